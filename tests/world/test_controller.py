@@ -1,0 +1,270 @@
+"""Real round trips: the unmodified ai2thor 5.0.0 Controller driving the stand-in process."""
+
+from __future__ import annotations
+
+import os
+import random
+import shutil
+import signal
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import msgpack
+import pytest
+from ai2thor.controller import Controller
+from ai2thor.server import MultiAgentEvent
+
+from smartllm_local.errors import UnknownFloorPlanError, UserError, WorldError
+from smartllm_local.world.controller import open_controller
+from smartllm_local.world.navigation import Box
+from smartllm_local.world.thor_server import ThorStandIn
+
+
+def _object(event, object_type):
+    return next(o for o in event.metadata["objects"] if o["objectType"] == object_type)
+
+
+def _nearest(positions, obj):
+    box = Box.of(obj)
+    return min(positions, key=lambda p: (box.distance(p["x"], p["z"]), p["x"], p["z"]))
+
+
+def test_single_agent_round_trip_through_the_console_script():
+    """The Controller starts smartllm-thor-server exactly as it starts a Unity build."""
+    script = shutil.which("smartllm-thor-server") or str(Path(sys.executable).with_name("smartllm-thor-server"))
+    controller = Controller(local_executable_path=script, scene="FloorPlan6", x_display=":0", server_timeout=10)
+    try:
+        event = controller.last_event
+        assert event.metadata["sceneName"] == "FloorPlan6_physics"
+        assert len(event.metadata["objects"]) == 68
+        apple = _object(event, "Apple")
+        positions = controller.step(action="GetReachablePositions").metadata["actionReturn"]
+        assert controller.step(action="Teleport", position=_nearest(positions, apple))
+        event = controller.step(action="PickupObject", objectId=apple["objectId"])
+        assert event.metadata["lastActionSuccess"], event.metadata["errorMessage"]
+        assert event.metadata["inventoryObjects"] == [{"objectId": apple["objectId"], "objectType": "Apple"}]
+        assert _object(event, "Apple")["isPickedUp"]
+    finally:
+        controller.stop()
+
+
+def test_four_agents_each_have_their_own_view():
+    controller = open_controller("FloorPlan15", agent_count=4)
+    try:
+        event = controller.last_event
+        assert isinstance(event, MultiAgentEvent) and len(event.events) == 4
+        starts = {(e.metadata["agent"]["position"]["x"], e.metadata["agent"]["position"]["z"]) for e in event.events}
+        assert len(starts) == 4
+        positions = controller.step(action="GetReachablePositions", agentId=2).metadata["actionReturn"]
+        targets = ["Apple", "Tomato", "Bread", "Potato"]
+        for agent_id, kind in enumerate(targets):
+            obj = _object(controller.last_event, kind)
+            taken = {(e.metadata["agent"]["position"]["x"], e.metadata["agent"]["position"]["z"])
+                     for i, e in enumerate(controller.last_event.events) if i != agent_id}
+            free = [p for p in positions if (p["x"], p["z"]) not in taken]
+            controller.step(action="Teleport", position=_nearest(free, obj), agentId=agent_id)
+            event = controller.step(action="PickupObject", objectId=obj["objectId"], agentId=agent_id)
+            assert event.metadata["lastActionSuccess"], event.metadata["errorMessage"]
+        for agent_id, kind in enumerate(targets):
+            view = event.events[agent_id].metadata
+            assert view["inventoryObjects"][0]["objectType"] == kind
+            assert all(o["isPickedUp"] for o in view["objects"] if o["objectType"] in targets)
+            held = next(o for o in view["objects"] if o["objectType"] == kind)
+            assert held["visible"], "an agent sees what it holds"
+        event = controller.step(action="PickupObject", objectId=_object(event, "Apple")["objectId"], agentId=3)
+        assert not event.metadata["lastActionSuccess"]
+        assert event.metadata["errorMessage"]
+    finally:
+        controller.stop()
+
+
+def test_errors_come_back_as_ai2thor_does():
+    controller = open_controller(6)
+    try:
+        event = controller.step(action="OpenObject", objectId="Fridge|+99.00|+00.00|+00.00")
+        assert not event.metadata["lastActionSuccess"]
+        assert "Object ID appears to be invalid" in event.metadata["errorMessage"]
+        with pytest.raises(ValueError, match="Invalid action"):
+            controller.step(action="Levitate")
+        with pytest.raises(ValueError, match="requires objectId"):
+            controller.step(action="PickupObject")
+        assert controller.step(action="Pass").metadata["lastActionSuccess"], "the session survives errors"
+    finally:
+        controller.stop()
+
+
+def test_a_contextual_rule_through_the_controller():
+    controller = open_controller(6)
+    try:
+        objects = {o["objectType"]: o for o in controller.last_event.metadata["objects"]}
+        for step in [
+            dict(action="PickupObject", objectId=objects["Potato"]["objectId"]),
+            dict(action="OpenObject", objectId=objects["Microwave"]["objectId"]),
+            dict(action="PutObject", objectId=objects["Microwave"]["objectId"]),
+            dict(action="CloseObject", objectId=objects["Microwave"]["objectId"]),
+            dict(action="ToggleObjectOn", objectId=objects["Microwave"]["objectId"]),
+        ]:
+            event = controller.step(forceAction=True, **step)
+            assert event.metadata["lastActionSuccess"], event.metadata["errorMessage"]
+        potato = _object(event, "Potato")
+        assert potato["temperature"] == "Hot" and potato["isCooked"]
+        assert potato["parentReceptacles"] == [objects["Microwave"]["objectId"]]
+    finally:
+        controller.stop()
+
+
+def test_reset_restores_the_scene():
+    controller = open_controller(6, agent_count=2)
+    try:
+        light = _object(controller.last_event, "LightSwitch")
+        controller.step(action="ToggleObjectOff", objectId=light["objectId"], forceAction=True)
+        assert not _object(controller.last_event, "LightSwitch")["isToggled"]
+        event = controller.reset("FloorPlan6")
+        assert _object(event, "LightSwitch")["isToggled"]
+        assert len(event.events) == 2, "reset keeps the Initialize parameters"
+    finally:
+        controller.stop()
+
+
+def test_patched_events_match_a_full_encoding():
+    """Steps that change no object answer with METADATA_PATCH; the merged event must equal a full one."""
+    rng = random.Random(7)
+    controller = open_controller(6, agent_count=3)
+    replay = ThorStandIn()
+    replay.handle({"action": "Reset", "sceneName": "FloorPlan6_physics", "sequenceId": 0})
+    replay.handle({"action": "Initialize", "agentCount": 3, "visibilityDistance": 1.5, "gridSize": 0.25})
+    try:
+        positions = controller.step(action="GetReachablePositions").metadata["actionReturn"]
+        replay.handle({"action": "GetReachablePositions", "agentId": 0})
+        ids = [o["objectId"] for o in controller.last_event.metadata["objects"]]
+        for i in range(120):
+            agent = rng.randrange(3)
+            kind = rng.choice(["Teleport", "RotateLeft", "Pass", "PickupObject", "PutObject", "OpenObject", "LookDown"])
+            step = {"action": kind, "agentId": agent}
+            if kind == "Teleport":
+                step["position"] = rng.choice(positions)
+            elif kind in ("PickupObject", "PutObject", "OpenObject"):
+                step["objectId"] = rng.choice(ids)
+            event = controller.step(dict(step))
+            replay.handle(dict(step, sequenceId=i + 10))
+            expected = msgpack.unpackb(replay.encoder.encode(replay.sim, active_agent=agent, sequence_id=0), raw=False)
+            for a in range(3):
+                got = event.events[a].metadata
+                want = expected["agents"][a]
+                assert got["objects"] == want["objects"], (i, step, a)
+                assert got["agent"] == want["agent"]
+                assert got["inventoryObjects"] == want["inventoryObjects"]
+    finally:
+        controller.stop()
+
+
+def test_bad_inputs_fail_before_starting_anything(tmp_path):
+    with pytest.raises(UnknownFloorPlanError, match="FloorPlan201-230"):
+        open_controller("FloorPlan999")
+    with pytest.raises(UserError, match="not an executable file"):
+        open_controller(6, build=tmp_path / "no-such-build")
+    with pytest.raises(UserError, match="agent_count"):
+        open_controller(6, agent_count=0)
+
+
+def _fake_build(tmp_path: Path, body: str) -> Path:
+    """An executable that poses as AI2-THOR and misbehaves as told."""
+    script = tmp_path / "fake-thor"
+    script.write_text(
+        f"#!{sys.executable}\n"
+        + textwrap.dedent(
+            """
+            import os, struct, sys, time, msgpack
+            open(os.environ["PID_FILE"], "w").write(str(os.getpid()))
+            def greet(out):
+                agent = {"sceneName": "", "screenWidth": 300, "screenHeight": 300, "thirdPartyCameras": [], "sequenceId": 0,
+                         "lastActionSuccess": True, "errorMessage": "", "errorCode": "", "actionReturn": None}
+                body = msgpack.packb({"agents": [agent], "thirdPartyCameras": [], "activeAgentId": 0, "sequenceId": 0})
+                out.write(struct.pack("!BI", 1, len(body)) + body + struct.pack("!BI", 255, 0)); out.flush()
+            """
+        )
+        + textwrap.dedent(body)
+    )
+    script.chmod(0o755)
+    return script
+
+
+def _assert_gone(pid_file: Path) -> None:
+    pid = int(pid_file.read_text())
+    deadline = time.monotonic() + 5
+    while Path(f"/proc/{pid}").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not Path(f"/proc/{pid}").exists(), f"process {pid} was left behind"
+
+
+@pytest.fixture
+def pid_file(tmp_path, monkeypatch):
+    path = tmp_path / "pid"
+    monkeypatch.setenv("PID_FILE", str(path))
+    return path
+
+
+def test_a_process_that_dies_at_start_fails_fast(tmp_path, pid_file):
+    build = _fake_build(tmp_path, "sys.exit(3)\n")
+    started = time.monotonic()
+    with pytest.raises(WorldError, match="status 3"):
+        open_controller(6, build=build, server_timeout=30)
+    assert time.monotonic() - started < 10
+    _assert_gone(pid_file)
+
+
+def test_a_process_that_never_answers_times_out_and_is_stopped(tmp_path, pid_file):
+    build = _fake_build(
+        tmp_path,
+        """
+        out = open(os.environ["AI2THOR_FIFO_SERVER_PIPE_PATH"], "wb")
+        greet(out)
+        inp = open(os.environ["AI2THOR_FIFO_CLIENT_PIPE_PATH"], "rb")
+        time.sleep(600)
+        """,
+    )
+    started = time.monotonic()
+    with pytest.raises(WorldError, match="did not answer"):
+        open_controller(6, build=build, server_timeout=1.5)
+    assert time.monotonic() - started < 20
+    _assert_gone(pid_file)
+
+
+def test_a_process_that_dies_after_greeting_fails_fast(tmp_path, pid_file):
+    build = _fake_build(
+        tmp_path,
+        """
+        out = open(os.environ["AI2THOR_FIFO_SERVER_PIPE_PATH"], "wb")
+        greet(out)
+        inp = open(os.environ["AI2THOR_FIFO_CLIENT_PIPE_PATH"], "rb")
+        inp.read(5)
+        sys.exit(5)
+        """,
+    )
+    started = time.monotonic()
+    with pytest.raises(WorldError, match="status 5"):
+        open_controller(6, build=build, server_timeout=30)
+    assert time.monotonic() - started < 10
+    _assert_gone(pid_file)
+
+
+def test_a_stand_in_killed_mid_session_fails_the_next_step_fast():
+    controller = open_controller(6, agent_count=2)
+    proc = controller.server.unity_proc
+    os.kill(proc.pid, signal.SIGKILL)
+    started = time.monotonic()
+    with pytest.raises(WorldError, match="status -9"):
+        controller.step(action="Pass")
+    assert time.monotonic() - started < 5
+    with pytest.raises(WorldError, match="stopped"):
+        controller.step(action="Pass")
+    assert proc.poll() is not None
+
+
+def test_stopping_leaves_no_process_behind():
+    controller = open_controller(6)
+    proc = controller.server.unity_proc
+    controller.stop()
+    assert proc.poll() is not None

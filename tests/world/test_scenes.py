@@ -1,0 +1,126 @@
+"""Scene data: all 120 iTHOR floor plans, read from procthor's AI2-THOR 5.0 dump."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from smartllm_local.errors import SceneDataError, UnknownFloorPlanError
+from smartllm_local.world import scenes
+from smartllm_local.world.navigation import Box, ReachableGrid
+from smartllm_local.world.object_types import PROPERTIES, TYPE_PROPERTIES, is_known_type
+from smartllm_local.world.simulator import Simulator
+
+
+def test_there_are_120_floor_plans_in_four_room_types():
+    plans = scenes.all_floor_plans()
+    assert len(plans) == 120 == len(set(plans))
+    assert plans[0] == "FloorPlan1" and plans[29] == "FloorPlan30"
+    assert plans[30] == "FloorPlan201" and plans[-1] == "FloorPlan430"
+    rooms = {scenes.scene_info(p).room_type for p in plans}
+    assert rooms == {"kitchen", "living room", "bedroom", "bathroom"}
+    assert scenes.scene_info(215).room_type == "living room"
+
+
+@pytest.mark.parametrize("value", [6, "6", "FloorPlan6", "floorplan6", "FloorPlan6_physics", " FloorPlan6 "])
+def test_floor_plan_names_normalise(value):
+    assert scenes.floor_plan_name(value) == "FloorPlan6"
+
+
+@pytest.mark.parametrize("value", [0, 31, 200, 231, 431, "Kitchen", "FloorPlan", "FloorPlan_Train1_1", -5])
+def test_unknown_floor_plans_name_the_valid_range(value):
+    with pytest.raises(UnknownFloorPlanError) as info:
+        scenes.floor_plan_name(value)
+    message = str(info.value)
+    assert "FloorPlan1-30" in message and "FloorPlan401-430" in message
+
+
+def test_every_scene_loads_and_every_object_type_is_known():
+    unknown: set[str] = set()
+    mismatched: list[str] = []
+    for plan in scenes.all_floor_plans():
+        objects = scenes.load_scene(plan)
+        assert objects, plan
+        assert any(o["objectType"] == "Floor" for o in objects), plan
+        for obj in objects:
+            if not is_known_type(obj["objectType"]):
+                unknown.add(obj["objectType"])
+                continue
+            flags = {p for p in PROPERTIES if obj.get(p)}
+            if not flags <= TYPE_PROPERTIES[obj["objectType"]]:
+                mismatched.append(f"{plan}:{obj['objectId']}")
+    assert not unknown
+    assert not mismatched
+
+
+def test_reference_facts_about_floorplan6():
+    objects = scenes.load_scene(6)
+    assert len(objects) == 68
+    types = {o["objectType"] for o in objects}
+    assert len(types) == 40
+    masses = {o["objectType"]: o["mass"] for o in objects}
+    assert masses["Apple"] == pytest.approx(0.2) and masses["Mug"] == pytest.approx(1.0)
+    assert sum(o["objectType"] == "Cabinet" for o in objects) == 15
+
+
+def test_load_scene_returns_independent_copies():
+    first = scenes.load_scene(6)
+    first[0]["objectType"] = "Mangled"
+    assert scenes.load_scene(6)[0]["objectType"] != "Mangled"
+
+
+def test_nearly_every_object_is_in_reach_of_some_free_cell():
+    """The stand-in's grid must let agents reach what plans name (AI2-THOR's 1.5 m)."""
+    far = []
+    total = 0
+    for plan in scenes.all_floor_plans():
+        objects = scenes.load_scene(plan)
+        grid = ReachableGrid(objects)
+        assert len(grid.cells) >= 20, plan
+        for obj in objects:
+            total += 1
+            box = Box.of(obj)
+            if min(box.distance(x, z) for x, z in grid.cells) > 1.5:
+                far.append((plan, obj["objectType"]))
+    assert len(far) / total < 0.002, far
+
+
+def test_missing_scene_data_says_which_package_to_install(tmp_path, monkeypatch):
+    monkeypatch.setattr(scenes.importlib.util, "find_spec", lambda name: None)
+    with pytest.raises(SceneDataError) as info:
+        scenes.source_path()
+    assert "pip install 'procthor==0.0.1.dev2'" in str(info.value)
+    with pytest.raises(SceneDataError):
+        scenes.load_scene(7, cache_dir=tmp_path)
+
+
+def test_corrupt_scene_data_is_reported(tmp_path):
+    bad = tmp_path / "ai2thor-object-metadata.json"
+    bad.write_text('{"kitchens": [', encoding="utf-8")
+    with pytest.raises(SceneDataError) as info:
+        scenes.load_scene(6, source=bad, cache_dir=tmp_path / "cache")
+    assert "corrupt" in str(info.value) and "procthor" in str(info.value)
+    bad.write_text(json.dumps({"kitchens": [], "bedrooms": 3}), encoding="utf-8")
+    with pytest.raises(SceneDataError):
+        scenes.load_scene(6, source=bad, cache_dir=tmp_path / "cache")
+
+
+def test_a_damaged_cache_is_rebuilt(tmp_path):
+    source = scenes.source_path()
+    cache = tmp_path / "cache"
+    scenes._memo.clear()
+    assert scenes.load_scene(3, cache_dir=cache)
+    split = next(cache.glob("scenes-*"))
+    (split / "FloorPlan3.json").write_text("{not json", encoding="utf-8")
+    scenes._memo.clear()
+    objects = scenes.load_scene(3, source=source, cache_dir=cache)
+    assert any(o["objectType"] == "Floor" for o in objects)
+
+
+def test_agents_start_on_distinct_free_cells():
+    sim = Simulator("FloorPlan401", agent_count=4)
+    cells = {(a.x, a.z) for a in sim.agents}
+    assert len(cells) == 4
+    assert all(c in set(sim.grid.cells) for c in cells)
