@@ -13,6 +13,7 @@ import sys
 import typer
 
 from ..errors import SmartLLMError, UserError
+from . import plans as _plans
 from . import scenes as _scenes
 
 app = typer.Typer(
@@ -22,6 +23,8 @@ app = typer.Typer(
     add_completion=False,
 )
 app.add_typer(_scenes.app, name="scenes")
+app.command("validate")(_plans.validate)
+app.command("execute")(_plans.execute)
 
 
 def main() -> None:

@@ -1,0 +1,96 @@
+"""``smartllm-local validate`` and ``smartllm-local execute``: check and run plan files."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ..errors import UserError
+from ..executor import run_plan
+from ..files import read_json, write_json
+from ..plan_language import read_plan
+from ..robots import load_catalogue, parse_robot_ids
+from ..scoring import parse_goals, score_execution
+from ..tasks import default_task_files, find_task, load_tasks
+from ..world.scenes import floor_plan_name, load_scene
+
+THOR_BUILD_HELP = "A Unity AI2-THOR executable to run in (default: $SMARTLLM_THOR_BUILD, else the headless stand-in)."
+
+
+def validate(
+    plan: Path = typer.Argument(..., help="The plan file (.py)."),
+    stage: str = typer.Option("allocated", help="decomposed (no robot arguments) or allocated."),
+    floor_plan: Optional[str] = typer.Option(None, help="Also check object names against this floor plan."),
+    robots: Optional[str] = typer.Option(None, help="Also check robots[i] against this team (catalogue ids, e.g. 1,2,3)."),
+    catalogue: Optional[Path] = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json)."),
+) -> None:
+    """Parse and validate a plan without running it."""
+    if stage not in ("decomposed", "allocated"):
+        raise UserError(f"--stage must be decomposed or allocated, not {stage!r}")
+    cat = load_catalogue(catalogue)
+    team_size = len(cat.team(parse_robot_ids(robots))) if robots else None
+    scene_types = {o["objectType"] for o in load_scene(floor_plan_name(floor_plan))} if floor_plan else None
+    parsed = read_plan(plan, form=stage, skills=cat.skills, team_size=team_size, scene_types=scene_types)  # type: ignore[arg-type]
+    if parsed.is_refusal:
+        typer.echo(f"{plan}: valid refusal: {parsed.refusal}")
+        return
+    subtasks = [f for f in parsed.functions]
+    typer.echo(
+        f"{plan}: valid {stage} plan: {len(subtasks)} function(s), {len(parsed.skill_calls())} skill call(s), "
+        f"stages {parsed.stages()}"
+    )
+
+
+def execute(
+    plan: Path = typer.Argument(..., help="The allocated plan file (.py)."),
+    floor_plan: Optional[str] = typer.Option(None, help="Floor plan, e.g. 6 or FloorPlan6."),
+    robots: Optional[str] = typer.Option(None, help="The team as catalogue ids, e.g. 1,2,3; robots[i] is the i-th."),
+    goal: Optional[Path] = typer.Option(None, help='Goal conditions: a JSON list of {"name", "contains", "state"}.'),
+    trans: Optional[int] = typer.Option(None, help="Ground-truth transitions (for RU and SR)."),
+    max_trans: Optional[int] = typer.Option(None, help="Maximum transitions (for RU and SR)."),
+    tasks: Optional[Path] = typer.Option(None, help="A task file to take the floor plan, robots and goals from."),
+    task: Optional[str] = typer.Option(None, help="The task id in --tasks (default: the project's benchmark)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the metrics as one JSON object."),
+    trace: Optional[Path] = typer.Option(None, help="Write every primitive action to this JSON file."),
+    catalogue: Optional[Path] = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json)."),
+    thor_build: Optional[Path] = typer.Option(None, help=THOR_BUILD_HELP),
+) -> None:
+    """Run a plan with a robot team in AI2-THOR and print SR, TCR, GCR, RU and Exe."""
+    cat = load_catalogue(catalogue)
+    if task is not None:
+        if floor_plan or robots or goal:
+            raise UserError("give either --task (with --tasks) or --floor-plan/--robots/--goal, not both")
+        chosen = find_task(load_tasks(tasks or default_task_files(), catalogue=cat), task)
+        scene, team_ids, goals = chosen.floor_plan, list(chosen.robots), list(chosen.goals)
+        trans = chosen.trans if trans is None else trans
+        max_trans = chosen.max_trans if max_trans is None else max_trans
+    else:
+        if tasks is not None:
+            raise UserError("--tasks needs --task ID")
+        if not (floor_plan and robots and goal):
+            raise UserError("execute needs --floor-plan, --robots and --goal (or --task ID)")
+        scene, team_ids = floor_plan_name(floor_plan), parse_robot_ids(robots)
+        goals = list(parse_goals(read_json(goal, "goal file"), where=str(goal)))
+    team = cat.team(team_ids)
+    parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team))
+    execution = run_plan(parsed, scene, team, build=str(thor_build) if thor_build else None, skills=cat.skills)
+    scores = score_execution(execution, goals, trans=trans, max_trans=max_trans)
+    if trace is not None:
+        write_json(trace, {"plan": str(plan), "floor_plan": scene, "robots": team_ids,
+                           "transitions": execution.transitions, "ticks": execution.ticks,
+                           "actions": [e.as_dict() for e in execution.trace]})
+    if as_json:
+        typer.echo(json.dumps(scores.metrics()))
+        return
+    fmt = lambda v: "n/a" if v is None else f"{v:.2f}"  # noqa: E731
+    typer.echo(f"{plan} on {scene} with robots {team_ids}: {execution.succeeded}/{execution.attempted} actions "
+               f"succeeded in {execution.ticks} ticks, {execution.transitions} transition(s)")
+    for entry in execution.trace:
+        if not entry.success:
+            typer.echo(f"  tick {entry.tick}: {entry.skill}{tuple(entry.objects)} by {entry.robots} failed: {entry.error}")
+    for description, ok in scores.conditions:
+        typer.echo(f"  [{'x' if ok else ' '}] {description}")
+    typer.echo(f"SR {fmt(scores.SR)}  TCR {fmt(scores.TCR)}  GCR {fmt(scores.GCR)}  RU {fmt(scores.RU)}  Exe {fmt(scores.Exe)}")

@@ -1,0 +1,44 @@
+"""Running plans: the interpreter (scheduler) and what skills do (team actions).
+
+:func:`run_plan` opens (or reuses) a Controller for the plan's floor plan and
+team, and executes; the scorer reads the :class:`Execution` it returns.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+from ..plan_language import Plan
+from ..robots import Robot
+from ..skills import DEFAULT_SKILL_SET, SkillSet
+from ..world.controller import open_controller
+from ..world.scenes import floor_plan_name
+from .scheduler import DEFAULT_MAX_TICKS, Execution, TraceEntry, execute
+
+__all__ = ["Execution", "TraceEntry", "execute", "run_plan"]
+
+
+def run_plan(
+    plan: Plan,
+    floor_plan: int | str,
+    team: Sequence[Robot],
+    *,
+    controller: Any = None,
+    build: str | None = None,
+    skills: SkillSet = DEFAULT_SKILL_SET,
+    max_ticks: int = DEFAULT_MAX_TICKS,
+) -> Execution:
+    """Execute ``plan`` on ``floor_plan`` with ``team``.
+
+    A given ``controller`` is reset to the floor plan with one agent per robot
+    and reused (much faster for many runs); otherwise one is opened and stopped.
+    """
+    scene = floor_plan_name(floor_plan)
+    if controller is not None:
+        controller.reset(scene, agentCount=len(team))
+        return execute(plan, controller, team, skills=skills, max_ticks=max_ticks)
+    controller = open_controller(scene, agent_count=len(team), build=build)
+    try:
+        return execute(plan, controller, team, skills=skills, max_ticks=max_ticks)
+    finally:
+        controller.stop()

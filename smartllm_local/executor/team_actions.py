@@ -1,0 +1,277 @@
+"""What one skill call does, for one robot or a team, through the ai2thor Controller.
+
+Robots are the Controller's agents: team member i is ``agentId=i``. Skills and
+mass limits are the robots' (the world knows neither), so they are enforced
+here:
+
+- a team acts with the union of its members' skills; the member that performs
+  the AI2-THOR action is the one that meets its precondition (holds the object
+  to put down, holds the knife, has a free hand), preferring members that have
+  the skill themselves;
+- picking something up needs lifting capacity for its mass (what it holds
+  included): the acting robot's, plus that of free-handed team members within
+  reach, who then help carry it until it is put down;
+- an object type resolves to the nearest instance (to the acting robot) that
+  has the affordance the skill needs; ``GoToObject`` moves every member to the
+  nearest free reachable cells and turns them to face it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+from ..robots import Robot
+from ..skills import Skill, SkillSet, has_affordance
+from ..world.navigation import Box, facing_yaw
+from ..world.object_types import SLICE_RESULTS, base_type
+
+KNIVES = frozenset({"Knife", "ButterKnife"})
+_HELD_ACTIONS = frozenset({"PutObject", "DropHandObject", "ThrowObject"})
+
+
+@dataclass
+class Outcome:
+    success: bool
+    error: str = ""
+    object_id: str | None = None
+    action: str = ""
+    actor: int | None = None
+
+
+class TeamWorld:
+    """The team's view of the world: the latest event, and the Controller to act through."""
+
+    def __init__(self, controller: Any, team: Sequence[Robot], skills: SkillSet):
+        self.controller = controller
+        self.team = list(team)
+        self.skills = skills
+        self.event = controller.last_event
+        reply = controller.step(action="GetReachablePositions")
+        self.event = reply
+        self.cells = [(p["x"], p["z"]) for p in reply.metadata["actionReturn"] or []]
+        self.cell_y = (reply.metadata["actionReturn"] or [{"y": 0.9}])[0]["y"]
+        self.helping: dict[int, str] = {}  # member -> object it helps carry
+
+    # ------------------------------------------------------------------ state
+
+    def _view(self, member: int) -> dict[str, Any]:
+        return self.event.events[member].metadata
+
+    @property
+    def objects(self) -> list[dict[str, Any]]:
+        return self.event.metadata["objects"]
+
+    def position(self, member: int) -> tuple[float, float]:
+        pos = self._view(member)["agent"]["position"]
+        return pos["x"], pos["z"]
+
+    def holding(self, member: int) -> dict[str, Any] | None:
+        inventory = self._view(member).get("inventoryObjects") or []
+        if not inventory:
+            return None
+        held_id = inventory[0]["objectId"]
+        return next((o for o in self.objects if o["objectId"] == held_id), None)
+
+    def hand_free(self, member: int) -> bool:
+        return self.holding(member) is None and member not in self.helping
+
+    def sees(self, member: int, object_id: str) -> bool:
+        return any(o["objectId"] == object_id and o.get("visible") for o in self._view(member)["objects"])
+
+    def _step(self, member: int, **action: Any) -> dict[str, Any]:
+        self.event = self.controller.step(dict(action, agentId=member))
+        return self._view(member)
+
+    # -------------------------------------------------------------- resolving
+
+    def _held_by_team(self, members: Sequence[int]) -> dict[str, int]:
+        held = {}
+        for m in members:
+            obj = self.holding(m)
+            if obj is not None:
+                held[obj["objectId"]] = m
+        return held
+
+    def resolve(self, name: str, affordance: str, near: int, members: Sequence[int]) -> dict[str, Any] | None:
+        """The instance a plan's object name means: nearest to ``near`` among usable matches."""
+        if "|" in name:
+            return next((o for o in self.objects if o["objectId"] == name.strip()), None)
+        wanted = name.strip().lower()
+        ours = self._held_by_team(members)
+        held_elsewhere = {
+            o["objectId"] for i in range(len(self.event.events)) if i not in members
+            for o in [self.holding(i)] if o is not None
+        }
+
+        def usable(o: dict[str, Any]) -> bool:
+            return (
+                not (o.get("isSliced") and o["objectType"] in SLICE_RESULTS)
+                and o["objectId"] not in held_elsewhere
+                and has_affordance(o, affordance)
+            )
+
+        matches = [o for o in self.objects if o["objectType"].lower() == wanted and usable(o)]
+        if not matches:
+            # "the apple" after slicing it: its pieces
+            matches = [o for o in self.objects if base_type(o["objectType"]).lower() == wanted
+                       and o["objectType"].lower() != wanted and usable(o)]
+        if not matches:
+            return None
+        held = [o for o in matches if o["objectId"] in ours]
+        if held:
+            return held[0]
+        x, z = self.position(near)
+        return min(matches, key=lambda o: (round(Box.of(o).distance(x, z), 6), o["objectId"]))
+
+    def _carried_mass(self, obj: dict[str, Any]) -> float:
+        by_id = {o["objectId"]: o for o in self.objects}
+        total, stack, seen = 0.0, [obj["objectId"]], set()
+        while stack:
+            oid = stack.pop()
+            if oid in seen or oid not in by_id:
+                continue
+            seen.add(oid)
+            total += float(by_id[oid].get("mass") or 0.0)
+            stack.extend(by_id[oid].get("receptacleObjectIds") or [])
+        return total
+
+    # ---------------------------------------------------------------- acting
+
+    def perform(self, skill: Skill, objects: Sequence[str], members: Sequence[int]) -> Outcome:
+        """Run one skill call by the team members ``members`` (team indices)."""
+        names = ", ".join(self.team[m].name for m in members)
+        if not any(skill.name in self.team[m].skills for m in members):
+            return Outcome(False, f"{names} cannot {skill.name}: no member has that skill")
+        if skill.action == "":
+            return self._go_to(objects[0], members)
+        if skill.action == "PickupObject":
+            return self._pickup(skill, objects[0], members)
+        if skill.action in _HELD_ACTIONS:
+            return self._release(skill, objects, members)
+        return self._object_action(skill, objects[0], members)
+
+    def _members_by_preference(self, skill: Skill, members: Sequence[int], condition) -> list[int]:
+        ranked = sorted(members, key=lambda m: (not condition(m), skill.name not in self.team[m].skills))
+        return [m for m in ranked if condition(m)] or []
+
+    def _go_to(self, name: str, members: Sequence[int]) -> Outcome:
+        target = self.resolve(name, "", members[0], members)
+        if target is None:
+            return Outcome(False, f"there is no {name!r} to go to", action="Teleport")
+        if target["objectId"] in self._held_by_team(members):
+            return Outcome(True, object_id=target["objectId"], action="Teleport")
+        box = Box.of(target)
+        chosen: set[tuple[float, float]] = set()
+        for member in members:
+            others = {self.position(i) for i in range(len(self.event.events)) if i != member}
+            free = [c for c in self.cells if c not in others and c not in chosen]
+            if not free:
+                return Outcome(False, f"no free place near {target['objectId']}", target["objectId"], "Teleport", member)
+            cell = min(free, key=lambda c: (round(box.distance(*c), 6), c))
+            chosen.add(cell)
+            yaw = facing_yaw(cell[0], cell[1], target["position"]["x"], target["position"]["z"])
+            view = self._step(member, action="Teleport", position={"x": cell[0], "y": self.cell_y, "z": cell[1]},
+                              rotation={"x": 0.0, "y": yaw, "z": 0.0}, horizon=30.0, standing=True)
+            if not view["lastActionSuccess"]:
+                return Outcome(False, view["errorMessage"], target["objectId"], "Teleport", member)
+        return Outcome(True, object_id=target["objectId"], action="Teleport")
+
+    def _pickup(self, skill: Skill, name: str, members: Sequence[int]) -> Outcome:
+        free = self._members_by_preference(skill, members, self.hand_free)
+        if not free:
+            return Outcome(False, "every robot of the team already has its hands full", action=skill.action)
+        actor = free[0]
+        target = self.resolve(name, skill.arguments[0], actor, members)
+        if target is None:
+            return Outcome(False, f"there is no pickupable {name!r} free to pick up", action=skill.action, actor=actor)
+        mass = self._carried_mass(target)
+        lifters = [actor]
+        capacity = self.team[actor].mass_capacity
+        for m in members:
+            if capacity >= mass:
+                break
+            if m != actor and self.hand_free(m) and self.sees(m, target["objectId"]):
+                lifters.append(m)
+                capacity += self.team[m].mass_capacity
+        if capacity < mass:
+            who = ", ".join(self.team[m].name for m in lifters)
+            return Outcome(False, f"{target['objectId']} weighs {mass:.3g} kg, more than {who} can lift "
+                                  f"({capacity:.3g} kg); bring more robots within reach", target["objectId"],
+                           skill.action, actor)
+        view = self._step(actor, action=skill.action, objectId=target["objectId"])
+        if not view["lastActionSuccess"]:
+            return Outcome(False, view["errorMessage"], target["objectId"], skill.action, actor)
+        for helper in lifters[1:]:
+            self.helping[helper] = target["objectId"]
+        return Outcome(True, object_id=target["objectId"], action=skill.action, actor=actor)
+
+    def _release(self, skill: Skill, objects: Sequence[str], members: Sequence[int]) -> Outcome:
+        wanted = objects[0].strip().lower()
+        holder = None
+        for m in members:
+            held = self.holding(m)
+            if held is not None and (held["objectId"] == objects[0].strip() or wanted in
+                                     (held["objectType"].lower(), base_type(held["objectType"]).lower())):
+                holder = m
+                break
+        if holder is None:
+            names = ", ".join(self.team[m].name for m in members)
+            return Outcome(False, f"{names} do not hold a {objects[0]!r}", action=skill.action)
+        held_id = self.holding(holder)["objectId"]  # type: ignore[index]
+        args: dict[str, Any] = {}
+        target_id = None
+        if skill.action == "PutObject" or (skill.action == "ThrowObject" and len(objects) > 1):
+            receptacle = self.resolve(objects[1], "receptacle", holder, members)
+            if receptacle is None or receptacle["objectId"] == held_id:
+                return Outcome(False, f"there is no receptacle {objects[1]!r} here", held_id, skill.action, holder)
+            target_id = receptacle["objectId"]
+            if skill.action == "PutObject":
+                args["objectId"] = target_id
+            else:
+                x, z = self.position(holder)
+                yaw = facing_yaw(x, z, receptacle["position"]["x"], receptacle["position"]["z"])
+                self._step(holder, action="Teleport", position={"x": x, "y": self.cell_y, "z": z},
+                           rotation={"x": 0.0, "y": yaw, "z": 0.0})
+                distance = math.hypot(receptacle["position"]["x"] - x, receptacle["position"]["z"] - z)
+                args["moveMagnitude"] = max(5.0, min(30.0, 10.0 * distance))
+        elif skill.action == "ThrowObject":
+            args["moveMagnitude"] = 7.0
+        view = self._step(holder, action=skill.action, **args)
+        if not view["lastActionSuccess"]:
+            return Outcome(False, view["errorMessage"], target_id or held_id, skill.action, holder)
+        for member, carried in list(self.helping.items()):
+            if carried == held_id:
+                del self.helping[member]
+        return Outcome(True, object_id=target_id or held_id, action=skill.action, actor=holder)
+
+    def _object_action(self, skill: Skill, name: str, members: Sequence[int]) -> Outcome:
+        if skill.action == "SliceObject":
+            def ready(m: int) -> bool:
+                held = self.holding(m)
+                return held is not None and held["objectType"] in KNIVES
+        else:
+            def ready(m: int) -> bool:
+                return True
+        candidates = self._members_by_preference(skill, members, ready) or list(members)
+        actor = candidates[0]
+        affordance = skill.arguments[0]
+        target = self.resolve(name, affordance, actor, members)
+        if target is None and affordance == "toggleable":
+            target = self._switch_for(name, actor, members)
+        if target is None:
+            need = f"{affordance} " if affordance else ""
+            return Outcome(False, f"there is no {need}{name!r} to {skill.name}", action=skill.action, actor=actor)
+        view = self._step(actor, action=skill.action, objectId=target["objectId"])
+        if not view["lastActionSuccess"]:
+            return Outcome(False, view["errorMessage"], target["objectId"], skill.action, actor)
+        return Outcome(True, object_id=target["objectId"], action=skill.action, actor=actor)
+
+    def _switch_for(self, name: str, actor: int, members: Sequence[int]) -> dict[str, Any] | None:
+        """A StoveBurner is switched through the StoveKnob that controls it."""
+        target = self.resolve(name, "", actor, members)
+        if target is None:
+            return None
+        return next((o for o in self.objects if target["objectId"] in (o.get("controlledObjects") or [])
+                     and o.get("toggleable")), None)

@@ -1,0 +1,174 @@
+"""Benchmark tasks: one JSON object per line, checked against ``benchmark/task.schema.json``.
+
+A task file is read whole and checked line by line; every bad line is
+reported as ``file:line: what is wrong`` and no line is skipped silently (blank
+lines are not tasks). Beyond the schema, floor plans must be iTHOR scenes,
+robots must be in the catalogue, goal types must exist in the floor plan, and
+ids must be unique.
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Iterable, Sequence
+
+import jsonschema
+
+from .errors import TaskFileError, UnknownFloorPlanError, UserError
+from .resources import data_dir
+from .robots import Catalogue, load_catalogue
+from .scoring import Goal, parse_goals
+from .world.object_types import SLICE_RESULTS
+from .world.scenes import floor_plan_name, load_scene
+
+CATEGORIES = ("elemental", "simple", "compound", "complex")
+
+
+@dataclass(frozen=True)
+class Task:
+    id: str
+    category: str
+    floor_plan: str
+    instruction: str
+    robots: tuple[int, ...]
+    goals: tuple[Goal, ...]
+    trans: int | None
+    max_trans: int | None
+    feasible: bool
+    missing_skills: tuple[str, ...] = ()
+    notes: str = ""
+    source: str = ""  # file:line
+
+    def as_json(self) -> dict[str, Any]:
+        data: dict[str, Any] = {
+            "id": self.id, "category": self.category, "floor_plan": int(self.floor_plan[len("FloorPlan"):]),
+            "instruction": self.instruction, "robots": list(self.robots),
+            "goals": [g.as_dict() for g in self.goals], "trans": self.trans, "max_trans": self.max_trans,
+            "feasible": self.feasible,
+        }
+        if self.missing_skills:
+            data["missing_skills"] = list(self.missing_skills)
+        if self.notes:
+            data["notes"] = self.notes
+        return data
+
+
+def benchmark_dir() -> Path:
+    return data_dir("benchmark")
+
+
+def default_task_files() -> list[Path]:
+    """The project's benchmark: feasible tasks, then the infeasible ones."""
+    return [benchmark_dir() / "tasks.jsonl", benchmark_dir() / "infeasible.jsonl"]
+
+
+@lru_cache(maxsize=1)
+def task_schema() -> dict[str, Any]:
+    return json.loads((benchmark_dir() / "task.schema.json").read_text(encoding="utf-8"))
+
+
+@lru_cache(maxsize=256)
+def _scene_types(floor_plan: str) -> frozenset[str]:
+    types = {o["objectType"] for o in load_scene(floor_plan)}
+    types |= {SLICE_RESULTS[t][0] for t in types if t in SLICE_RESULTS}
+    return frozenset(t.lower() for t in types)
+
+
+def check_task(data: Any, catalogue: Catalogue, where: str) -> tuple[Task | None, list[str]]:
+    """Check one decoded line; return the task and the problems found."""
+    problems = []
+    validator = jsonschema.Draft202012Validator(task_schema())
+    for error in sorted(validator.iter_errors(data), key=lambda e: list(e.absolute_path)):
+        field = "/".join(str(p) for p in error.absolute_path) or "(line)"
+        problems.append(f"{where}: {field}: {error.message}")
+    if problems:
+        return None, problems
+    try:
+        scene = floor_plan_name(data["floor_plan"])
+    except UnknownFloorPlanError as exc:
+        return None, [f"{where}: floor_plan: {exc}"]
+    unknown = [r for r in data["robots"] if r not in catalogue.robots]
+    if unknown:
+        problems.append(f"{where}: robots: {unknown} are not in the catalogue {catalogue.path}")
+    try:
+        goals = parse_goals(data["goals"], where="goals")
+    except TaskFileError as exc:
+        return None, problems + [f"{where}: {exc}"]
+    types = _scene_types(scene)
+    for goal in goals:
+        for name in (goal.name, *goal.contains):
+            if name.lower() not in types:
+                problems.append(f"{where}: goals: there is no {name!r} in {scene}")
+    if data["trans"] is not None and data["max_trans"] is not None and data["trans"] > data["max_trans"]:
+        problems.append(f"{where}: trans ({data['trans']}) is larger than max_trans ({data['max_trans']})")
+    if data["feasible"] and not goals:
+        problems.append(f"{where}: goals: a feasible task needs at least one goal condition")
+    if problems:
+        return None, problems
+    task = Task(
+        id=data["id"], category=data["category"], floor_plan=scene, instruction=data["instruction"].strip(),
+        robots=tuple(data["robots"]), goals=goals, trans=data["trans"], max_trans=data["max_trans"],
+        feasible=data["feasible"], missing_skills=tuple(data.get("missing_skills", ())),
+        notes=data.get("notes", ""), source=where,
+    )
+    return task, []
+
+
+def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
+               catalogue: Catalogue | None = None) -> list[Task]:
+    """Read task files (default: the project's benchmark) and check every line.
+
+    Raises:
+        TaskFileError: listing every bad line as ``file:line: problem``.
+    """
+    if paths is None:
+        paths = default_task_files()
+    elif isinstance(paths, (str, Path)):
+        paths = [paths]
+    catalogue = catalogue or load_catalogue()
+    tasks: list[Task] = []
+    problems: list[str] = []
+    seen: dict[str, str] = {}
+    for path in map(Path, paths):
+        try:
+            lines = path.read_text(encoding="utf-8").splitlines()
+        except OSError as exc:
+            raise TaskFileError(f"cannot read task file {path}: {exc.strerror or exc}") from exc
+        except UnicodeDecodeError as exc:
+            raise TaskFileError(f"task file {path} is not UTF-8 text ({exc.reason})") from exc
+        for number, line in enumerate(lines, start=1):
+            if not line.strip():
+                continue
+            where = f"{path}:{number}"
+            try:
+                data = json.loads(line)
+            except ValueError as exc:
+                problems.append(f"{where}: not valid JSON ({exc})")
+                continue
+            task, found = check_task(data, catalogue, where)
+            problems += found
+            if task is None:
+                continue
+            if task.id in seen:
+                problems.append(f"{where}: id {task.id!r} is already used at {seen[task.id]}")
+                continue
+            seen[task.id] = where
+            tasks.append(task)
+    if problems:
+        raise TaskFileError("\n".join(problems))
+    return tasks
+
+
+def find_task(tasks: Iterable[Task], task_id: str) -> Task:
+    """The task with this id; an unknown id gets the closest ids as suggestions."""
+    tasks = list(tasks)
+    for task in tasks:
+        if task.id == task_id:
+            return task
+    close = difflib.get_close_matches(task_id, [t.id for t in tasks], n=3)
+    hint = f"; did you mean {', '.join(close)}?" if close else ""
+    raise UserError(f"no task {task_id!r} in the task file(s){hint}")
