@@ -13,6 +13,7 @@ import sys
 import typer
 
 from ..errors import SmartLLMError, UserError
+from . import benchmark as _benchmark
 from . import plans as _plans
 from . import scenes as _scenes
 
@@ -23,6 +24,7 @@ app = typer.Typer(
     add_completion=False,
 )
 app.add_typer(_scenes.app, name="scenes")
+app.add_typer(_benchmark.app, name="benchmark")
 app.command("validate")(_plans.validate)
 app.command("execute")(_plans.execute)
 

@@ -1,0 +1,69 @@
+"""``smartllm-local benchmark``: list the tasks, check the benchmark, import SMART-LLM's task files."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ..errors import UserError
+from ..files import write_atomic
+from ..robots import load_catalogue
+from ..tasks import CATEGORIES, default_task_files, load_tasks
+
+app = typer.Typer(help="The benchmark: list its tasks, check it, import SMART-LLM's task files.", no_args_is_help=True)
+
+
+@app.command("list")
+def list_tasks(
+    category: Optional[str] = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
+    tasks: Optional[Path] = typer.Option(None, help="A task file (default: the project's benchmark)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the tasks as JSON lines."),
+) -> None:
+    """Print the tasks: id, category, floor plan, robots and instruction."""
+    if category is not None and category not in (*CATEGORIES, "uncategorized"):
+        raise UserError(f"--category must be one of {', '.join(CATEGORIES)}, not {category!r}")
+    chosen = [t for t in load_tasks(tasks or default_task_files()) if category in (None, t.category)]
+    for task in chosen:
+        if as_json:
+            typer.echo(json.dumps(task.as_json()))
+        else:
+            flag = "" if task.feasible else "  [infeasible]"
+            typer.echo(f"{task.id:<16}{task.category:<12}{task.floor_plan:<14}{str(list(task.robots)):<16}"
+                       f"{task.instruction}{flag}")
+
+
+@app.command("check")
+def check(
+    tasks: Optional[Path] = typer.Option(None, help="A task file (default: the project's benchmark)."),
+    plans: Optional[Path] = typer.Option(None, help="Reference plans folder (default: benchmark/reference_plans)."),
+    thor_build: Optional[Path] = typer.Option(None, help="A Unity AI2-THOR executable (default: the stand-in)."),
+) -> None:
+    """Validate the task files and run every reference plan; print a per-category table."""
+    from ..benchmark import check_reference_plans, category_table
+
+    loaded = load_tasks(tasks or default_task_files())
+    results = check_reference_plans(loaded, plans, build=str(thor_build) if thor_build else None)
+    typer.echo(category_table(results))
+    failed = [r for r in results if not r.passed]
+    for result in failed:
+        typer.echo(f"FAILED {result.task.id}: {result.problem}")
+    if failed:
+        raise typer.Exit(1)
+
+
+@app.command("import-smartllm")
+def import_smartllm(
+    source: Path = typer.Argument(..., help="SMART-LLM's repository (or its data/final_test folder)."),
+    out: Path = typer.Option(..., "--out", help="The task file (JSON lines) to write."),
+) -> None:
+    """Import SMART-LLM's data/final_test/FloorPlan<N>.json files as a task file."""
+    from ..importer import import_smartllm as run_import
+
+    report = run_import(source, catalogue=load_catalogue())
+    for note in report.notes:
+        typer.echo(str(note))
+    write_atomic(out, "".join(json.dumps(task) + "\n" for task in report.tasks))
+    typer.echo(f"wrote {len(report.tasks)} task(s) to {out} ({report.summary()})")
