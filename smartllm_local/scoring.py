@@ -2,13 +2,14 @@
 
 - **Exe**: successful actions / attempted actions (every skill call a plan makes
   is an attempted action, ``GoToObject`` included; 0 when nothing was attempted).
-- **GCR**: satisfied goal conditions / goal conditions (1 when there are none).
+- **GCR**: satisfied goal conditions / goal conditions (None for a task that
+  has none: an imported task without ground truth can be run, not judged).
 - **TCR**: 1 iff GCR = 1.
 - **RU**: 1 when the run's transitions equal the ground truth, 0 when they
   reach the task's maximum, linear in between, clipped to [0, 1]; when the
   maximum equals the ground truth, 1 for at most that many transitions and 0
   above. Unknown (None) without a ground truth.
-- **SR**: 1 iff TCR = 1 and RU = 1 (None when RU is unknown).
+- **SR**: 1 iff TCR = 1 and RU = 1 (None when either is unknown).
 
 Goal conditions come in SMART-LLM's ground-truth shape: ``{"name": type,
 "contains": [types], "state": STATE or null}``. Each entry yields one
@@ -181,8 +182,8 @@ def robot_utilization(transitions: int, ground_truth: int | None, maximum: int |
 @dataclass(frozen=True)
 class Scores:
     SR: float | None
-    TCR: float
-    GCR: float
+    TCR: float | None
+    GCR: float | None
     RU: float | None
     Exe: float
     transitions: int
@@ -208,10 +209,10 @@ def score(
     """Score a run from its final objects, its action counts and its transitions."""
     inside = containment(final_objects)
     results = [(c, condition_holds(c, final_objects, inside)) for g in goals for c in g.conditions()]
-    gcr = sum(ok for _, ok in results) / len(results) if results else 1.0
-    tcr = 1.0 if gcr == 1.0 else 0.0
+    gcr = sum(ok for _, ok in results) / len(results) if results else None
+    tcr = None if gcr is None else float(gcr == 1.0)
     ru = robot_utilization(transitions, trans, max_trans)
-    sr = None if ru is None else float(tcr == 1.0 and ru == 1.0)
+    sr = None if ru is None or tcr is None else float(tcr == 1.0 and ru == 1.0)
     exe = succeeded / attempted if attempted else 0.0
     return Scores(SR=sr, TCR=tcr, GCR=gcr, RU=ru, Exe=exe, transitions=transitions,
                   conditions=tuple((c.describe(), ok) for c, ok in results))

@@ -105,8 +105,6 @@ def check_task(data: Any, catalogue: Catalogue, where: str) -> tuple[Task | None
                 problems.append(f"{where}: goals: there is no {name!r} in {scene}")
     if data["trans"] is not None and data["max_trans"] is not None and data["trans"] > data["max_trans"]:
         problems.append(f"{where}: trans ({data['trans']}) is larger than max_trans ({data['max_trans']})")
-    if data["feasible"] and not goals:
-        problems.append(f"{where}: goals: a feasible task needs at least one goal condition")
     if problems:
         return None, problems
     task = Task(
