@@ -1,0 +1,37 @@
+"""Model backends: llama.cpp (default) and transformers (+ llguidance). They only generate."""
+
+from __future__ import annotations
+
+import os
+
+from ...errors import UserError
+from .base import Backend, Generated, Sampling
+
+BACKENDS = ("llamacpp", "transformers")
+
+__all__ = ["BACKENDS", "Backend", "Generated", "Sampling", "load_backend"]
+
+
+def load_backend(
+    name: str = "llamacpp",
+    model: str | None = None,
+    *,
+    n_ctx: int = 4096,
+    threads: int | None = None,
+    n_gpu_layers: int = 0,
+    seed: int = 0,
+) -> Backend:
+    """Load a model in a backend; ``model`` is a path or an embedded model name (None: the default)."""
+    # No network, ever: these switches keep Hugging Face libraries off the hub.
+    for switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
+        os.environ[switch] = "1"
+    if name == "llamacpp":
+        from ..models import resolve_gguf
+        from .llamacpp import LlamaCppBackend
+
+        return LlamaCppBackend(resolve_gguf(model), n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers, seed=seed)
+    if name == "transformers":
+        from .transformers import TransformersBackend
+
+        return TransformersBackend(model, n_ctx=n_ctx, threads=threads, seed=seed)
+    raise UserError(f"unknown backend {name!r}; choose one of {', '.join(BACKENDS)}")

@@ -1,0 +1,305 @@
+"""Grammars as data, and what we do with them: GBNF for llama.cpp, Lark for llguidance,
+a regular expression to test membership, random sampling, and the longest string.
+
+Every grammar here is finite-depth: rules may refer to other rules but never,
+directly or not, to themselves, and every repetition is bounded. That keeps
+llama.cpp's sampler away from the recursion and nested-repetition cases that
+crash or overflow it, lets a grammar be checked by a plain regex, and bounds
+the length of every string it admits, so generation always ends by completing
+the grammar rather than by running out of tokens.
+"""
+
+from __future__ import annotations
+
+import random
+import re
+import string
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Iterable, Union
+
+from ..errors import SmartLLMError
+
+
+class GrammarError(SmartLLMError):
+    """A grammar is malformed (undefined rule, recursion, bad repetition)."""
+
+
+@dataclass(frozen=True)
+class Lit:
+    text: str
+
+
+@dataclass(frozen=True)
+class Chars:
+    """One character from a set (printable ASCII only)."""
+
+    chars: frozenset[str]
+
+
+@dataclass(frozen=True)
+class Ref:
+    name: str
+
+
+@dataclass(frozen=True)
+class Seq:
+    items: tuple["Node", ...]
+
+
+@dataclass(frozen=True)
+class Alt:
+    options: tuple["Node", ...]
+
+
+@dataclass(frozen=True)
+class Rep:
+    item: "Node"
+    min: int
+    max: int
+
+
+Node = Union[Lit, Chars, Ref, Seq, Alt, Rep]
+NodeLike = Union[Node, str]
+
+
+def _node(x: NodeLike) -> Node:
+    return Lit(x) if isinstance(x, str) else x
+
+
+def seq(*items: NodeLike) -> Node:
+    nodes = tuple(_node(i) for i in items)
+    return nodes[0] if len(nodes) == 1 else Seq(nodes)
+
+
+def alt(*options: NodeLike) -> Node:
+    nodes = tuple(dict.fromkeys(_node(o) for o in options))
+    if not nodes:
+        raise GrammarError("an alternation needs at least one option")
+    return nodes[0] if len(nodes) == 1 else Alt(nodes)
+
+
+def rep(item: NodeLike, low: int, high: int) -> Node:
+    if not 0 <= low <= high:
+        raise GrammarError(f"repetition {{{low},{high}}} is empty or negative")
+    return Rep(_node(item), low, high)
+
+
+def opt(item: NodeLike) -> Node:
+    return Rep(_node(item), 0, 1)
+
+
+def chars(allowed: Iterable[str]) -> Chars:
+    allowed = frozenset(allowed)
+    bad = [c for c in allowed if c not in string.printable or c in "\t\r\x0b\x0c"]
+    if bad or not allowed:
+        raise GrammarError(f"character classes hold printable ASCII only, got {sorted(bad)!r}")
+    return Chars(allowed)
+
+
+_RULE_NAME = re.compile(r"^[a-z][a-z0-9-]*$")
+
+
+class Grammar:
+    """Named rules; ``root`` is where a string starts."""
+
+    def __init__(self, rules: dict[str, NodeLike]):
+        self.rules: dict[str, Node] = {name: _node(node) for name, node in rules.items()}
+        self._check()
+
+    def _check(self) -> None:
+        if "root" not in self.rules:
+            raise GrammarError("a grammar needs a root rule")
+        for name in self.rules:
+            if not _RULE_NAME.match(name):
+                raise GrammarError(f"rule name {name!r}: use lowercase letters, digits and hyphens")
+        state: dict[str, int] = {}
+
+        def visit(name: str, path: tuple[str, ...]) -> None:
+            if name not in self.rules:
+                raise GrammarError(f"rule {path[-1] if path else 'root'} refers to undefined rule {name!r}")
+            if state.get(name) == 2:
+                return
+            if state.get(name) == 1:
+                raise GrammarError(f"rules must not recurse: {' -> '.join(path + (name,))}")
+            state[name] = 1
+            for ref in _refs(self.rules[name]):
+                visit(ref, path + (name,))
+            state[name] = 2
+
+        visit("root", ())
+
+    # ------------------------------------------------------------------ GBNF
+
+    def to_gbnf(self) -> str:
+        """llama.cpp's GBNF; every rule reachable from root, root first."""
+        return "\n".join(f"{name} ::= {_gbnf(node)}" for name, node in self._reachable()) + "\n"
+
+    def _reachable(self) -> list[tuple[str, Node]]:
+        order: list[str] = []
+
+        def visit(name: str) -> None:
+            if name in order:
+                return
+            order.append(name)
+            for ref in _refs(self.rules[name]):
+                visit(ref)
+
+        visit("root")
+        return [(n, self.rules[n]) for n in order]
+
+    # ---------------------------------------------------------------- others
+
+    @cached_property
+    def regex(self) -> re.Pattern[str]:
+        return re.compile(self._regex(self.rules["root"]), re.DOTALL)
+
+    def _regex(self, node: Node) -> str:
+        if isinstance(node, Lit):
+            return re.escape(node.text)
+        if isinstance(node, Chars):
+            return "[" + "".join(re.escape(c) for c in sorted(node.chars)) + "]"
+        if isinstance(node, Ref):
+            return "(?:" + self._regex(self.rules[node.name]) + ")"
+        if isinstance(node, Seq):
+            return "".join(self._regex(i) for i in node.items)
+        if isinstance(node, Alt):
+            return "(?:" + "|".join(self._regex(o) for o in node.options) + ")"
+        return f"(?:{self._regex(node.item)}){{{node.min},{node.max}}}"
+
+    def matches(self, text: str) -> bool:
+        """Whether the grammar admits exactly ``text``."""
+        return self.regex.fullmatch(text) is not None
+
+    def max_length(self) -> int:
+        """The length of the longest string the grammar admits."""
+        return self._max(self.rules["root"], {})
+
+    def _max(self, node: Node, memo: dict[str, int]) -> int:
+        if isinstance(node, Lit):
+            return len(node.text)
+        if isinstance(node, Chars):
+            return 1
+        if isinstance(node, Ref):
+            if node.name not in memo:
+                memo[node.name] = self._max(self.rules[node.name], memo)
+            return memo[node.name]
+        if isinstance(node, Seq):
+            return sum(self._max(i, memo) for i in node.items)
+        if isinstance(node, Alt):
+            return max(self._max(o, memo) for o in node.options)
+        return node.max * self._max(node.item, memo)
+
+    def sample(self, rng: random.Random) -> str:
+        """A random string of the grammar (uniform choices, uniform repetition counts)."""
+        out: list[str] = []
+        self._sample(self.rules["root"], rng, out)
+        return "".join(out)
+
+    def _sample(self, node: Node, rng: random.Random, out: list[str]) -> None:
+        if isinstance(node, Lit):
+            out.append(node.text)
+        elif isinstance(node, Chars):
+            out.append(rng.choice(sorted(node.chars)))
+        elif isinstance(node, Ref):
+            self._sample(self.rules[node.name], rng, out)
+        elif isinstance(node, Seq):
+            for item in node.items:
+                self._sample(item, rng, out)
+        elif isinstance(node, Alt):
+            self._sample(rng.choice(node.options), rng, out)
+        else:
+            for _ in range(rng.randint(node.min, node.max)):
+                self._sample(node.item, rng, out)
+
+    def to_lark(self) -> str:
+        """The same grammar in the Lark dialect llguidance reads (``start`` is root)."""
+        lines = []
+        for name, node in self._reachable():
+            lark_name = "start" if name == "root" else name.replace("-", "_")
+            lines.append(f"{lark_name}: {_lark(node)}")
+        return "\n".join(lines) + "\n"
+
+
+def _refs(node: Node) -> Iterable[str]:
+    if isinstance(node, Ref):
+        yield node.name
+    elif isinstance(node, Seq):
+        for i in node.items:
+            yield from _refs(i)
+    elif isinstance(node, Alt):
+        for o in node.options:
+            yield from _refs(o)
+    elif isinstance(node, Rep):
+        yield from _refs(node.item)
+
+
+def _escape_char(c: str, in_class: bool) -> str:
+    if c.isalnum() or c == " " or (not in_class and c not in '"\\'):
+        return c
+    return f"\\x{ord(c):02X}"
+
+
+def _literal(text: str) -> str:
+    body = "".join("\\n" if c == "\n" else _escape_char(c, in_class=False) for c in text)
+    return f'"{body}"'
+
+
+def _class(allowed: frozenset[str]) -> str:
+    codes = sorted(ord(c) for c in allowed)
+    parts: list[str] = []
+    i = 0
+    while i < len(codes):
+        j = i
+        while j + 1 < len(codes) and codes[j + 1] == codes[j] + 1:
+            j += 1
+        first, last = chr(codes[i]), chr(codes[j])
+        if j - i >= 2:
+            parts.append(f"{_escape_char(first, True)}-{_escape_char(last, True)}")
+        else:
+            parts.extend(_escape_char(chr(c), True) for c in codes[i:j + 1])
+        i = j + 1
+    return "[" + "".join(parts) + "]"
+
+
+def _gbnf(node: Node) -> str:
+    if isinstance(node, Lit):
+        return _literal(node.text)
+    if isinstance(node, Chars):
+        return _class(node.chars)
+    if isinstance(node, Ref):
+        return node.name
+    if isinstance(node, Seq):
+        return " ".join(_gbnf_atom(i) for i in node.items)
+    if isinstance(node, Alt):
+        return " | ".join(_gbnf(o) for o in node.options)
+    inner = _gbnf_atom(node.item)
+    if (node.min, node.max) == (0, 1):
+        return f"{inner}?"
+    if node.min == node.max:
+        return f"{inner}{{{node.min}}}"
+    return f"{inner}{{{node.min},{node.max}}}"
+
+
+def _gbnf_atom(node: Node) -> str:
+    text = _gbnf(node)
+    return f"({text})" if isinstance(node, (Alt, Seq)) else text
+
+
+def _lark(node: Node) -> str:
+    if isinstance(node, Lit):
+        return "\"" + node.text.replace("\\", "\\\\").replace("\"", "\\\"").replace("\n", "\\n") + "\""
+    if isinstance(node, Chars):
+        return "/" + "[" + "".join(re.escape(c).replace("/", "\\/") for c in sorted(node.chars)) + "]/"
+    if isinstance(node, Ref):
+        return node.name.replace("-", "_")
+    if isinstance(node, Seq):
+        return " ".join(_lark_atom(i) for i in node.items)
+    if isinstance(node, Alt):
+        return " | ".join(_lark(o) for o in node.options)
+    return f"{_lark_atom(node.item)}{{{node.min},{node.max}}}"
+
+
+def _lark_atom(node: Node) -> str:
+    text = _lark(node)
+    return f"({text})" if isinstance(node, (Alt, Seq)) else text

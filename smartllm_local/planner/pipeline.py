@@ -1,0 +1,226 @@
+"""SMART-LLM's three stages on a local model: decomposition, coalition formation, allocation.
+
+Each stage is a plain method, so a benchmark run can take every task through
+one stage before the next (the examples at the head of a stage's prompt then
+stay in the model's cache from one task to the next).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ..files import write_atomic, write_json
+from ..plan_language import Plan, parse_plan
+from ..robots import Catalogue, Robot
+from ..skills import SkillSet
+from .backends.base import Backend, Sampling
+from .constraints import REFUSAL_PREFIX, CoalitionConstraint, PlanConstraint
+from .prompts import (
+    Example,
+    PromptOptions,
+    allocation_prompt,
+    coalition_prompt,
+    decomposition_prompt,
+    examples_for,
+    load_examples,
+    plan_object_types,
+    rank_by_relevance,
+)
+from .scene_context import SceneObjects, scene_objects
+from .stages import StageRecord, check_output, fit_prompt, run_stage
+
+DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 512, "allocation": 1280}
+_COALITION_LINE = re.compile(r"^# (SubTask \d+ \(.*\): .*|INFEASIBLE: .*)$")
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    sampling: Sampling = Sampling()
+    grammar: bool = True
+    prompts: PromptOptions = PromptOptions()
+    budgets: dict[str, int] = field(default_factory=lambda: dict(DEFAULT_BUDGETS))
+
+
+@dataclass
+class PlanResult:
+    """A task's way through the stages."""
+
+    instruction: str
+    floor_plan: str
+    robots: list[int]
+    stages: list[StageRecord] = field(default_factory=list)
+    allocated: str = ""
+    plan: Plan | None = None
+    refusal: str | None = None
+    error: str = ""
+
+    @property
+    def notices(self) -> list[str]:
+        return [f"{r.stage}: dropped example(s) {', '.join(r.dropped)} to fit the context" for r in self.stages if r.dropped]
+
+
+class Planner:
+    """Plans tasks with one backend; keeps nothing between tasks but the backend's cache."""
+
+    def __init__(self, backend: Backend, catalogue: Catalogue, config: PlannerConfig = PlannerConfig(),
+                 examples: Sequence[Example] | None = None):
+        self.backend = backend
+        self.catalogue = catalogue
+        self.config = config
+        self.examples = list(examples) if examples is not None else load_examples()
+        self.rng = np.random.default_rng(config.sampling.seed)
+
+    # ---------------------------------------------------------------- stages
+
+    def decompose(self, result: PlanResult, scene: SceneObjects) -> StageRecord:
+        opts = self.config.prompts
+        record = StageRecord("decomposition")
+        examples = examples_for("decomposition", self.examples, opts)
+        ranked = rank_by_relevance(examples, result.instruction)
+        budget = self.config.budgets["decomposition"]
+        skills = self.catalogue.skills
+        record.prompt, tokens, kept, dropped = fit_prompt(
+            lambda ex: decomposition_prompt(result.instruction, scene, skills, ex, opts), examples, ranked,
+            self.backend, budget)
+        record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
+        constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary) \
+            if self.config.grammar else None
+        run_stage(record, self.backend, tokens, constraint, output_budget=budget,
+                  sampling=self.config.sampling, rng=self.rng)
+        self._finish_plan_stage(record, result, form="decomposed", scene=scene)
+        result.stages.append(record)
+        return record
+
+    def form_coalition(self, result: PlanResult, decomposed: Plan, team: Sequence[Robot],
+                       scene: SceneObjects) -> StageRecord:
+        opts = self.config.prompts
+        record = StageRecord("coalition")
+        decomposition = result.stages[0].output
+        examples = examples_for("coalition", self.examples, opts)
+        ranked = rank_by_relevance(examples, result.instruction, plan_object_types(decomposition, scene))
+        budget = self.config.budgets["coalition"]
+        record.prompt, tokens, kept, dropped = fit_prompt(
+            lambda ex: coalition_prompt(decomposition, team, scene, self.catalogue.robots, ex, opts),
+            examples, ranked, self.backend, budget)
+        record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
+        names = [f.name for f in decomposed.functions]
+        constraint = CoalitionConstraint(names, len(team)) if self.config.grammar else None
+        run_stage(record, self.backend, tokens, constraint, output_budget=budget,
+                  sampling=self.config.sampling, rng=self.rng)
+        if constraint is None:
+            lines = [line for line in record.output.splitlines() if line.strip()]
+            bad = [line for line in lines if not _COALITION_LINE.match(line)]
+            if bad or not lines:
+                record.error = f"coalition output is not a list of coalition lines: {bad[:1] or 'empty'}"
+            elif lines[0].startswith(REFUSAL_PREFIX):
+                record.refusal = lines[0][len(REFUSAL_PREFIX):].strip()
+        if record.refusal is not None:
+            result.refusal = record.refusal
+        result.stages.append(record)
+        return record
+
+    def allocate(self, result: PlanResult, decomposed: Plan, coalition: str | None, team: Sequence[Robot],
+                 scene: SceneObjects) -> StageRecord:
+        opts = self.config.prompts
+        record = StageRecord("allocation")
+        decomposition = result.stages[0].output
+        examples = examples_for("allocation", self.examples, opts)
+        ranked = rank_by_relevance(examples, result.instruction, plan_object_types(decomposition, scene))
+        budget = self.config.budgets["allocation"]
+        skills = self.catalogue.skills
+        record.prompt, tokens, kept, dropped = fit_prompt(
+            lambda ex: allocation_prompt(decomposition, coalition, team, skills, self.catalogue.robots, ex, opts),
+            examples, ranked, self.backend, budget)
+        record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
+        constraint = None
+        if self.config.grammar:
+            team_skills = [s for s in skills.values() if any(s.name in r.skills for r in team)]
+            constraint = PlanConstraint(scene, SkillSet(team_skills), team_size=len(team), comments=opts.comments,
+                                        function_names=[f.name for f in decomposed.functions])
+        run_stage(record, self.backend, tokens, constraint, output_budget=budget,
+                  sampling=self.config.sampling, rng=self.rng)
+        self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))
+        result.stages.append(record)
+        return record
+
+    def _finish_plan_stage(self, record: StageRecord, result: PlanResult, *, form: str, scene: SceneObjects,
+                           team_size: int | None = None) -> None:
+        plan = check_output(record, lambda text: parse_plan(
+            text, form=form, skills=self.catalogue.skills, team_size=team_size, scene_types=scene.types,  # type: ignore[arg-type]
+            name=f"<{record.stage} output>"))
+        if isinstance(plan, Plan) and plan.is_refusal:
+            record.refusal = plan.refusal
+        if record.refusal is not None:
+            result.refusal = record.refusal
+        if record.error:
+            result.error = record.error
+        record.plan = plan
+
+    # ------------------------------------------------------------------ task
+
+    def plan(self, instruction: str, floor_plan: str | int, robot_ids: Sequence[int]) -> PlanResult:
+        """All stages for one task; the allocated plan (or the refusal) is in the result."""
+        team = self.catalogue.team(robot_ids)
+        scene = scene_objects(floor_plan)
+        result = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=list(robot_ids))
+        first = self.decompose(result, scene)
+        if self.continue_after(result, first):
+            decomposed = first.plan
+            coalition_text = None
+            if self.config.prompts.coalition:
+                second = self.form_coalition(result, decomposed, team, scene)
+                coalition_text = second.output
+            if result.refusal is None and not result.error:
+                self.allocate(result, decomposed, coalition_text, team, scene)
+        self.conclude(result)
+        return result
+
+    @staticmethod
+    def continue_after(result: PlanResult, record: StageRecord) -> bool:
+        return result.refusal is None and not result.error and record.plan is not None
+
+    @staticmethod
+    def conclude(result: PlanResult) -> None:
+        """Set the allocated plan text: the last stage's plan, or the refusal."""
+        if result.refusal is not None:
+            result.allocated = f"{REFUSAL_PREFIX}{result.refusal}\n"
+            result.plan = parse_plan(result.allocated, form="allocated")
+            return
+        last = result.stages[-1] if result.stages else None
+        if last is not None and last.stage == "allocation" and not last.error:
+            result.allocated = last.output
+            result.plan = last.plan  # type: ignore[assignment]
+
+
+def write_artifacts(result: PlanResult, out: Path, extra: dict | None = None) -> None:
+    """Write prompts, grammars, raw outputs, timings and the stage outputs under ``out``."""
+    names = {"decomposition": "decomposed.py", "coalition": "coalition.txt", "allocation": "allocated.py"}
+    for record in result.stages:
+        folder = out / record.stage
+        write_atomic(folder / "prompt.txt", record.prompt)
+        if record.grammars:
+            write_atomic(folder / "grammar.gbnf", "".join(
+                f"# grammar {k + 1} of {len(record.grammars)} offered for a line of this stage\n{g}\n"
+                for k, g in enumerate(record.grammars)))
+        write_atomic(folder / "raw_output.txt", record.raw)
+        write_json(folder / "timings.json", record.timings())
+        write_atomic(out / names[record.stage], record.output)
+    summary = {
+        "instruction": result.instruction, "floor_plan": result.floor_plan, "robots": result.robots,
+        "refusal": result.refusal, "error": result.error or None, "notices": result.notices,
+        "stages": {r.stage: r.timings() for r in result.stages},
+        **(extra or {}),
+    }
+    write_json(out / "result.json", summary)
+    if result.allocated and not any(r.stage == "allocation" for r in result.stages):
+        write_atomic(out / "allocated.py", result.allocated)
+
+
+def result_json(result: PlanResult) -> str:
+    return json.dumps({"allocated": result.allocated, "refusal": result.refusal, "error": result.error or None})

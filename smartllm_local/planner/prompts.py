@@ -1,0 +1,224 @@
+"""The three stages' prompts, assembled from the worked examples under prompts/.
+
+Prompts are Python source, as in SMART-LLM: the skills as an import line,
+worked examples (each a task description followed by its plan), then the new
+task. The examples come first and the task's own details last, so that the
+long shared beginning of a prompt is the same for every task of a stage and a
+backend can keep it in its cache.
+
+Ablations (as in the paper): ``comments=False`` removes the comment lines
+from the examples' code, ``summary=False`` removes the summary block of the
+decompositions, and ``coalition=False`` drops stage 2 (stage 3 then works
+from the decomposition and the robots alone).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+from ..errors import UserError
+from ..resources import data_dir
+from ..robots import Robot
+from ..skills import SkillSet
+from .scene_context import SceneObjects, scene_objects
+
+STAGES = ("decomposition", "coalition", "allocation")
+DEFAULT_EXAMPLE_COUNTS = {"decomposition": 5, "coalition": 3, "allocation": 4}
+_QUOTED = re.compile(r"'([A-Za-z]+)'")
+
+
+@dataclass(frozen=True)
+class Example:
+    name: str
+    instruction: str
+    floor_plan: int
+    robots: tuple[int, ...]
+    goals: tuple[dict[str, Any], ...]
+    trans: int
+    max_trans: int
+    feasible: bool
+    stages: tuple[str, ...]
+    decomposition: str
+    coalition: str | None
+    allocation: str | None
+
+    def object_types(self) -> list[str]:
+        """The object types its plan mentions, in order of appearance."""
+        return list(dict.fromkeys(_QUOTED.findall(self.decomposition)))
+
+
+@dataclass(frozen=True)
+class PromptOptions:
+    comments: bool = True
+    summary: bool = True
+    coalition: bool = True
+    example_counts: dict[str, int] = field(default_factory=lambda: dict(DEFAULT_EXAMPLE_COUNTS))
+
+
+def load_examples(folder: Path | None = None) -> list[Example]:
+    """The worked examples, in the order examples.json lists them."""
+    folder = folder or data_dir("prompts")
+    try:
+        meta = json.loads((folder / "examples.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise UserError(f"cannot read the prompt examples in {folder}: {exc}") from exc
+    examples = []
+    for entry in meta["examples"]:
+        name = entry["name"]
+
+        def read(stage: str, suffix: str, required: bool) -> str | None:
+            path = folder / stage / f"{name}{suffix}"
+            if not path.is_file():
+                if required:
+                    raise UserError(f"prompt example {name} lacks {path}")
+                return None
+            return path.read_text(encoding="utf-8")
+
+        stages = tuple(entry["stages"])
+        examples.append(Example(
+            name=name, instruction=entry["instruction"], floor_plan=entry["floor_plan"],
+            robots=tuple(entry["robots"]), goals=tuple(entry["goals"]), trans=entry["trans"],
+            max_trans=entry["max_trans"], feasible=entry.get("feasible", True), stages=stages,
+            decomposition=read("decomposition", ".py", True) or "",
+            coalition=read("coalition", ".txt", "coalition" in stages),
+            allocation=read("allocation", ".py", "allocation" in stages),
+        ))
+    return examples
+
+
+def examples_for(stage: str, examples: Sequence[Example], options: PromptOptions) -> list[Example]:
+    chosen = [e for e in examples if stage in e.stages]
+    return chosen[: options.example_counts.get(stage, len(chosen))]
+
+
+def rank_by_relevance(examples: Sequence[Example], instruction: str, types: Sequence[str] = ()) -> list[Example]:
+    """Examples from most to least relevant to a task: shared words and object types."""
+    words = set(re.findall(r"[a-z]+", instruction.lower())) - _STOPWORDS
+    wanted = {t.lower() for t in types}
+
+    def score(e: Example) -> float:
+        own = set(re.findall(r"[a-z]+", e.instruction.lower())) - _STOPWORDS
+        kinds = {t.lower() for t in e.object_types()}
+        return len(words & own) + len(wanted & kinds) + 0.5 * len(words & kinds)
+
+    return sorted(examples, key=lambda e: -score(e))
+
+
+_STOPWORDS = {"the", "a", "an", "and", "in", "on", "of", "to", "then", "it", "put", "me", "please", "into", "up", "off"}
+
+
+# ------------------------------------------------------------------ transforms
+
+
+def strip_comments(code: str) -> str:
+    """The code without its comment lines (the summary block is kept: that is another ablation)."""
+    lines = code.splitlines(keepends=True)
+    body_started = False
+    out = []
+    for line in lines:
+        if line.startswith("def ") or (line.strip() and not line.startswith("#")):
+            body_started = True
+        if body_started and line.lstrip().startswith("#"):
+            continue
+        out.append(line)
+    return "".join(out)
+
+
+def strip_summary(code: str) -> str:
+    """The code without the summary block that precedes the first function."""
+    lines = code.splitlines(keepends=True)
+    first = next((i for i, line in enumerate(lines) if line.startswith("def ")), 0)
+    return "".join(lines[first:])
+
+
+def shape(code: str, options: PromptOptions) -> str:
+    if not options.summary:
+        code = strip_summary(code)
+    if not options.comments:
+        code = strip_comments(code)
+    return code.rstrip("\n") + "\n"
+
+
+def skills_header(skills: SkillSet) -> str:
+    return f"from skills import {', '.join(skills)}\nimport threading\nimport time\n"
+
+
+def robots_list(team: Sequence[Robot]) -> str:
+    items = ",\n    ".join(
+        f"{{'name': 'robots[{i}]', 'id': {r.id}, 'skills': {sorted(r.skills)!r}, 'mass_capacity': {r.mass_capacity:g}}}"
+        for i, r in enumerate(team)
+    )
+    return f"robots = [\n    {items},\n]\n"
+
+
+def _example_scene(example: Example) -> SceneObjects:
+    return scene_objects(example.floor_plan)
+
+
+# --------------------------------------------------------------------- stages
+
+DECOMPOSITION_INTRO = """\
+# Each task below is broken into sub-tasks: a summary of them, one function per
+# sub-task, then the order they run in. Sub-tasks that do not depend on each other
+# run in parallel threads; the others run one after another.
+"""
+
+COALITION_INTRO = """\
+# For each sub-task of a plan, choose the robot, or the team of robots, that will do it.
+# A robot can only use its own skills and lift up to its mass capacity; a team pools
+# its members' skills and lifts the sum of their capacities. Prefer a single robot when
+# one can do the whole sub-task. If no robot or team can do a sub-task, answer with one
+# line: # INFEASIBLE: <why>.
+"""
+
+ALLOCATION_INTRO = """\
+# Each plan below is rewritten for its robots: every function takes robot_list, every
+# skill call names the robot (robot_list[0]) or the whole team (robot_list) that acts,
+# and each sub-task is started with the robots the coalition chose for it.
+"""
+
+
+def decomposition_prompt(instruction: str, scene: SceneObjects, skills: SkillSet,
+                         examples: Sequence[Example], options: PromptOptions) -> str:
+    parts = [skills_header(skills), "\n", DECOMPOSITION_INTRO]
+    for k, ex in enumerate(examples, start=1):
+        objects = _example_scene(ex).python_list(ex.object_types())
+        parts.append(f"\n# Example {k}\nobjects = {objects}\n# Task Description: {ex.instruction}\n")
+        parts.append(shape(ex.decomposition, options))
+    parts.append(f"\n# Your task\nobjects = {scene.python_list()}\n# Task Description: {instruction}\n")
+    return "".join(parts)
+
+
+def plan_object_types(code: str, scene: SceneObjects) -> list[str]:
+    return [t for t in dict.fromkeys(_QUOTED.findall(code)) if t in scene.masses]
+
+
+def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects, catalogue: dict[int, Robot],
+                     examples: Sequence[Example], options: PromptOptions) -> str:
+    parts = [COALITION_INTRO]
+    for k, ex in enumerate(examples, start=1):
+        ex_team = [catalogue[i] for i in ex.robots]
+        objects = _example_scene(ex).python_list(ex.object_types())
+        parts.append(f"\n# Example {k}\n{shape(ex.decomposition, options)}{robots_list(ex_team)}"
+                     f"objects = {objects}\n# Coalition:\n{ex.coalition}")
+    objects = scene.python_list(plan_object_types(decomposed, scene))
+    parts.append(f"\n# Your plan\n{shape(decomposed, options)}{robots_list(team)}objects = {objects}\n# Coalition:\n")
+    return "".join(parts)
+
+
+def allocation_prompt(decomposed: str, coalition: str | None, team: Sequence[Robot], skills: SkillSet,
+                      catalogue: dict[int, Robot], examples: Sequence[Example], options: PromptOptions) -> str:
+    parts = [skills_header(skills), "\n", ALLOCATION_INTRO]
+    for k, ex in enumerate(examples, start=1):
+        ex_team = [catalogue[i] for i in ex.robots]
+        coalition_part = f"# Coalition:\n{ex.coalition}" if options.coalition else ""
+        allocated = shape(ex.allocation or "", PromptOptions(comments=options.comments, summary=True))
+        parts.append(f"\n# Example {k}\n{shape(ex.decomposition, options)}{robots_list(ex_team)}"
+                     f"{coalition_part}# Allocated plan:\n{allocated}")
+    coalition_part = f"# Coalition:\n{coalition}" if options.coalition and coalition else ""
+    parts.append(f"\n# Your plan\n{shape(decomposed, options)}{robots_list(team)}{coalition_part}# Allocated plan:\n")
+    return "".join(parts)

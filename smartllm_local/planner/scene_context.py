@@ -1,0 +1,59 @@
+"""What the planner knows of a scene: its object types, their masses and affordances.
+
+Prompts list the types (with the heaviest instance's mass) and grammars only
+admit, for each skill argument, the types that offer what the skill needs.
+Pieces that only exist after slicing (``TomatoSliced``) are included for every
+sliceable type, since a plan may slice first and then handle the pieces.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable
+
+from ..skills import has_affordance
+from ..world.object_types import SLICE_RESULTS, TYPE_PROPERTIES
+from ..world.scenes import floor_plan_name, load_scene
+
+AFFORDANCE_NAMES = ("pickupable", "receptacle", "openable", "toggleable", "sliceable", "breakable", "dirtyable", "movable")
+
+
+@dataclass(frozen=True)
+class SceneObjects:
+    floor_plan: str
+    masses: dict[str, float]  # type -> heaviest instance (kg)
+    by_affordance: dict[str, tuple[str, ...]]  # affordance ("" = any) -> types, sorted
+
+    @property
+    def types(self) -> tuple[str, ...]:
+        return self.by_affordance[""]
+
+    def types_for(self, affordance: str) -> tuple[str, ...]:
+        return self.by_affordance.get(affordance, ())
+
+    def python_list(self, only: Iterable[str] | None = None) -> str:
+        """The objects as a Python list of dicts, as the prompts show them."""
+        chosen = self.types if only is None else [t for t in self.types if t in set(only)]
+        items = ", ".join(f"{{'name': '{t}', 'mass': {self.masses[t]:g}}}" for t in chosen)
+        return f"[{items}]"
+
+
+def scene_objects(floor_plan: int | str) -> SceneObjects:
+    """The object types of a floor plan, grouped by affordance."""
+    name = floor_plan_name(floor_plan)
+    objects = load_scene(name)
+    masses: dict[str, float] = {}
+    flags: dict[str, set[str]] = {}
+    for obj in objects:
+        kind = obj["objectType"]
+        masses[kind] = round(max(masses.get(kind, 0.0), float(obj.get("mass") or 0.0)), 3)
+        flags.setdefault(kind, set()).update(a for a in AFFORDANCE_NAMES if has_affordance(obj, a))
+    for kind in list(masses):
+        if kind in SLICE_RESULTS:
+            piece, count = SLICE_RESULTS[kind]
+            masses[piece] = round(masses[kind] / count, 3)
+            flags[piece] = {a for a in AFFORDANCE_NAMES if has_affordance({p: True for p in TYPE_PROPERTIES[piece]}, a)}
+    by_affordance = {"": tuple(sorted(masses))}
+    for affordance in AFFORDANCE_NAMES:
+        by_affordance[affordance] = tuple(sorted(t for t, f in flags.items() if affordance in f))
+    return SceneObjects(floor_plan=name, masses=masses, by_affordance=by_affordance)

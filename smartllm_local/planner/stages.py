@@ -1,0 +1,141 @@
+"""Running one stage: fit its prompt into the context, generate under its constraint, check the result.
+
+Context budget: the prompt is measured with the loaded model's tokenizer;
+when prompt + output budget exceed the context, examples are dropped, least
+relevant first, and the drop is recorded and reported rather than the prompt
+being truncated or the run failing.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..errors import PlanError, UserError
+from .backends.base import Backend, Sampling
+from .constraints import Choose, Constraint
+from .generation import BudgetError, run_constraint
+from .prompts import Example
+
+STOP_STRINGS = {
+    "decomposition": ("\n# Example", "\n# Your task", "\n# Task Description", "\nobjects ="),
+    "coalition": ("\n\n", "\n# Example", "\n# Your plan", "\ndef "),
+    "allocation": ("\n# Example", "\n# Your plan", "\n# Task Description"),
+}
+
+
+@dataclass
+class StageRecord:
+    """Everything about one stage's run, as written to --out."""
+
+    stage: str
+    prompt: str = ""
+    grammars: list[str] = field(default_factory=list)
+    raw: str = ""
+    output: str = ""
+    refusal: str | None = None
+    prompt_tokens: int = 0
+    generated_tokens: int = 0
+    forced_tokens: int = 0
+    seconds: float = 0.0
+    examples: list[str] = field(default_factory=list)
+    dropped: list[str] = field(default_factory=list)
+    error: str = ""
+    plan: object = None  # the parsed plan of a plan stage
+
+    @property
+    def tokens_per_second(self) -> float:
+        return self.generated_tokens / self.seconds if self.seconds else 0.0
+
+    def timings(self) -> dict[str, float | int | list[str]]:
+        return {
+            "prompt_tokens": self.prompt_tokens, "generated_tokens": self.generated_tokens,
+            "forced_tokens": self.forced_tokens, "seconds": round(self.seconds, 3),
+            "tokens_per_second": round(self.tokens_per_second, 2),
+            "examples": self.examples, "dropped_examples": self.dropped,
+        }
+
+
+def fit_prompt(
+    build: Callable[[Sequence[Example]], str],
+    examples: Sequence[Example],
+    ranked: Sequence[Example],
+    backend: Backend,
+    output_budget: int,
+) -> tuple[str, list[int], list[Example], list[Example]]:
+    """The prompt with as many examples as fit, dropping the least relevant (last of ``ranked``) first.
+
+    Examples keep their file order in the prompt. Returns prompt, its tokens, the kept and the dropped.
+    """
+    dropped: list[Example] = []
+    while True:
+        kept = [e for e in examples if e not in dropped]
+        prompt = build(kept)
+        tokens = backend.tokenize(prompt, bos=True)
+        if len(tokens) + output_budget < backend.n_ctx:
+            return prompt, tokens, kept, dropped
+        if not kept:
+            raise UserError(
+                f"the prompt alone ({len(tokens)} tokens) and an output budget of {output_budget} tokens "
+                f"exceed the model's context of {backend.n_ctx} tokens; raise --n-ctx"
+            )
+        dropped.append(next(e for e in reversed(ranked) if e not in dropped))
+
+
+def run_stage(
+    record: StageRecord,
+    backend: Backend,
+    prompt_tokens: list[int],
+    constraint: Constraint | None,
+    *,
+    output_budget: int,
+    sampling: Sampling,
+    rng: np.random.Generator,
+) -> None:
+    """Generate a stage's output into ``record`` (constrained, or free with stop strings)."""
+    context = list(prompt_tokens)
+    record.prompt_tokens = len(prompt_tokens)
+    started = time.perf_counter()
+    if constraint is None:
+        result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,
+                                  stop=STOP_STRINGS[record.stage], rng=rng)  # type: ignore[call-arg]
+        record.generated_tokens = len(result.tokens)
+        record.raw = record.output = result.text.rstrip() + "\n"
+        record.seconds = time.perf_counter() - started
+        return
+
+    def write(choose: Choose, remaining: int) -> tuple[str, int]:
+        result = backend.generate(context, grammar=choose.grammar, max_tokens=choose.grammar.max_length() + 1,
+                                  sampling=sampling, rng=rng)  # type: ignore[call-arg]
+        context.extend(result.tokens)
+        record.generated_tokens += len(result.tokens) + (result.stop == "eos")
+        return result.text, len(result.tokens) + (result.stop == "eos")
+
+    def force(text: str) -> int:
+        tokens = backend.tokenize(text)
+        context.extend(tokens)
+        record.forced_tokens += len(tokens)
+        return len(tokens)
+
+    try:
+        record.raw = record.output = run_constraint(constraint, write, force, output_budget)
+    except BudgetError as exc:
+        raise UserError(f"{record.stage}: {exc}") from exc
+    finally:
+        record.seconds = time.perf_counter() - started
+        record.grammars = list(dict.fromkeys(constraint.grammars))
+    record.refusal = constraint.refusal
+
+
+def check_output(record: StageRecord, validate: Callable[[str], object]) -> object | None:
+    """Validate a stage's output; a failure is recorded (free generation can produce anything)."""
+    if record.refusal is not None:
+        return None
+    try:
+        return validate(record.output)
+    except PlanError as exc:
+        record.error = f"{record.stage} output is not a valid plan: {exc}"
+        return None
