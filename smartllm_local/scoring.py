@@ -17,7 +17,9 @@ condition for its state and one per contained type (so a receptacle that must
 hold two things gives partial credit), and each condition is counted once: it
 holds when some object of the type is in the state, or some receptacle of the
 type holds (directly or nested) an object of the contained type. Type names
-match case-insensitively after trimming, and a slice of X counts as X.
+match case-insensitively after trimming, and a slice of X counts as X. ON and
+OFF apply to toggleable objects and to StoveBurners, which are on while the
+StoveKnob that controls them is.
 
 Where this differs from the scoring code of the original SMART-LLM release:
 that code matches a type as a substring of object names (so "Pan" matches
@@ -41,9 +43,15 @@ STATES = (
     "BROKEN", "PICKED", "CLEAN", "DIRTY", "FILLED",
 )
 
+
+def _switchable(o: Mapping[str, Any]) -> bool:
+    """Toggleable, or a StoveBurner: it is switched through its StoveKnob, and is on while that is."""
+    return bool(o.get("toggleable")) or o.get("objectType") == "StoveBurner"
+
+
 _STATE_TESTS = {
-    "ON": lambda o: o.get("toggleable") and o.get("isToggled"),
-    "OFF": lambda o: o.get("toggleable") and not o.get("isToggled"),
+    "ON": lambda o: _switchable(o) and o.get("isToggled"),
+    "OFF": lambda o: _switchable(o) and not o.get("isToggled"),
     "OPENED": lambda o: o.get("openable") and o.get("isOpen"),
     "CLOSED": lambda o: o.get("openable") and not o.get("isOpen"),
     "HOT": lambda o: o.get("temperature") == "Hot",

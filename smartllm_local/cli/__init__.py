@@ -14,6 +14,7 @@ import typer
 
 from ..errors import SmartLLMError, UserError
 from . import benchmark as _benchmark
+from . import plan as _plan
 from . import plans as _plans
 from . import scenes as _scenes
 
@@ -25,6 +26,8 @@ app = typer.Typer(
 )
 app.add_typer(_scenes.app, name="scenes")
 app.add_typer(_benchmark.app, name="benchmark")
+_benchmark.app.command("run")(_plan.benchmark_run)
+app.command("plan")(_plan.plan_command)
 app.command("validate")(_plans.validate)
 app.command("execute")(_plans.execute)
 

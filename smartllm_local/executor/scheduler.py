@@ -24,7 +24,9 @@ from dataclasses import dataclass, field
 from typing import Any, Iterator, Sequence
 
 from ..errors import UserError
-from ..plan_language.ir import Call, Function, Join, NewThread, Plan, SkillCall, Sleep, Start, bind, resolve_robots
+from ..plan_language.ir import (
+    Call, Function, Join, NewThread, Plan, RobotIndexError, SkillCall, Sleep, Start, bind, resolve_robots,
+)
 from ..robots import Robot
 from ..skills import DEFAULT_SKILL_SET, SkillSet
 from .team_actions import TeamWorld
@@ -129,6 +131,15 @@ def execute(
     if plan.form != "allocated":
         raise UserError("only allocated plans (whose skill calls name robots) can be executed")
     team_size = len(team)
+    # Resolve every robot reference before anything runs: a plan validated without the team
+    # (team_size=None) may still name robots it does not have.
+    try:
+        for step in plan.main:
+            if isinstance(step, (Call, NewThread)):
+                fn = plan.by_name[step.function]
+                _robots_used(plan, fn, bind(fn, step.args, {}, team_size), team_size)
+    except RobotIndexError as exc:
+        raise UserError(f"the plan does not fit this team of {team_size}: {exc.message}") from None
     world = TeamWorld(controller, team, skills)
     trace: list[TraceEntry] = []
     pending: list[_Task] = []

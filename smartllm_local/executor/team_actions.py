@@ -28,6 +28,9 @@ from ..world.navigation import Box, facing_yaw
 from ..world.object_types import SLICE_RESULTS, base_type
 
 KNIVES = frozenset({"Knife", "ButterKnife"})
+# Scene masses are float32 values (a 0.4 kg cup is 0.4000000059604645): a capacity that equals
+# the mass as written must suffice.
+_MASS_TOLERANCE = 1e-6
 _HELD_ACTIONS = frozenset({"PutObject", "DropHandObject", "ThrowObject"})
 
 
@@ -190,12 +193,12 @@ class TeamWorld:
         lifters = [actor]
         capacity = self.team[actor].mass_capacity
         for m in members:
-            if capacity >= mass:
+            if capacity + _MASS_TOLERANCE >= mass:
                 break
             if m != actor and self.hand_free(m) and self.sees(m, target["objectId"]):
                 lifters.append(m)
                 capacity += self.team[m].mass_capacity
-        if capacity < mass:
+        if capacity + _MASS_TOLERANCE < mass:
             who = ", ".join(self.team[m].name for m in lifters)
             return Outcome(False, f"{target['objectId']} weighs {mass:.3g} kg, more than {who} can lift "
                                   f"({capacity:.3g} kg); bring more robots within reach", target["objectId"],

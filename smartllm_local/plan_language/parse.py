@@ -13,18 +13,20 @@ and a reason) before anything runs:
 - robot arguments: ``robots[i]``, ``<param>[i]``, a list of those, ``<param>``
   or ``robots``; object arguments: string literals.
 
-Recursion, unknown names, out-of-range robot indices, sleeps over a minute
-and plans whose expansion exceeds a step budget are rejected too.
+Recursion, unknown names, out-of-range robot indices, sleeps over a minute,
+calls nested more than ``MAX_CALL_DEPTH`` functions deep and plans whose
+expansion exceeds a step budget are rejected too.
 """
 
 from __future__ import annotations
 
 import ast
 import builtins
+import difflib
 import math
 import re
 from dataclasses import dataclass, field
-from typing import Collection, Iterable
+from typing import Collection, Iterable, Iterator
 
 from ..errors import PlanError
 from ..skills import DEFAULT_SKILL_SET, SkillSet
@@ -53,8 +55,11 @@ from .ir import (
 MAX_SOURCE_CHARS = 1_000_000
 MAX_SLEEP_SECONDS = 60.0
 MAX_EXPANDED_STEPS = 10_000
+MAX_CALL_DEPTH = 100  # plan functions calling plan functions, this many deep at most
 MAX_OBJECT_NAME = 100
-REFUSAL_RE = re.compile(r"^\s*#\s*INFEASIBLE\s*:\s*(.*?)\s*$", re.MULTILINE)
+MAX_NESTING = 50  # syntax-tree depth; plans need about 10, and the checks below recurse on it
+# Horizontal whitespace only: ``\s`` would span lines (and make the search quadratic in blank lines).
+REFUSAL_RE = re.compile(r"^[ \t]*#[ \t]*INFEASIBLE[ \t]*:[ \t]*(.*?)[ \t]*$", re.MULTILINE)
 _ALLOWED_MODULES = {"threading", "time"}
 _BUILTINS = frozenset(dir(builtins))
 
@@ -65,6 +70,7 @@ class _Context:
     skills: SkillSet
     source_lines: list[str]
     problems: list[tuple[int, int, str]] = field(default_factory=list)
+    defined: frozenset[str] = frozenset()  # the plan's function names, known before any body is read
     thread_names: set[str] = field(default_factory=lambda: {"threading.Thread"})
     sleep_names: set[str] = field(default_factory=lambda: {"time.sleep"})
 
@@ -98,14 +104,24 @@ def parse_plan(
     """
     if len(source) > MAX_SOURCE_CHARS:
         raise PlanError([(1, 1, f"the plan is {len(source)} characters long; the limit is {MAX_SOURCE_CHARS}")], name)
+    if "\0" in source:
+        before = source[: source.index("\0")]
+        line, col = before.count("\n") + 1, len(before) - (before.rfind("\n") + 1) + 1
+        raise PlanError([(line, col, "the plan contains a null byte")], name)
     try:
         tree = ast.parse(source, filename=name)
     except SyntaxError as exc:
         raise PlanError([(exc.lineno or 1, exc.offset or 1, f"not valid Python: {exc.msg}")], name) from None
-    except (ValueError, RecursionError, MemoryError) as exc:
-        raise PlanError([(1, 1, f"not valid Python: {type(exc).__name__}: {exc}")], name) from None
+    except (RecursionError, MemoryError):
+        raise PlanError([(1, 1, "the plan is nested too deeply to be parsed")], name) from None
+    except ValueError as exc:
+        raise PlanError([(1, 1, f"not valid Python: {exc}")], name) from None
 
-    ctx = _Context(form=form, skills=skills, source_lines=source.splitlines())
+    too_deep = _too_deep(tree)
+    if too_deep is not None:
+        raise PlanError([(getattr(too_deep, "lineno", 1), getattr(too_deep, "col_offset", 0) + 1,
+                          f"the plan is nested too deeply here (more than {MAX_NESTING} levels)")], name)
+    ctx = _Context(form=form, skills=skills, source_lines=source.splitlines(), defined=_defined_names(tree.body))
     functions: dict[str, Function] = {}
     main: list[MainStep] = []
     _module(ctx, tree.body, functions, main)
@@ -120,6 +136,23 @@ def parse_plan(
     if ctx.problems:
         raise PlanError(sorted(ctx.problems), name)
     return Plan(form=form, functions=tuple(functions.values()), main=tuple(main), source=source, refusal=refusal)
+
+
+def _too_deep(tree: ast.AST) -> ast.AST | None:
+    """The first node nested deeper than MAX_NESTING, found without recursion (or None)."""
+    stack = [(tree, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if depth > MAX_NESTING:
+            return node
+        stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node))
+    return None
+
+
+def _show(node: ast.AST, limit: int = 60) -> str:
+    """Source text of a node for a message, shortened."""
+    text = ast.unparse(node)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 # ----------------------------------------------------------------------------- module level
@@ -166,11 +199,24 @@ def _module(ctx: _Context, body: list[ast.stmt], functions: dict[str, Function],
     flush()
 
 
+def _defined_names(body: list[ast.stmt]) -> frozenset[str]:
+    """The functions a module defines (in its main guard too): calls may come before definitions."""
+    names: set[str] = set()
+    for node in body:
+        if isinstance(node, ast.FunctionDef):
+            names.add(node.name)
+        elif _is_main_guard(node):
+            names |= _defined_names(node.body)  # type: ignore[attr-defined]
+    return frozenset(names)
+
+
 def _import(ctx: _Context, node: ast.Import | ast.ImportFrom) -> None:
     if isinstance(node, ast.Import):
         for alias in node.names:
-            if alias.name not in _ALLOWED_MODULES | {"skills"} or alias.asname:
+            if alias.name not in _ALLOWED_MODULES | {"skills"}:
                 ctx.fail(node, f"import {alias.name} is not allowed: plans may import threading, time and skills only")
+            elif alias.asname:
+                ctx.fail(node, f"import {alias.name} as {alias.asname} is not allowed: import modules under their own names")
         return
     if node.module == "skills":
         for alias in node.names:
@@ -252,6 +298,9 @@ def _function(ctx: _Context, node: ast.FunctionDef, functions: dict[str, Functio
     if args.vararg or args.kwarg or args.kwonlyargs or args.defaults or args.kw_defaults or args.posonlyargs:
         ctx.fail(node, f"{node.name}: parameters must be plain names (no defaults, *args or **kwargs)")
         ok = False
+    if node.returns is not None or any(a.annotation is not None for a in args.args):
+        ctx.fail(node, f"{node.name}: annotations are not part of the plan language")
+        ok = False
     params = tuple(a.arg for a in args.args)
     for param in params:
         if param == TEAM_NAME or param.startswith("__"):
@@ -302,7 +351,7 @@ def _body_call(ctx: _Context, call: ast.Call, params: tuple[str, ...]) -> Step |
         return _skill_call(ctx, call, params)
     if isinstance(call.func, ast.Name):
         return _function_call(ctx, call, params)
-    ctx.fail(call, f"{name or ast.unparse(call.func)}(...) is not a skill or plan function; attribute calls are not allowed")
+    ctx.fail(call, f"{name or _show(call.func)}(...) is not a skill or plan function; attribute calls are not allowed")
     return None
 
 
@@ -363,6 +412,11 @@ def _function_call(ctx: _Context, call: ast.Call, params: tuple[str, ...]) -> Ca
     if name.startswith("__") or name in _BUILTINS:
         ctx.fail(call, f"{name}() is not allowed: plans call only skills and their own functions")
         return None
+    if name not in ctx.defined:
+        close = difflib.get_close_matches(name, [*ctx.skills, *sorted(ctx.defined)], n=1)
+        hint = f"; did you mean {close[0]}?" if close else ""
+        ctx.fail(call, f"{name} is not a skill or a function of this plan{hint}")
+        return None
     if call.keywords or any(isinstance(a, ast.Starred) for a in call.args):
         ctx.fail(call, f"{call.func.id}: pass robots by position")  # type: ignore[attr-defined]
         return None
@@ -410,7 +464,7 @@ def _robot_ref(ctx: _Context, node: ast.expr, params: tuple[str, ...], *, single
             members.append(ref)
         return RobotGroup(tuple(members))  # type: ignore[arg-type]
     what = "a single robot such as robots[0]" if single else "robots[i], a parameter, or a list of robots[i]"
-    ctx.fail(node, f"expected {what}, got {ast.unparse(node)!r}")
+    ctx.fail(node, f"expected {what}, got {_show(node)!r}")
     return None
 
 
@@ -466,7 +520,7 @@ def _main_call(ctx: _Context, call: ast.Call) -> MainStep | None:
         return cls(call.func.value.id, call.lineno, call.col_offset + 1)
     if isinstance(call.func, ast.Name):
         return _function_call(ctx, call, ())
-    ctx.fail(call, f"{name or ast.unparse(call.func)}(...) is not allowed: only plan functions, skills, "
+    ctx.fail(call, f"{name or _show(call.func)}(...) is not allowed: only plan functions, skills, "
                    "time.sleep and thread start/join may be called")
     return None
 
@@ -490,12 +544,14 @@ def _check_structure(ctx: _Context, functions: dict[str, Function], main: list[M
         for call in _called(fn):
             _check_call(ctx, functions, call.function, call.args, call)
     threads: dict[str, str] = {}  # var -> "created" | "started" | "joined"
+    created: dict[str, NewThread] = {}
     for step in main:
         if isinstance(step, NewThread):
             _check_call(ctx, functions, step.function, step.args, step)
             if threads.get(step.var) == "created":
                 ctx.fail(_at(step), f"thread {step.var} is replaced before it was started")
             threads[step.var] = "created"
+            created[step.var] = step
         elif isinstance(step, Start):
             state = threads.get(step.var)
             if state is None:
@@ -514,6 +570,9 @@ def _check_structure(ctx: _Context, functions: dict[str, Function], main: list[M
                 threads[step.var] = "joined"
         elif isinstance(step, Call):
             _check_call(ctx, functions, step.function, step.args, step)
+    for var, state in threads.items():
+        if state == "created":
+            ctx.fail(_at(created[var]), f"thread {var} is created but never started: add {var}.start()")
     if ctx.problems:
         return
     _check_recursion(ctx, functions)
@@ -538,23 +597,48 @@ def _check_call(ctx: _Context, functions: dict[str, Function], name: str, args: 
 
 
 def _check_recursion(ctx: _Context, functions: dict[str, Function]) -> None:
-    state: dict[str, int] = {}
+    """Reject cycles and call chains deeper than MAX_CALL_DEPTH (iteratively: a plan must not
+    exhaust the interpreter's stack here, and the later recursive walks rely on the depth bound)."""
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    depth: dict[str, int] = {}  # name -> longest chain of calls below it, itself included
 
-    def visit(name: str, path: list[str]) -> None:
-        if state.get(name) == 2:
-            return
-        if state.get(name) == 1:
-            cycle = " -> ".join(path[path.index(name):] + [name])
-            fn = functions[name]
-            ctx.fail(_at(fn), f"recursion is not allowed: {cycle}")
-            return
-        state[name] = 1
-        for call in _called(functions[name]):
-            visit(call.function, path + [name])
-        state[name] = 2
-
-    for name in functions:
-        visit(name, [])
+    for root in functions:
+        if root in state:
+            continue
+        path: list[str] = [root]
+        pending: list[Iterator[Call]] = [iter(_called(functions[root]))]
+        state[root] = 1
+        depth[root] = 1
+        while pending:
+            call = next(pending[-1], None)
+            if call is None:
+                done = path.pop()
+                pending.pop()
+                state[done] = 2
+                if path:
+                    depth[path[-1]] = max(depth[path[-1]], depth[done] + 1)
+                continue
+            name = call.function
+            if state.get(name) == 1:
+                cycle = " -> ".join(path[path.index(name):] + [name])
+                ctx.fail(_at(functions[name]), f"recursion is not allowed: {cycle}")
+                return
+            if state.get(name) == 2:
+                depth[path[-1]] = max(depth[path[-1]], depth[name] + 1)
+                continue
+            if len(path) >= MAX_CALL_DEPTH:
+                ctx.fail(_at(call), f"plan functions call each other {MAX_CALL_DEPTH} deep here "
+                                    f"({' -> '.join(path[:3])} -> ...); the limit is {MAX_CALL_DEPTH}")
+                return
+            path.append(name)
+            pending.append(iter(_called(functions[name])))
+            state[name] = 1
+            depth[name] = 1
+    deepest = max(depth.values(), default=0)
+    if deepest > MAX_CALL_DEPTH:  # reached through already visited functions
+        name = max(depth, key=lambda n: depth[n])
+        ctx.fail(_at(functions[name]), f"plan functions call each other {deepest} deep from {name}; "
+                                       f"the limit is {MAX_CALL_DEPTH}")
 
 
 def _check_size(ctx: _Context, functions: dict[str, Function], main: list[MainStep]) -> None:

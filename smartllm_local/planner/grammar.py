@@ -91,9 +91,9 @@ def opt(item: NodeLike) -> Node:
 
 def chars(allowed: Iterable[str]) -> Chars:
     allowed = frozenset(allowed)
-    bad = [c for c in allowed if c not in string.printable or c in "\t\r\x0b\x0c"]
+    bad = [c for c in allowed if c not in string.printable or c in "\t\n\r\x0b\x0c"]
     if bad or not allowed:
-        raise GrammarError(f"character classes hold printable ASCII only, got {sorted(bad)!r}")
+        raise GrammarError(f"character classes hold printable ASCII without newlines only, got {sorted(bad)!r}")
     return Chars(allowed)
 
 

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import ctypes
 import os
-import time
 from pathlib import Path
 from typing import Sequence
 
@@ -75,6 +74,7 @@ class LlamaCppBackend:
         self._vocab = self.llm._model.vocab
         self._ctx = self.llm._ctx.ctx
         self._tokens: list[int] = []  # what the key/value cache holds
+        self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
         self._full = np.zeros(self.n_vocab, dtype=[("id", np.intc), ("logit", np.single), ("p", np.single)])
         self._few = np.zeros(_TOP, dtype=self._full.dtype)
@@ -110,6 +110,7 @@ class LlamaCppBackend:
         if not tokens:
             return
         self.llm.eval(tokens)
+        self.evaluated_tokens += len(tokens)
         self._tokens.extend(tokens)
         self._fresh = True
 
@@ -215,9 +216,3 @@ class LlamaCppBackend:
         llm, self.llm = getattr(self, "llm", None), None
         if llm is not None:
             llm.close()
-
-
-def timed_load(model_path: str | Path, **kwargs) -> tuple[LlamaCppBackend, float]:
-    started = time.perf_counter()
-    backend = LlamaCppBackend(model_path, **kwargs)
-    return backend, time.perf_counter() - started

@@ -1,0 +1,180 @@
+"""``smartllm-local plan`` and ``smartllm-local benchmark run``: the planner on a local model."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ..errors import UserError
+from ..evaluation import execute_and_score, run_benchmark, summary_table
+from ..planner.backends import BACKENDS, Sampling, load_backend
+from ..planner.models import DEFAULT_MODEL, EMBEDDED
+from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
+from ..planner.prompts import PromptOptions
+from ..robots import load_catalogue, parse_robot_ids
+from ..tasks import CATEGORIES, default_task_files, find_task, load_tasks
+from ..world.scenes import floor_plan_name
+
+MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
+              f"demonstration model: {', '.join(EMBEDDED)} (default: {DEFAULT_MODEL}).")
+
+
+class ModelOptions:
+    """The options every planning command shares, turned into a Planner."""
+
+    def __init__(self, model: Optional[str], backend: str, n_ctx: int, threads: Optional[int], n_gpu_layers: int,
+                 seed: int, temperature: float, no_comments: bool, no_summary: bool, no_coalition: bool,
+                 no_grammar: bool):
+        if backend not in BACKENDS:
+            raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
+        if temperature < 0:
+            raise UserError("--temperature must be 0 (greedy) or more")
+        if n_ctx < 512:
+            raise UserError("--n-ctx must be at least 512 tokens")
+        self.model, self.backend, self.n_ctx, self.threads = model, backend, n_ctx, threads
+        self.n_gpu_layers = n_gpu_layers
+        self.config = PlannerConfig(
+            sampling=Sampling(temperature=temperature, seed=seed),
+            grammar=not no_grammar,
+            prompts=PromptOptions(comments=not no_comments, summary=not no_summary, coalition=not no_coalition),
+        )
+        self.seed = seed
+
+    def planner(self, catalogue) -> Planner:
+        backend = load_backend(self.backend, self.model, n_ctx=self.n_ctx, threads=self.threads,
+                               n_gpu_layers=self.n_gpu_layers, seed=self.seed)
+        return Planner(backend, catalogue, self.config)
+
+
+# Options shared by every command that plans (typer option objects can be reused as defaults).
+_MODEL = typer.Option(None, help=MODEL_HELP)
+_BACKEND = typer.Option("llamacpp", help="llamacpp or transformers.")
+_N_CTX = typer.Option(4096, "--n-ctx", help="Context size in tokens.")
+_THREADS = typer.Option(None, help="CPU threads (default: all cores).")
+_GPU = typer.Option(0, "--n-gpu-layers", help="Layers to offload to a GPU (needs a CUDA or Metal build of llama.cpp).")
+_SEED = typer.Option(0, help="Sampling seed.")
+_TEMPERATURE = typer.Option(0.0, help="0 is greedy decoding.")
+_NO_COMMENTS = typer.Option(False, "--no-comments", help="Ablation: examples without comments.")
+_NO_SUMMARY = typer.Option(False, "--no-summary", help="Ablation: decompositions without the summary.")
+_NO_COALITION = typer.Option(False, "--no-coalition", help="Ablation: skip coalition formation.")
+_NO_GRAMMAR = typer.Option(False, "--no-grammar", help="Generate freely (for comparison); the output may be invalid.")
+_CATALOGUE = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json).")
+_THOR_BUILD = typer.Option(None, help="A Unity AI2-THOR executable (default: the headless stand-in).")
+_TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
+
+
+def plan_command(
+    instruction: Optional[str] = typer.Argument(None, help="What the robots should do (or use --task)."),
+    floor_plan: Optional[str] = typer.Option(None, help="Floor plan, e.g. 15 or FloorPlan15."),
+    robots: Optional[str] = typer.Option(None, help="The team as catalogue ids, e.g. 1,2,3."),
+    tasks: Optional[Path] = _TASKS,
+    task: Optional[str] = typer.Option(None, help="Plan this task of --tasks, with its floor plan and robots."),
+    out: Optional[Path] = typer.Option(None, help="Write prompts, grammars, raw outputs and timings here."),
+    execute: bool = typer.Option(False, "--execute", help="Run the plan in AI2-THOR and print the metrics."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    catalogue: Optional[Path] = _CATALOGUE,
+    thor_build: Optional[Path] = _THOR_BUILD,
+    model: Optional[str] = _MODEL,
+    backend: str = _BACKEND,
+    n_ctx: int = _N_CTX,
+    threads: Optional[int] = _THREADS,
+    n_gpu_layers: int = _GPU,
+    seed: int = _SEED,
+    temperature: float = _TEMPERATURE,
+    no_comments: bool = _NO_COMMENTS,
+    no_summary: bool = _NO_SUMMARY,
+    no_coalition: bool = _NO_COALITION,
+    no_grammar: bool = _NO_GRAMMAR,
+) -> None:
+    """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
+    options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
+                           no_summary, no_coalition, no_grammar)
+    cat = load_catalogue(catalogue)
+    goals, trans, max_trans = (), None, None
+    if task is not None:
+        if instruction or floor_plan or robots:
+            raise UserError("give either --task (with --tasks) or an instruction with --floor-plan and --robots")
+        chosen = find_task(load_tasks(tasks or default_task_files(), catalogue=cat), task)
+        instruction, scene, team_ids = chosen.instruction, chosen.floor_plan, list(chosen.robots)
+        goals, trans, max_trans = chosen.goals, chosen.trans, chosen.max_trans
+    else:
+        if tasks is not None:
+            raise UserError("--tasks needs --task ID")
+        if not (instruction and floor_plan and robots):
+            raise UserError('plan needs an instruction, --floor-plan and --robots (or --task ID), e.g. '
+                            'smartllm-local plan "Put the apple in the fridge" --floor-plan 6 --robots 1,2')
+        scene, team_ids = floor_plan_name(floor_plan), parse_robot_ids(robots)
+    cat.team(team_ids)
+    planner = options.planner(cat)
+    try:
+        result = planner.plan(instruction, scene, team_ids)
+    finally:
+        planner.backend.close()
+    for notice in result.notices:
+        print(f"notice: {notice}", file=sys.stderr)
+    scores = None
+    if execute and result.plan is not None and not result.error:
+        scores = execute_and_score(result, goals, cat, trans=trans, max_trans=max_trans,
+                                   build=str(thor_build) if thor_build else None)
+    extra = {"model": planner.backend.model, "backend": planner.backend.name}
+    if scores is not None:
+        extra["metrics"] = scores.metrics()
+    if out is not None:
+        write_artifacts(result, out, extra)
+    if as_json:
+        typer.echo(json.dumps({"allocated": result.allocated, "refusal": result.refusal,
+                               "error": result.error or None, **extra}))
+    else:
+        typer.echo(result.allocated or f"# no valid plan: {result.error}", nl=False)
+        if scores is not None:
+            fmt = lambda v: "n/a" if v is None else f"{v:.2f}"  # noqa: E731
+            for description, ok in scores.conditions:
+                typer.echo(f"  [{'x' if ok else ' '}] {description}")
+            typer.echo(f"SR {fmt(scores.SR)}  TCR {fmt(scores.TCR)}  GCR {fmt(scores.GCR)}  "
+                       f"RU {fmt(scores.RU)}  Exe {fmt(scores.Exe)}  transitions {scores.transitions}")
+    if result.error:
+        raise typer.Exit(1)
+
+
+def benchmark_run(
+    out: Path = typer.Option(..., "--out", help="Folder for per-task artifacts, results.jsonl and summary.txt."),
+    tasks: Optional[Path] = _TASKS,
+    category: Optional[str] = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
+    task: Optional[list[str]] = typer.Option(None, help="Only these task ids (repeatable)."),
+    catalogue: Optional[Path] = _CATALOGUE,
+    thor_build: Optional[Path] = _THOR_BUILD,
+    model: Optional[str] = _MODEL,
+    backend: str = _BACKEND,
+    n_ctx: int = _N_CTX,
+    threads: Optional[int] = _THREADS,
+    n_gpu_layers: int = _GPU,
+    seed: int = _SEED,
+    temperature: float = _TEMPERATURE,
+    no_comments: bool = _NO_COMMENTS,
+    no_summary: bool = _NO_SUMMARY,
+    no_coalition: bool = _NO_COALITION,
+    no_grammar: bool = _NO_GRAMMAR,
+) -> None:
+    """Plan, execute and score every task of a task file; print a per-category table."""
+    options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
+                           no_summary, no_coalition, no_grammar)
+    cat = load_catalogue(catalogue)
+    chosen = load_tasks(tasks or default_task_files(), catalogue=cat)
+    if category is not None:
+        chosen = [t for t in chosen if t.category == category]
+    if task:
+        chosen = [find_task(chosen, t) for t in task]
+    if not chosen:
+        raise UserError("no task matches the filters")
+    planner = options.planner(cat)
+    try:
+        outcomes = run_benchmark(chosen, planner, cat, out=out, build=str(thor_build) if thor_build else None,
+                                 progress=lambda message: print(message, file=sys.stderr))
+    finally:
+        planner.backend.close()
+    typer.echo(summary_table(outcomes))
+    typer.echo(f"results: {out / 'results.jsonl'}")

@@ -1,0 +1,179 @@
+"""Stage grammars: what they must accept and reject, and random samples that must all be valid plans."""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+
+from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.constraints import CoalitionConstraint, PlanConstraint
+from smartllm_local.planner.generation import BudgetError, accepts, run_constraint, sample_output
+from smartllm_local.planner.prompts import load_examples
+from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.skills import DEFAULT_SKILL_SET
+
+SCENES = [1, 6, 201, 212, 301, 320, 401, 410]
+
+
+def decomposer(scene=6, **kwargs):
+    return PlanConstraint(scene_objects(scene), DEFAULT_SKILL_SET, **kwargs)
+
+
+def allocator(names, team_size, scene=6, **kwargs):
+    return PlanConstraint(scene_objects(scene), DEFAULT_SKILL_SET, team_size=team_size, function_names=names, **kwargs)
+
+
+GOOD_DECOMPOSITION = """\
+# SubTask 1: put the apple in the fridge (skills: GoToObject, PickupObject, OpenObject, PutObject, CloseObject)
+# SubTask 2: switch off the light (skills: GoToObject, SwitchOff)
+# They are independent.
+
+def subtask1_apple_to_fridge():
+    # fetch it
+    GoToObject('Apple')
+    PickupObject('Apple')
+    GoToObject('Fridge')
+    OpenObject('Fridge')
+    PutObject('Apple', 'Fridge')
+    CloseObject('Fridge')
+
+def subtask2_light_off():
+    GoToObject('LightSwitch')
+    SwitchOff('LightSwitch')
+
+t1 = threading.Thread(target=subtask1_apple_to_fridge)
+t2 = threading.Thread(target=subtask2_light_off)
+t1.start()
+t2.start()
+t1.join()
+t2.join()
+"""
+
+NAMES = ["subtask1_apple_to_fridge", "subtask2_light_off"]
+
+GOOD_ALLOCATION = """\
+def subtask1_apple_to_fridge(robot_list):
+    GoToObject(robot_list, 'Apple')
+    PickupObject(robot_list[1], 'Apple')
+    GoToObject(robot_list, 'Fridge')
+    OpenObject(robot_list[0], 'Fridge')
+    PutObject(robot_list[1], 'Apple', 'Fridge')
+
+def subtask2_light_off(robot_list):
+    # the third robot switches
+    GoToObject(robot_list[0], 'LightSwitch')
+    SwitchOff(robot_list[0], 'LightSwitch')
+
+t1 = threading.Thread(target=subtask1_apple_to_fridge, args=([robots[0], robots[1]],))
+t2 = threading.Thread(target=subtask2_light_off, args=([robots[2]],))
+t1.start()
+t2.start()
+t1.join()
+t2.join()
+"""
+
+
+def test_a_good_decomposition_and_allocation_are_accepted():
+    assert accepts(decomposer(), GOOD_DECOMPOSITION)
+    assert accepts(allocator(NAMES, 3), GOOD_ALLOCATION)
+    assert accepts(decomposer(), "# INFEASIBLE: there is no car in a kitchen\n")
+
+
+@pytest.mark.parametrize("change", [
+    ("'Apple')\n    PickupObject", "'Banana')\n    PickupObject"),      # not in the scene
+    ("PickupObject('Apple')", "PickupObject('Fridge')"),                 # not pickupable
+    ("SwitchOff('LightSwitch')", "SwitchOff('Apple')"),                  # not toggleable
+    ("GoToObject('Apple')", "GoToObject(robots[0], 'Apple')"),           # robots in a decomposition
+    ("def subtask2_light_off", "def light_off"),                         # names carry their sub-task number
+    ("def subtask2_light_off", "def subtask3_light_off"),                # in order
+    ("target=subtask2_light_off", "target=subtask9_unknown"),            # undefined function
+    ("t1.start()\nt2.start()", "t2.start()\nt1.start()"),                # starts are boilerplate, in order
+    ("# fetch it\n", "# fetch\nit\n"),                                   # a comment is one line
+    ("    GoToObject('LightSwitch')\n", "  GoToObject('LightSwitch')\n"),  # four-space indent
+    ("(skills: GoToObject, SwitchOff)", "(skills: Teleport)"),           # not a skill
+    ("# They are independent.\n", "# They are independent.\n# extra\n"),
+])
+def test_decompositions_that_break_a_rule_are_rejected(change):
+    bad = GOOD_DECOMPOSITION.replace(*change)
+    assert bad != GOOD_DECOMPOSITION
+    assert not accepts(decomposer(), bad)
+
+
+@pytest.mark.parametrize("change", [
+    ("robot_list[1], 'Apple')\n    GoToObject", "robot_list[3], 'Apple')\n    GoToObject"),  # past the team
+    ("args=([robots[0], robots[1]],)", "args=([robots[0]],)"),           # too short for robot_list[1]
+    ("args=([robots[2]],)", "args=([robots[3]],)"),                      # not in the team
+    ("args=([robots[0], robots[1]],)", "args=([robots[1], robots[0]],)"),  # robots listed in order
+    ("args=([robots[0], robots[1]],)", "args=([robots[0], robots[0]],)"),  # and once
+    ("def subtask1_apple_to_fridge(robot_list)", "def subtask1_other(robot_list)"),  # the decomposition's names
+    ("GoToObject(robot_list[0], 'LightSwitch')", "GoToObject('LightSwitch')"),  # robots named
+])
+def test_allocations_that_break_a_rule_are_rejected(change):
+    bad = GOOD_ALLOCATION.replace(*change)
+    assert bad != GOOD_ALLOCATION
+    assert not accepts(allocator(NAMES, 3), bad)
+
+
+def test_coalition_lines_name_only_robots_of_the_team():
+    good = ("# SubTask 1 (subtask1_apple_to_fridge): robots[0] and robots[1]; robots[1] lifts 0.2 kg\n"
+            "# SubTask 2 (subtask2_light_off): robots[2]; it has SwitchOff\n")
+    assert accepts(CoalitionConstraint(NAMES, 3), good)
+    for bad in (good.replace("robots[2]; it", "robots[3]; it"),
+                good.replace("it has SwitchOff", "robot 12 has SwitchOff"),
+                good.replace("robots[0] and robots[1]", "robots[1] and robots[0]"),
+                good.replace("(subtask2_light_off)", "(subtask2_other)"),
+                good.splitlines(keepends=True)[0]):
+        assert not accepts(CoalitionConstraint(NAMES, 3), bad), bad
+    assert accepts(CoalitionConstraint(NAMES, 3), "# INFEASIBLE: no robot can switch anything\n")
+
+
+def test_every_prompt_example_is_in_its_stage_grammar():
+    for ex in load_examples():
+        scene = scene_objects(ex.floor_plan)
+        assert accepts(PlanConstraint(scene, DEFAULT_SKILL_SET), ex.decomposition), ex.name
+        names = [f.name for f in parse_plan(ex.decomposition, form="decomposed").functions]
+        if ex.coalition:
+            assert accepts(CoalitionConstraint(names, len(ex.robots)), ex.coalition), ex.name
+        if ex.allocation:
+            assert accepts(allocator(names, len(ex.robots), ex.floor_plan), ex.allocation), ex.name
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_samples_of_every_stage_are_valid_plans(seed):
+    rng = random.Random(seed)
+    for _ in range(8):
+        floor_plan = rng.choice(SCENES)
+        scene = scene_objects(floor_plan)
+        flags = dict(comments=rng.random() < 0.7, summary=rng.random() < 0.7)
+        decomposed = sample_output(PlanConstraint(scene, DEFAULT_SKILL_SET, **flags), rng, rng.randint(400, 3000))
+        plan = parse_plan(decomposed, form="decomposed", scene_types=scene.types)
+        if plan.is_refusal:
+            continue
+        names = [f.name for f in plan.functions]
+        team = rng.randint(1, 4)
+        coalition = sample_output(CoalitionConstraint(names, team), rng, 4000)
+        assert all(line.startswith("# ") for line in coalition.splitlines())
+        allocated = sample_output(
+            PlanConstraint(scene, DEFAULT_SKILL_SET, team_size=team, function_names=names, comments=flags["comments"]),
+            rng, rng.randint(600, 4000))
+        parse_plan(allocated, form="allocated", team_size=team, scene_types=scene.types)
+
+
+def test_outputs_fit_their_budget_for_any_writer():
+    """The longest line every time (a worst-case model) still ends within the budget."""
+    for budget in (460, 700, 1500):
+        constraint = decomposer(allow_refusal=False)
+
+        def longest(choose, remaining):
+            text = max((choose.grammar.sample(random.Random(k)) for k in range(30)), key=len)
+            return text, len(text) + (text == "")
+
+        out = run_constraint(constraint, longest, len, budget)
+        assert len(out) <= budget
+        parse_plan(out, form="decomposed")
+
+
+def test_a_budget_too_small_for_any_plan_is_refused_up_front():
+    with pytest.raises(BudgetError, match="cannot hold"):
+        sample_output(decomposer(), random.Random(0), budget=50)

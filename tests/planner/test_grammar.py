@@ -1,0 +1,62 @@
+"""The grammar model: emission (GBNF, Lark), checks, membership, sampling, length bounds."""
+
+from __future__ import annotations
+
+import random
+
+import llguidance
+import pytest
+
+from smartllm_local.planner.grammar import Grammar, GrammarError, Ref, alt, chars, opt, rep, seq
+
+
+def test_gbnf_escapes_quotes_backslashes_newlines_and_class_punctuation():
+    g = Grammar({"root": seq('say "hi"\\', "\n", rep(chars("-]^[a"), 1, 2), opt("x"))})
+    text = g.to_gbnf()
+    assert text == 'root ::= "say \\x22hi\\x22\\x5C" "\\n" [\\x2D\\x5B\\x5D\\x5Ea]{1,2} "x"?\n'
+    assert g.matches('say "hi"\\\n-]x') and g.matches('say "hi"\\\n^') and not g.matches('say "hi"\\\n')
+
+
+def test_rules_are_emitted_reachable_only_and_root_first():
+    g = Grammar({"unused": "zzz", "word": alt("a", "b"), "root": seq(Ref("word"), "!")})
+    assert g.to_gbnf().splitlines() == ['root ::= word "!"', 'word ::= "a" | "b"']
+
+
+@pytest.mark.parametrize("rules, message", [
+    ({"word": "a"}, "root"),
+    ({"root": Ref("missing")}, "undefined rule"),
+    ({"root": Ref("loop"), "loop": seq("a", Ref("loop"))}, "must not recurse"),
+    ({"root": "a", "Bad_Name": "b"}, "rule name"),
+])
+def test_malformed_grammars_are_refused(rules, message):
+    with pytest.raises(GrammarError, match=message):
+        Grammar(rules)
+
+
+def test_bad_building_blocks_are_refused():
+    with pytest.raises(GrammarError):
+        rep("a", 2, 1)
+    with pytest.raises(GrammarError):
+        chars("\n")
+    with pytest.raises(GrammarError):
+        alt()
+
+
+def test_samples_are_members_and_never_longer_than_the_bound():
+    g = Grammar({
+        "item": alt("apple", "fig", seq("k", rep(chars("xyz"), 0, 3))),
+        "root": seq(Ref("item"), rep(seq(", ", Ref("item")), 0, 4), "\n"),
+    })
+    rng = random.Random(0)
+    bound = g.max_length()
+    assert bound == len("apple") * 1 + 4 * (2 + 5) + 1
+    for _ in range(300):
+        sample = g.sample(rng)
+        assert g.matches(sample) and len(sample) <= bound
+    assert not g.matches("apple, pear\n")
+
+
+def test_llguidance_accepts_the_gbnf_and_the_lark_forms():
+    g = Grammar({"obj": alt("'Apple'", "'Fridge'"), "root": seq("PutObject(", Ref("obj"), ")\n")})
+    for fmt, text in (("gbnf", g.to_gbnf()), ("lark", g.to_lark())):
+        assert llguidance.LLMatcher.validate_grammar(llguidance.grammar_from(fmt, text)) == ""

@@ -1,0 +1,80 @@
+"""The llama.cpp backend with real GGUF models: constraints bite, sampling is reproducible, the cache is reused."""
+
+from __future__ import annotations
+
+import pytest
+
+from smartllm_local.errors import ModelError
+from smartllm_local.planner.backends import load_backend
+from smartllm_local.planner.backends.base import Sampling
+from smartllm_local.planner.grammar import Grammar, GrammarError, alt, chars, rep, seq
+
+PROMPT = "The capital of France is"
+
+
+def test_unconstrained_and_constrained_greedy_differ_and_the_grammar_wins(smollm2):
+    context = smollm2.tokenize(PROMPT, bos=True)
+    free = smollm2.generate(context, grammar=None, max_tokens=4, sampling=Sampling())
+    assert "Paris" in free.text
+    grammar = Grammar({"root": alt(" London.\n", " Rome.\n", " Madrid.\n")})
+    forced = smollm2.generate(context, grammar=grammar, max_tokens=grammar.max_length() + 1, sampling=Sampling())
+    assert forced.text in (" London.\n", " Rome.\n", " Madrid.\n")
+    assert forced.stop == "line"
+
+
+def test_sampling_is_reproducible_and_stays_in_the_grammar(smollm2):
+    context = smollm2.tokenize("# a list of fruit:\n", bos=True)
+    grammar = Grammar({"root": seq("# ", rep(chars("abcdefghijklmnopqrstuvwxyz "), 1, 30), "\n")})
+    hot = Sampling(temperature=1.5, seed=7)
+    first = smollm2.generate(context, grammar=grammar, max_tokens=40, sampling=hot)
+    again = smollm2.generate(context, grammar=grammar, max_tokens=40, sampling=hot)
+    other = [smollm2.generate(context, grammar=grammar, max_tokens=40, sampling=Sampling(1.5, s)).text for s in range(5)]
+    assert first.text == again.text
+    assert len(set(other)) > 1
+    assert all(grammar.matches(t) for t in [first.text, *other])
+
+
+def test_a_grammar_that_may_end_lets_the_model_stop(smollm2):
+    context = smollm2.tokenize("Say nothing at all.", bos=True)
+    grammar = Grammar({"root": alt("", "zzzz\n")})
+    out = smollm2.generate(context, grammar=grammar, max_tokens=6, sampling=Sampling())
+    assert out.text in ("", "zzzz\n")
+
+
+def test_a_shared_prefix_is_not_evaluated_again(smollm2):
+    context = smollm2.tokenize("def subtask1_wash():\n    GoToObject('Apple')\n" * 20, bos=True)
+    grammar = Grammar({"root": seq("    ", alt("PickupObject('Apple')", "GoToObject('Cup')"), "\n")})
+    smollm2.generate(context, grammar=grammar, max_tokens=12, sampling=Sampling())
+    before = smollm2.evaluated_tokens
+    line = smollm2.generate(context, grammar=grammar, max_tokens=12, sampling=Sampling())
+    longer = context + line.tokens + smollm2.tokenize("    # next\n")
+    smollm2.generate(longer, grammar=grammar, max_tokens=12, sampling=Sampling())
+    spent = smollm2.evaluated_tokens - before
+    assert spent < 40, f"{spent} tokens evaluated for a {len(longer)}-token context"
+
+
+def test_a_grammar_llama_cpp_rejects_is_an_error_not_a_crash(smollm2):
+    class Broken(Grammar):
+        def to_gbnf(self) -> str:
+            return 'root ::= "a" missing-rule\n'
+
+    broken = Broken({"root": "a"})
+    with pytest.raises(GrammarError, match="rejected"):
+        smollm2.generate(smollm2.tokenize("x", bos=True), grammar=broken, max_tokens=3, sampling=Sampling())
+
+
+def test_a_context_longer_than_n_ctx_is_a_clear_error(smollm2):
+    with pytest.raises(ModelError, match="does not fit"):
+        smollm2.generate([1] * smollm2.n_ctx, grammar=None, max_tokens=1, sampling=Sampling())
+
+
+def test_the_other_embedded_model_runs_too():
+    gemma = load_backend("llamacpp", "gemma3-270m", n_ctx=1024)
+    try:
+        assert gemma.n_vocab > 200_000
+        grammar = Grammar({"root": seq("    ", alt("SwitchOn('Toaster')", "SwitchOff('Toaster')"), "\n")})
+        out = gemma.generate(gemma.tokenize("def toast():\n", bos=True), grammar=grammar,
+                             max_tokens=grammar.max_length() + 1, sampling=Sampling())
+        assert grammar.matches(out.text)
+    finally:
+        gemma.close()

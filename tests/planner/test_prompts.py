@@ -1,0 +1,97 @@
+"""Prompt assembly, ablations, the context budget and the stage plumbing (with a fake model)."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from smartllm_local.errors import UserError
+from smartllm_local.planner.pipeline import Planner, PlannerConfig, write_artifacts
+from smartllm_local.planner.prompts import PromptOptions, load_examples, strip_comments, strip_summary
+from smartllm_local.robots import load_catalogue
+
+from .fakes import FakeBackend
+
+INSTRUCTION = "Put the apple in the fridge and turn off the light."
+
+
+@pytest.fixture
+def catalogue():
+    return load_catalogue()
+
+
+def plan_with(backend, catalogue, **options):
+    planner = Planner(backend, catalogue, PlannerConfig(prompts=PromptOptions(**options)))
+    return planner.plan(INSTRUCTION, 6, [1, 24, 25])
+
+
+def test_the_three_prompts_have_their_parts(catalogue):
+    result = plan_with(FakeBackend(), catalogue)
+    decomposition, coalition, allocation = (r.prompt for r in result.stages)
+    assert decomposition.startswith("from skills import GoToObject, OpenObject, CloseObject")
+    assert len(re.findall(r"^# Example \d$", decomposition, re.M)) == 5
+    assert "{'name': 'Apple', 'mass': 0.2}" in decomposition and "{'name': 'Fridge'" in decomposition
+    assert decomposition.endswith(f"# Task Description: {INSTRUCTION}\n")
+    assert len(re.findall(r"^# Example \d$", coalition, re.M)) == 3
+    assert "'name': 'robots[1]', 'id': 24, 'skills': ['GoToObject', 'SwitchOff', 'SwitchOn'], 'mass_capacity': 100" in coalition
+    assert coalition.endswith("# Coalition:\n")
+    assert len(re.findall(r"^# Example \d$", allocation, re.M)) == 4
+    assert "# Allocated plan:\ndef subtask1_" in allocation
+    assert allocation.endswith("# Allocated plan:\n")
+    assert result.stages[0].output in coalition and result.stages[1].output in allocation
+
+
+def test_ablations_change_the_prompts(catalogue):
+    full = plan_with(FakeBackend(), catalogue)
+    bare = plan_with(FakeBackend(), catalogue, comments=False, summary=False, coalition=False)
+    assert [r.stage for r in bare.stages] == ["decomposition", "allocation"]
+    examples_part = bare.stages[0].prompt.split("# Your task")[0]
+    assert "# SubTask 1:" not in examples_part and "# SubTask 1:" in full.stages[0].prompt
+    assert not re.search(r"^    #", examples_part, re.M) and re.search(r"^    #", full.stages[0].prompt, re.M)
+    assert "# Coalition:" not in bare.stages[1].prompt
+    assert "robots = [" in bare.stages[1].prompt
+
+
+def test_strip_helpers():
+    code = "# SubTask 1: x (skills: GoToObject)\n# order\n\ndef subtask1_x():\n    # go\n    GoToObject('Apple')\n"
+    assert strip_summary(code) == "def subtask1_x():\n    # go\n    GoToObject('Apple')\n"
+    assert strip_comments(code) == "# SubTask 1: x (skills: GoToObject)\n# order\n\ndef subtask1_x():\n    GoToObject('Apple')\n"
+
+
+def test_examples_are_dropped_least_relevant_first_when_the_context_is_short(catalogue):
+    full = plan_with(FakeBackend(), catalogue)
+    size = len(full.stages[0].prompt) // 4 + 2
+    squeezed = plan_with(FakeBackend(n_ctx=size + 1024 - 900), catalogue)
+    first = squeezed.stages[0]
+    assert first.dropped and len(first.examples) + len(first.dropped) == 5
+    assert "dropped example(s)" in squeezed.notices[0]
+    with pytest.raises(UserError, match="raise --n-ctx"):
+        plan_with(FakeBackend(n_ctx=1500), catalogue)
+
+
+def test_relevance_keeps_the_closest_example():
+    from smartllm_local.planner.prompts import rank_by_relevance
+
+    ranked = rank_by_relevance(load_examples(), "Make some toast with the bread")
+    assert ranked[0].name == "toast"
+
+
+def test_a_refusal_stops_the_pipeline_and_becomes_the_plan(catalogue, tmp_path):
+    result = plan_with(FakeBackend(refuse=True), catalogue)
+    assert result.refusal and [r.stage for r in result.stages] == ["decomposition"]
+    assert result.allocated.startswith("# INFEASIBLE: ") and result.plan.is_refusal
+    write_artifacts(result, tmp_path)
+    assert (tmp_path / "allocated.py").read_text().startswith("# INFEASIBLE")
+
+
+def test_artifacts_hold_every_stage(catalogue, tmp_path):
+    result = plan_with(FakeBackend(), catalogue)
+    write_artifacts(result, tmp_path, {"model": "fake"})
+    for stage in ("decomposition", "coalition", "allocation"):
+        for name in ("prompt.txt", "grammar.gbnf", "raw_output.txt", "timings.json"):
+            assert (tmp_path / stage / name).stat().st_size > 0, (stage, name)
+    assert (tmp_path / "decomposed.py").read_text() == result.stages[0].output
+    assert (tmp_path / "coalition.txt").read_text() == result.stages[1].output
+    assert (tmp_path / "allocated.py").read_text() == result.allocated
+    assert "root ::=" in (tmp_path / "allocation" / "grammar.gbnf").read_text()
