@@ -1,5 +1,5 @@
-# SubTask 1: rinse the tomato under the faucet (skills: GoToObject, PickupObject, PutObject, SwitchOn, SwitchOff)
-# SubTask 2: put the egg in the fridge (skills: GoToObject, PickupObject, OpenObject, PutObject, CloseObject)
+# SubTask 1: rinse the tomato under the faucet (skills: GoToObject, SwitchOn, SwitchOff, PickupObject, PutObject)
+# SubTask 2: put the egg in the fridge (skills: GoToObject, OpenObject, CloseObject, PickupObject, PutObject)
 # SubTask 1 and SubTask 2 touch different things, so they can run in parallel.
 
 def subtask1_rinse_tomato():

@@ -1,4 +1,4 @@
-# SubTask 1: put the soap bar in a drawer (skills: GoToObject, PickupObject, OpenObject, PutObject, CloseObject)
+# SubTask 1: put the soap bar in a drawer (skills: GoToObject, OpenObject, CloseObject, PickupObject, PutObject)
 # SubTask 2: switch off the light (skills: GoToObject, SwitchOff)
 # Either order works; the sub-tasks could run in parallel if there are robots for both.
 

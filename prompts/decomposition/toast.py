@@ -1,5 +1,5 @@
-# SubTask 1: cut the bread into slices (skills: GoToObject, PickupObject, SliceObject)
-# SubTask 2: toast one slice (skills: GoToObject, PickupObject, PutObject, SwitchOn)
+# SubTask 1: cut the bread into slices (skills: GoToObject, SliceObject, PickupObject)
+# SubTask 2: toast one slice (skills: GoToObject, SwitchOn, PickupObject, PutObject)
 # SubTask 2 needs the slices SubTask 1 makes, so they run one after the other.
 
 def subtask1_slice_bread():

@@ -28,7 +28,7 @@ class ModelOptions:
 
     def __init__(self, model: Optional[str], backend: str, n_ctx: int, threads: Optional[int], n_gpu_layers: int,
                  seed: int, temperature: float, no_comments: bool, no_summary: bool, no_coalition: bool,
-                 no_grammar: bool):
+                 no_grammar: bool, free_teams: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if temperature < 0:
@@ -40,6 +40,7 @@ class ModelOptions:
         self.config = PlannerConfig(
             sampling=Sampling(temperature=temperature, seed=seed),
             grammar=not no_grammar,
+            free_teams=free_teams,
             prompts=PromptOptions(comments=not no_comments, summary=not no_summary, coalition=not no_coalition),
         )
         self.seed = seed
@@ -62,6 +63,8 @@ _NO_COMMENTS = typer.Option(False, "--no-comments", help="Ablation: examples wit
 _NO_SUMMARY = typer.Option(False, "--no-summary", help="Ablation: decompositions without the summary.")
 _NO_COALITION = typer.Option(False, "--no-coalition", help="Ablation: skip coalition formation.")
 _NO_GRAMMAR = typer.Option(False, "--no-grammar", help="Generate freely (for comparison); the output may be invalid.")
+_FREE_TEAMS = typer.Option(False, "--free-teams", help="Let the model pick any team and refuse at will, rather than "
+                                                       "only teams whose skills and strength suit each sub-task.")
 _CATALOGUE = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json).")
 _THOR_BUILD = typer.Option(None, help="A Unity AI2-THOR executable (default: the headless stand-in).")
 _TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
@@ -89,10 +92,11 @@ def plan_command(
     no_summary: bool = _NO_SUMMARY,
     no_coalition: bool = _NO_COALITION,
     no_grammar: bool = _NO_GRAMMAR,
+    free_teams: bool = _FREE_TEAMS,
 ) -> None:
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
-                           no_summary, no_coalition, no_grammar)
+                           no_summary, no_coalition, no_grammar, free_teams)
     cat = load_catalogue(catalogue)
     goals, trans, max_trans = (), None, None
     if task is not None:
@@ -158,10 +162,11 @@ def benchmark_run(
     no_summary: bool = _NO_SUMMARY,
     no_coalition: bool = _NO_COALITION,
     no_grammar: bool = _NO_GRAMMAR,
+    free_teams: bool = _FREE_TEAMS,
 ) -> None:
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
-                           no_summary, no_coalition, no_grammar)
+                           no_summary, no_coalition, no_grammar, free_teams)
     cat = load_catalogue(catalogue)
     chosen = load_tasks(tasks or default_task_files(), catalogue=cat)
     if category is not None:

@@ -32,12 +32,16 @@ A stage may instead answer with one line ``# INFEASIBLE: <reason>``.
 
 from __future__ import annotations
 
+import re
 import string
 from abc import ABC, abstractmethod
+from itertools import combinations, permutations
 from dataclasses import dataclass, field
 from typing import Sequence
 
+from ..robots import Robot
 from ..skills import SkillSet
+from .feasibility import Need, Step, feasible_lists, feasible_teams
 from .grammar import Grammar, Node, Ref, alt, chars, opt, rep, seq
 from .scene_context import SceneObjects
 
@@ -52,7 +56,8 @@ ORDER_LEN = 100
 REASON_LEN = 100
 NAME_LEN = 30
 MAX_SUBTASKS = 8
-MAX_STEPS = 16
+MAX_STEPS = 12
+MAX_COMMENTS = 3  # per function
 INDENT = "    "
 REFUSAL_PREFIX = "# INFEASIBLE: "
 EOS = 1  # the end-of-sequence token that closes a stage
@@ -77,30 +82,29 @@ class Choose:
         return next((name for name, g in self.options.items() if g.matches(line)), "")
 
 
-def robot_chains(team_size: int, separator: str) -> dict[str, Node]:
-    """Rules for lists of distinct robots in increasing order, at least ``need`` long.
+def ordered_subset(items: Sequence[str], separator: str) -> Node:
+    """One or more of ``items``, each at most once, in the given order.
 
-    ``robots-from-i-need-n`` starts with some robots[j], j >= i, and holds at
-    least n robots; the rules refer only to higher indices, so they never recurse.
+    Written as a choice of the first item followed by optional later ones, so
+    the grammar (and its regex) grows with the square of the items, not 2^n.
     """
-    rules: dict[str, Node] = {}
-    for i in reversed(range(team_size)):
-        for need in range(0, team_size - i + 1):
-            options: list[Node] = []
-            for j in range(i, team_size):
-                rest_need = max(0, need - 1)
-                if team_size - (j + 1) < rest_need:
-                    continue
-                head = f"robots[{j}]"
-                if j + 1 < team_size:
-                    tail = Ref(f"robots-from-{j + 1}-need-{rest_need}")
-                    more = seq(head, separator, tail)
-                    options.append(more if rest_need else alt(head, more))
-                elif rest_need == 0:
-                    options.append(head)
-            if options:
-                rules[f"robots-from-{i}-need-{need}"] = alt(*options)
-    return rules
+    return alt(*(seq(items[k], *(opt(seq(separator, item)) for item in items[k + 1:])) for k in range(len(items))))
+
+
+def robot_list(team_size: int, need: int, separator: str, *, ordered: bool = False) -> Node:
+    """A list of at least ``need`` distinct robots of the team, written robots[i].
+
+    A set (``ordered=False``) is listed in increasing order; an ordered list
+    (where position matters, as robot_list[i] does) may come in any order.
+    Teams too big to enumerate (over 6 robots, 5 when ordered) get lists of
+    any robots of the right length.
+    """
+    names = [f"robots[{i}]" for i in range(team_size)]
+    if team_size <= (5 if ordered else 6):
+        pick = permutations if ordered else combinations
+        return alt(*(separator.join(c) for n in range(max(1, need), team_size + 1) for c in pick(names, n)))
+    robot = alt(*names)
+    return seq(robot, rep(seq(separator, robot), max(0, need - 1), team_size - 1))
 
 
 def _text(charset: frozenset[str], length: int) -> Node:
@@ -156,15 +160,51 @@ def _length(node: Node, rules: dict[str, Node]) -> int:
     return Grammar({**rules, "root": node}).max_length()
 
 
+KNIVES = frozenset({"Knife", "ButterKnife"})
+# Actions that set a state, and the action that undoes each.
+_STATE_ACTIONS = {"OpenObject": "CloseObject", "CloseObject": "OpenObject",
+                  "ToggleObjectOn": "ToggleObjectOff", "ToggleObjectOff": "ToggleObjectOn"}
+_CALL = re.compile(r"^\s+(\w+)\((?:robot_list(?:\[(\d+)\])?, )?'([^']+)'(?:, '([^']+)')?\)$")
+
+
 @dataclass
 class _Function:
     name: str
     steps: int = 0
     max_index: int = -1  # the highest robot_list[i] used; -1: none (robot_list alone counts as 0)
+    last: str = ""  # the kind of the last line: "action", "goto", "sleep" or "comment"
+    comments: int = 0
+    held: set[str] = field(default_factory=set)  # object types picked up and not yet put down
+    states: dict[str, str] = field(default_factory=dict)  # type -> the last state action on it
+    last_call: tuple[str, str] = ("", "")  # (AI2-THOR action, object) of the last step
+    calls: list[tuple[int | None, str, str]] = field(default_factory=list)  # (robot_list slot, skill, object)
+
+    def track(self, line: str, actions: dict[str, str]) -> None:
+        match = _CALL.match(line.rstrip("\n"))
+        if not match:
+            self.last_call = ("", "")
+            return
+        skill, first = match.group(1), match.group(3)
+        slot = int(match.group(2)) if match.group(2) is not None else None
+        self.calls.append((slot, skill, first))
+        action = actions.get(skill, "")
+        self.last_call = (action, first)
+        if action == "PickupObject":
+            self.held.add(first)
+        elif action in ("PutObject", "DropHandObject", "ThrowObject"):
+            self.held.discard(first)
+        elif action in _STATE_ACTIONS:
+            self.states[first] = action
 
 
 class PlanConstraint(Constraint):
-    """Stage 1 (decomposed) and stage 3 (allocated) plans."""
+    """Stage 1 (decomposed) and stage 3 (allocated) plans.
+
+    Beyond syntax, the constraint keeps the plan's shape sensible: a function
+    ends with an action (not a bare GoToObject), a summary lists distinct
+    skills in the vocabulary's order, and the orchestration launches every
+    function exactly once, in threads or directly, then stops.
+    """
 
     def __init__(
         self,
@@ -178,24 +218,27 @@ class PlanConstraint(Constraint):
         max_subtasks: int = MAX_SUBTASKS,
         max_steps: int = MAX_STEPS,
         allow_refusal: bool = True,
+        team: Sequence[Robot] | None = None,
     ):
         super().__init__()
+        if team is not None:
+            team_size = len(team)
+        self.team = list(team) if team is not None else None
         self.allocated = team_size is not None
         self.team_size = team_size or 0
         self.comments = comments
         self.summary = summary and not self.allocated and not function_names
         self.fixed_names = list(function_names or [])
         self.max_subtasks = len(self.fixed_names) or max_subtasks
-        self.max_steps = max_steps
+        self.max_steps = max(2, max_steps)
         self.allow_refusal = allow_refusal
-        self.skill_names: list[str] = []
+        self.rules: dict[str, Node] = {}
         self.rules = self._vocabulary(scene, skills)
         self.phase = "start"
         self.summary_lines = 0
-        self.owed = len(self.fixed_names) or None  # defs still promised
+        self.owed = len(self.fixed_names) or None  # defs promised (by the summary, or the decomposition)
         self.functions: list[_Function] = []
-        self.last_was_comment = False
-        self.blocks = 0
+        self.launched: list[str] = []
         self.threads: list[str] = []  # targets of the block being written
         self.pending = ""  # boilerplate to write next (the rest of a block's starts and joins)
         self._lengths()
@@ -204,63 +247,90 @@ class PlanConstraint(Constraint):
 
     def _vocabulary(self, scene: SceneObjects, skills: SkillSet) -> dict[str, Node]:
         rules: dict[str, Node] = {}
-        calls: list[Node] = []
-        robot = None
+        self.scene = scene
+        self.skills = [s for s in skills.values()
+                       if all(scene.types_for(a) for a in s.arguments[: s.required])]
+        self.skill_names = [s.name for s in self.skills]
+        self.skill_actions = {s.name: s.action for s in self.skills}
         if self.allocated:
             rules["robot-arg"] = alt("robot_list", *(f"robot_list[{i}]" for i in range(self.team_size)))
-            robot = Ref("robot-arg")
-        for skill in skills.values():
-            args: list[Node] = []
-            for aff in skill.arguments:
-                types = scene.types_for(aff)
-                if not types:
-                    break
-                name = "obj-" + (aff or "any")
-                rules[name] = alt(*(f"'{t}'" for t in types))
-                args.append(Ref(name))
-            if len(args) < skill.required:
-                continue
-            parts: list[Node | str] = [f"{skill.name}("]
-            if robot is not None:
-                parts += [robot, ", "]
-            for i, arg in enumerate(args[: skill.required]):
-                parts += ([", "] if i else []) + [arg]
-            for arg in args[skill.required:]:
-                parts.append(opt(seq(", ", arg)))
-            parts.append(")")
-            calls.append(seq(*parts))
-            self.skill_names.append(skill.name)
-        if not calls:
-            raise ValueError("no skill of the vocabulary applies to any object of this scene")
-        rules["call"] = alt(*calls)
-        rules["step"] = alt(seq(INDENT, Ref("call"), "\n"), seq(INDENT, "time.sleep(", chars("123456789"), ")\n"))
+        goto = [s for s in self.skills if s.action == ""]
+        if not goto or len(goto) == len(self.skills):
+            raise ValueError("the skills cannot act on any object of this scene")
+        rules["goto"] = alt(*(self._call(s, [scene.types_for(a) for a in s.arguments]) for s in goto))
+        rules["action"] = self._actions(_Function(""))
+        rules["sleep"] = seq(INDENT, "time.sleep(", chars("123456789"), ")\n")
         rules["comment"] = seq(INDENT, "# ", _text(COMMENT_CHARS, COMMENT_LEN), "\n")
         rules["refusal"] = _refusal()
+        rules["skills"] = ordered_subset(self.skill_names, ", ")
         return rules
+
+    def _call(self, skill, arg_types: Sequence[Sequence[str]]) -> Node:
+        """One skill call line with each object argument drawn from its list of types."""
+        parts: list[Node | str] = [INDENT, f"{skill.name}("]
+        if self.allocated:
+            parts += [Ref("robot-arg"), ", "]
+        for i, types in enumerate(arg_types):
+            arg = alt(*(f"'{t}'" for t in types))
+            if i < skill.required:
+                parts += ([", "] if i else []) + [arg]
+            else:
+                parts.append(opt(seq(", ", arg)))
+        parts.append(")\n")
+        return seq(*parts)
+
+    def _actions(self, fn: "_Function") -> Node:
+        """The action lines whose preconditions the function's own steps do not rule out.
+
+        Put, drop and throw only what the function holds; pick up what it does not
+        hold; slice only with a knife in hand; do not switch on what it switched on
+        (or open what it opened), and do not undo the step just taken.
+        """
+        lines = []
+        for skill in self.skills:
+            if skill.action == "":
+                continue
+            types = [list(self.scene.types_for(a)) for a in skill.arguments]
+            if skill.action in ("PutObject", "DropHandObject", "ThrowObject"):
+                types[0] = [t for t in types[0] if t in fn.held]
+                if len(types) > 1:
+                    types[1] = [t for t in types[1] if t not in fn.held]
+            elif skill.action == "PickupObject":
+                types[0] = [t for t in types[0] if t not in fn.held]
+            elif skill.action == "SliceObject" and not fn.held & KNIVES:
+                continue
+            elif skill.action in _STATE_ACTIONS:
+                types[0] = [t for t in types[0] if fn.states.get(t) != skill.action
+                            and fn.last_call != (_STATE_ACTIONS[skill.action], t)]
+            if all(types[: skill.required]):
+                lines.append(self._call(skill, [t for t in types if t]))
+        if not lines:  # nothing the state allows: any action (still a valid plan)
+            return self.rules["action"]
+        return alt(*lines)
 
     def _header(self, k: int) -> Node:
         params = "robot_list" if self.allocated else ""
         return seq(f"def subtask{k}_", chars(NAME_FIRST), rep(chars(NAME_REST), 0, NAME_LEN - 1), f"({params}):\n")
 
     def _summary_line(self, k: int) -> Node:
-        skill = alt(*self.skill_names)
-        return seq(f"# SubTask {k}: ", _text(SUMMARY_CHARS, SUMMARY_LEN), " (skills: ", skill,
-                   rep(seq(", ", skill), 0, 7), ")\n")
+        return seq(f"# SubTask {k}: ", _text(SUMMARY_CHARS, SUMMARY_LEN), " (skills: ", Ref("skills"), ")\n")
 
     def _lengths(self) -> None:
         r = self.rules
-        self.step_len = _length(Ref("step"), r)
+        self.action_len = _length(Ref("action"), r)
+        self.goto_len = max(_length(Ref("goto"), r), _length(Ref("sleep"), r))
         self.comment_len = _length(Ref("comment"), r)
+        name_len = max((len(n) for n in self.fixed_names), default=len("subtask9_") + NAME_LEN)
+        robots_len = self._robot_list_len(self.team_size) if self.allocated else 0
+        self.thread_len = len("t9 = threading.Thread(target=") + name_len + len(", args=(,)") * self.allocated \
+            + robots_len + 2
+        self.call_len = name_len + robots_len + 3
         self.header_len = max((len(f"def {n}(robot_list):\n") for n in self.fixed_names),
                               default=_length(self._header(self.max_subtasks), r))
-        self.def_min = self.header_len + self.step_len + 1
+        self.def_min = self.header_len + self.action_len + 1 + self.call_len  # a def with one action, launched
         self.summary_len = _length(self._summary_line(9), r)
         self.order_len = len("# ") + ORDER_LEN + 1
         self.refusal_len = _length(Ref("refusal"), r)
-        name_len = max((len(n) for n in self.fixed_names), default=len("subtask9_") + NAME_LEN)
-        args_len = len(", args=(,)") + self._robot_list_len(self.team_size) if self.allocated else 0
-        self.thread_len = len("t9 = threading.Thread(target=") + name_len + args_len + 2
-        self.call_len = name_len + (self._robot_list_len(self.team_size) if self.allocated else 0) + 3
 
     @staticmethod
     def _robot_list_len(n: int) -> int:
@@ -268,20 +338,25 @@ class PlanConstraint(Constraint):
 
     def minimum_budget(self) -> int:
         if self.summary:
-            return self.summary_len + self.order_len + 1 + self.def_min + self.call_len + EOS
-        return max(self.refusal_len, self.def_min * max(1, len(self.fixed_names)) + self.call_len + EOS)
+            return self.summary_len + self.order_len + 1 + self.def_min
+        return max(self.refusal_len, self.def_min * max(1, len(self.fixed_names)))
 
     # ---------------------------------------------------------------- costs
 
-    def _orch_min(self) -> int:
-        return self.call_len + EOS if self.blocks == 0 else EOS
+    def _unlaunched(self) -> list[str]:
+        return [f.name for f in self.functions if f.name not in self.launched and f.name not in self.threads]
 
-    def _body_finish(self) -> int:
-        """Cost to finish after a step: the blank line, the defs still owed, the orchestration."""
-        owed = max(0, (self.owed or 0) - len(self.functions))
-        return 1 + owed * self.def_min + self._orch_min()
+    def _owed_defs(self) -> int:
+        return max(0, (self.owed or 0) - len(self.functions))
 
-    def _starts_joins(self, n: int) -> int:
+    def _finish(self, after_action: bool) -> int:
+        """Worst-case cost to complete from inside a body: an action if due, the blank line,
+        the defs still owed, and a direct call for every function not launched yet."""
+        return (0 if after_action else self.action_len) + 1 + self._owed_defs() * self.def_min \
+            + len(self._unlaunched()) * self.call_len
+
+    @staticmethod
+    def _starts_joins(n: int) -> int:
         return sum(len(f"t{i}.start()\n") + len(f"t{i}.join()\n") for i in range(1, n + 1))
 
     # ------------------------------------------------------------- choices
@@ -289,24 +364,15 @@ class PlanConstraint(Constraint):
     def next(self, remaining: int) -> Forced | Choose | None:
         if self.pending:
             return Forced(self.pending)
-        phase = self.phase
-        if phase == "start":
-            return self._start(remaining)
-        if phase == "summary":
-            return self._summary(remaining)
-        if phase == "order-blank":
+        handler = {
+            "start": self._start, "summary": self._summary, "header": self._header_choice, "body": self._body,
+            "orch": self._orch, "threads": self._threads,
+        }.get(self.phase)
+        if self.phase == "order-blank":
             return Forced("\n")
-        if phase == "header":
-            return self._header_choice(remaining)
-        if phase == "body":
-            return self._body(remaining)
-        if phase == "orch":
-            return self._orch(remaining)
-        if phase == "threads":
-            return self._threads(remaining)
-        return None
+        return handler(remaining) if handler else None
 
-    def _start(self, remaining: int) -> Forced | Choose:
+    def _start(self, remaining: int) -> Choose:
         options: dict[str, Node] = {}
         if self.allow_refusal:
             options["refusal"] = Ref("refusal")
@@ -321,20 +387,20 @@ class PlanConstraint(Constraint):
     def _summary(self, remaining: int) -> Choose:
         options: dict[str, Node] = {}
         k = self.summary_lines
-        base = self.order_len + 1 + k * self.def_min + self.call_len + EOS
-        if k < self.max_subtasks and self.summary_len + self.def_min + base <= remaining:
+        after = self.order_len + 1 + (k + 1) * self.def_min
+        if k < self.max_subtasks and self.summary_len + after <= remaining:
             options["summary"] = self._summary_line(k + 1)
         options["order"] = seq("# ", _text(COMMENT_CHARS, ORDER_LEN), "\n")
         return self._choose(self.rules, options)
 
-    def _header_choice(self, remaining: int) -> Forced | Choose:
+    def _header_choice(self, remaining: int) -> Forced | Choose | None:
         k = len(self.functions) + 1
         if self.fixed_names:
             return Forced(f"def {self.fixed_names[k - 1]}(robot_list):\n")
         if self.owed:
             return self._choose(self.rules, {"header": self._header(k)})
         options: dict[str, Node] = {}
-        if k <= self.max_subtasks and self.def_min + self.call_len + EOS <= remaining:
+        if k <= self.max_subtasks and self.def_min + len(self._unlaunched()) * self.call_len <= remaining:
             options["header"] = self._header(k)
         options.update(self._orch_options(remaining))
         return self._choose({**self.rules, **self._orch_rules()}, options)
@@ -342,52 +408,72 @@ class PlanConstraint(Constraint):
     def _body(self, remaining: int) -> Choose:
         fn = self.functions[-1]
         options: dict[str, Node] = {}
-        if fn.steps < self.max_steps and self.step_len + self._body_finish() <= remaining:
-            options["step"] = Ref("step")
-            if self.comments and not self.last_was_comment and \
-                    self.comment_len + self.step_len + self._body_finish() <= remaining:
-                options["comment"] = Ref("comment")
-        if self.last_was_comment:
-            options["step"] = Ref("step")
-        elif fn.steps >= 1:
+        room = fn.steps < self.max_steps - 1  # leave a step for the closing action
+        if room and self.goto_len + self._finish(False) <= remaining:
+            if fn.last != "goto":  # going somewhere twice in a row is never useful
+                options["goto"] = Ref("goto")
+            if fn.last_call[0] == "ToggleObjectOn":  # waiting only makes sense for something just switched on
+                options["sleep"] = Ref("sleep")
+        if fn.steps < self.max_steps and self.action_len + self._finish(True) <= remaining:
+            options["action"] = self._actions(fn)
+        if self.comments and fn.last != "comment" and fn.steps < self.max_steps and fn.comments < MAX_COMMENTS and \
+                self.comment_len + self.action_len + self._finish(True) <= remaining:
+            options["comment"] = Ref("comment")
+        if fn.last == "action":
             options["end"] = "\n"
+        if not options:
+            options["action"] = self._actions(fn)  # budget invariants make this unreachable; stay valid anyway
         return self._choose(self.rules, options)
 
     def _orch_rules(self) -> dict[str, Node]:
-        names = [f.name for f in self.functions]
+        names = self._unlaunched()
+        index = {f.name: k for k, f in enumerate(self.functions)}
         rules: dict[str, Node] = {}
+        if not names:
+            return rules
         if self.allocated:
-            rules.update(robot_chains(self.team_size, ", "))
-            for k, fn in enumerate(self.functions):
-                rules[f"team-{k}"] = seq("[", Ref(f"robots-from-0-need-{max(1, fn.max_index + 1)}"), "]")
-            rules["target"] = alt(*(seq(f"{n}, args=(", Ref(f"team-{k}"), ",)") for k, n in enumerate(names)))
-            rules["direct"] = alt(*(seq(n, "(", Ref(f"team-{k}"), ")\n") for k, n in enumerate(names)))
+            for name in names:
+                rules[f"team-{index[name]}"] = seq("[", self._robot_lists(self.functions[index[name]]), "]")
+            rules["target"] = alt(*(seq(f"{n}, args=(", Ref(f"team-{index[n]}"), ",)") for n in names))
+            rules["direct"] = alt(*(seq(n, "(", Ref(f"team-{index[n]}"), ")\n") for n in names))
         else:
             rules["target"] = alt(*names)
             rules["direct"] = alt(*(f"{n}()\n" for n in names))
         return rules
 
+    def _robot_lists(self, fn: _Function) -> Node:
+        """The robot lists a function may be run with: long enough for its robot_list[i], and, when
+        the team is known, such that every step has an actor with the skill and the strength."""
+        need = max(1, fn.max_index + 1)
+        if self.team is not None:
+            pickups = {s.name for s in self.skills if s.action == "PickupObject"}
+            steps = [Step(slot, skill, self.scene.masses.get(obj, 0.0) if skill in pickups else 0.0)
+                     for slot, skill, obj in fn.calls]
+            lists = feasible_lists(self.team, steps, need)
+            if lists:
+                return alt(*(", ".join(f"robots[{i}]" for i in order) for order in lists))
+        return robot_list(self.team_size, need, ", ", ordered=True)
+
     def _orch_options(self, remaining: int) -> dict[str, Node]:
+        left = len(self._unlaunched())
         options: dict[str, Node] = {}
-        if self.blocks < max(1, len(self.functions)):
-            if self.thread_len + self._starts_joins(1) + EOS <= remaining:
-                options["thread"] = seq("t1 = threading.Thread(target=", Ref("target"), ")\n")
-            if self.call_len + EOS <= remaining:
-                options["direct"] = Ref("direct")
-        if self.blocks >= 1:
-            options["end"] = ""
+        if left and self.thread_len + self._starts_joins(1) + (left - 1) * self.call_len <= remaining:
+            options["thread"] = seq("t1 = threading.Thread(target=", Ref("target"), ")\n")
+        if left:
+            options["direct"] = Ref("direct")
         return options
 
     def _orch(self, remaining: int) -> Choose | None:
         options = self._orch_options(remaining)
-        if list(options) == ["end"]:
+        if not options:
             return None
         return self._choose({**self.rules, **self._orch_rules()}, options)
 
     def _threads(self, remaining: int) -> Choose:
         n = len(self.threads)
+        left = len(self._unlaunched())
         options: dict[str, Node] = {}
-        if n < len(self.functions) and self.thread_len + self._starts_joins(n + 1) + EOS <= remaining:
+        if left and self.thread_len + self._starts_joins(n + 1) + (left - 1) * self.call_len <= remaining:
             options["thread"] = seq(f"t{n + 1} = threading.Thread(target=", Ref("target"), ")\n")
         options["start"] = "t1.start()\n"
         return self._choose({**self.rules, **self._orch_rules()}, options)
@@ -405,44 +491,44 @@ class PlanConstraint(Constraint):
             self.phase = "order-blank"
         elif kind == "forced" and self.pending:
             self.pending = ""
+            self.phase = "orch" if self._unlaunched() else "done"
         elif kind == "forced" and self.phase == "order-blank":
             self.phase = "header"
         elif kind == "header" or (kind == "forced" and piece.startswith("def ")):
             self.functions.append(_Function(piece[4:piece.index("(")]))
-            self.last_was_comment = False
             self.phase = "body"
-        elif kind == "comment":
-            self.last_was_comment = True
-        elif kind == "step":
-            self.last_was_comment = False
+        elif kind in ("goto", "sleep", "action", "comment"):
             fn = self.functions[-1]
-            fn.steps += 1
+            fn.last = kind
+            if kind != "comment":
+                fn.steps += 1
+            else:
+                fn.comments += 1
+            if kind == "action":
+                fn.track(piece, self.skill_actions)
+            elif kind in ("goto", "sleep"):
+                fn.last_call = ("", "")
+                match = _CALL.match(piece.rstrip("\n"))
+                if match:
+                    fn.calls.append((int(match.group(2)) if match.group(2) else None, match.group(1), match.group(3)))
             for i in range(self.team_size):
                 if f"robot_list[{i}]" in piece:
                     fn.max_index = max(fn.max_index, i)
-        elif kind == "end" and self.phase == "body":
+        elif kind == "end":
             done = self.owed is not None and len(self.functions) >= self.owed
             self.phase = "orch" if done else "header"
-        else:
-            self._advance_orchestration(kind, piece)
-
-    def _advance_orchestration(self, kind: str, piece: str) -> None:
-        if kind == "end":
-            self.phase = "done"
         elif kind == "start":
             n = len(self.threads)
+            self.launched += self.threads
+            self.threads = []
             self.pending = "".join(f"t{i}.start()\n" for i in range(2, n + 1))
             self.pending += "".join(f"t{i}.join()\n" for i in range(1, n + 1))
-            self.threads = []
-            self.blocks += 1
-            self.phase = "orch"
         elif kind == "thread":
-            target = piece.split("target=", 1)[1].split(",")[0].split(")")[0]
-            self.threads.append(target)
+            self.threads.append(piece.split("target=", 1)[1].split(",")[0].split(")")[0])
             self.phase = "threads"
         elif kind == "direct":
-            self.blocks += 1
-            self.phase = "orch"
+            self.launched.append(piece.split("(", 1)[0])
+            self.phase = "orch" if self._unlaunched() else "done"
 
 
 class CoalitionConstraint(Constraint):
@@ -450,47 +536,64 @@ class CoalitionConstraint(Constraint):
 
     Robots are named only as ``robots[i]`` with i inside the team: the free
     text of a line admits no digits or brackets, except in a mass (``2.5 kg``).
-    A line's reason is made of up to six pieces (a run of words, a robot, a
-    mass); fewer when the budget left must also cover the lines still to come.
+    With the sub-tasks' needs known, a line admits only teams that can do the
+    sub-task, and a refusal is the only answer when some sub-task has none
+    (``free=True`` leaves both choices to the model). A line's reason is made of
+    up to six pieces (a run of words, a robot, a mass); fewer when the budget
+    left must also cover the lines still to come.
     """
 
     PIECE = 24  # longest piece of a reason
     MAX_PIECES = 6
 
-    def __init__(self, function_names: Sequence[str], team_size: int, *, allow_refusal: bool = True):
+    def __init__(self, function_names: Sequence[str], team: Sequence[Robot] | int, *,
+                 needs: Sequence[Need] | None = None, free: bool = False, allow_refusal: bool = True):
         super().__init__()
         self.names = list(function_names)
-        self.team_size = team_size
+        self.team_size = team if isinstance(team, int) else len(team)
         self.allow_refusal = allow_refusal
         self.lines = 0
+        teams: list[list[tuple[int, ...]] | None] = [None] * len(self.names)
+        if needs is not None and not free and not isinstance(team, int):
+            teams = [feasible_teams(team, need) for need in needs]
+        # The model decides on refusing unless every sub-task's teams are known.
+        self.free = any(t is None for t in teams)
+        self.must_refuse = allow_refusal and any(t == [] for t in teams)
         mass = seq(rep(chars(string.digits), 1, 3), opt(seq(".", rep(chars(string.digits), 1, 2))), " kg")
         self.rules: dict[str, Node] = {
-            "robot": alt(*(f"robots[{i}]" for i in range(team_size))),
+            "robot": alt(*(f"robots[{i}]" for i in range(self.team_size))),
             "piece": alt(_text(REASON_CHARS, self.PIECE), Ref("robot"), mass),
-            **robot_chains(team_size, " and "),
-            "team": Ref("robots-from-0-need-1"),
             "refusal": _refusal(),
         }
-        team_len = _length(Ref("team"), self.rules)
-        self.fixed = [len(self._prefix(k)) + team_len + len("; ") + 1 for k in range(len(self.names))]
+        for k, allowed in enumerate(teams):
+            if allowed:
+                self.rules[f"team-{k}"] = alt(*(" and ".join(f"robots[{i}]" for i in c) for c in allowed))
+            else:
+                self.rules[f"team-{k}"] = robot_list(self.team_size, 1, " and ")
+        self.fixed = [len(self._prefix(k)) + _length(Ref(f"team-{k}"), self.rules) + len("; ") + 1
+                      for k in range(len(self.names))]
         self.refusal_len = _length(Ref("refusal"), self.rules)
 
     def _prefix(self, k: int) -> str:
         return f"# SubTask {k + 1} ({self.names[k]}): "
 
     def minimum_budget(self) -> int:
+        if self.must_refuse:
+            return self.refusal_len
         return sum(f + self.PIECE for f in self.fixed)
 
     def next(self, remaining: int) -> Choose | None:
         k = self.lines
         if self.refusal is not None or k == len(self.names):
             return None
+        if self.must_refuse:
+            return self._choose(self.rules, {"refusal": Ref("refusal")})
         reserve = sum(f + self.PIECE for f in self.fixed[k + 1:])
         pieces = min(self.MAX_PIECES, (remaining - reserve - self.fixed[k]) // self.PIECE)
         options: dict[str, Node] = {}
-        if self.allow_refusal and self.refusal_len <= remaining:
+        if self.allow_refusal and self.free and self.refusal_len <= remaining:
             options["refusal"] = Ref("refusal")
-        options["line"] = seq(self._prefix(k), Ref("team"), "; ", rep(Ref("piece"), 1, max(1, pieces)), "\n")
+        options["line"] = seq(self._prefix(k), Ref(f"team-{k}"), "; ", rep(Ref("piece"), 1, max(1, pieces)), "\n")
         return self._choose(self.rules, options)
 
     def _advance(self, kind: str, piece: str) -> None:

@@ -221,6 +221,100 @@ class Grammar:
         return "\n".join(lines) + "\n"
 
 
+class Matcher:
+    """Follows text through a grammar, character by character, and says what must come next.
+
+    A Thompson automaton of the (finite) grammar: backends use it to write the
+    characters a grammar forces (``robots[`` after ``SwitchOn(``...) in one
+    batch instead of sampling them one token at a time.
+    """
+
+    def __init__(self, grammar: Grammar):
+        self._edges: list[list[tuple[frozenset[str] | None, int]]] = []  # state -> (chars or epsilon, target)
+        start, self._accept = self._build(grammar.rules["root"], grammar.rules)
+        self._states = self._closure({start})
+
+    def _state(self) -> int:
+        self._edges.append([])
+        return len(self._edges) - 1
+
+    def _build(self, node: Node, rules: dict[str, Node]) -> tuple[int, int]:
+        if isinstance(node, Ref):
+            return self._build(rules[node.name], rules)
+        start = self._state()
+        if isinstance(node, Lit):
+            current = start
+            for c in node.text:
+                nxt = self._state()
+                self._edges[current].append((frozenset(c), nxt))
+                current = nxt
+            return start, current
+        if isinstance(node, Chars):
+            end = self._state()
+            self._edges[start].append((node.chars, end))
+            return start, end
+        if isinstance(node, Seq):
+            current = start
+            for item in node.items:
+                s, e = self._build(item, rules)
+                self._edges[current].append((None, s))
+                current = e
+            return start, current
+        if isinstance(node, Alt):
+            end = self._state()
+            for option in node.options:
+                s, e = self._build(option, rules)
+                self._edges[start].append((None, s))
+                self._edges[e].append((None, end))
+            return start, end
+        end = self._state()
+        current = start
+        for k in range(node.max):
+            if k >= node.min:
+                self._edges[current].append((None, end))
+            s, e = self._build(node.item, rules)
+            self._edges[current].append((None, s))
+            current = e
+        self._edges[current].append((None, end))
+        return start, end
+
+    def _closure(self, states: set[int]) -> frozenset[int]:
+        stack, seen = list(states), set(states)
+        while stack:
+            for label, target in self._edges[stack.pop()]:
+                if label is None and target not in seen:
+                    seen.add(target)
+                    stack.append(target)
+        return frozenset(seen)
+
+    def advance(self, text: str) -> bool:
+        """Consume ``text``; False (and no change) if the grammar does not allow it."""
+        states = self._states
+        for c in text:
+            states = self._closure({t for s in states for label, t in self._edges[s] if label is not None and c in label})
+            if not states:
+                return False
+        self._states = states
+        return True
+
+    @property
+    def accepting(self) -> bool:
+        return self._accept in self._states
+
+    def forced(self) -> str:
+        """The characters that must come next, up to the first choice (or the end)."""
+        out: list[str] = []
+        states = self._states
+        while self._accept not in states:
+            labels = {label for s in states for label, _ in self._edges[s] if label is not None}
+            if len(labels) != 1 or len(next(iter(labels))) != 1:
+                break
+            c = next(iter(next(iter(labels))))
+            out.append(c)
+            states = self._closure({t for s in states for label, t in self._edges[s] if label is not None and c in label})
+        return "".join(out)
+
+
 def _refs(node: Node) -> Iterable[str]:
     if isinstance(node, Ref):
         yield node.name

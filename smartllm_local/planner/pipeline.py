@@ -21,6 +21,7 @@ from ..robots import Catalogue, Robot
 from ..skills import SkillSet
 from .backends.base import Backend, Sampling
 from .constraints import REFUSAL_PREFIX, CoalitionConstraint, PlanConstraint
+from .feasibility import function_needs
 from .prompts import (
     Example,
     PromptOptions,
@@ -41,8 +42,12 @@ _COALITION_LINE = re.compile(r"^# (SubTask \d+ \(.*\): .*|INFEASIBLE: .*)$")
 
 @dataclass(frozen=True)
 class PlannerConfig:
+    """How to plan. ``free_teams`` lets the model pick any team (and refuse at will) instead of
+    only the teams the catalogue says can do each sub-task."""
+
     sampling: Sampling = Sampling()
     grammar: bool = True
+    free_teams: bool = False
     prompts: PromptOptions = PromptOptions()
     budgets: dict[str, int] = field(default_factory=lambda: dict(DEFAULT_BUDGETS))
 
@@ -110,7 +115,10 @@ class Planner:
             examples, ranked, self.backend, budget)
         record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
         names = [f.name for f in decomposed.functions]
-        constraint = CoalitionConstraint(names, len(team)) if self.config.grammar else None
+        pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
+        needs = function_needs(decomposed, scene, pickups)
+        constraint = CoalitionConstraint(names, team, needs=[needs[n] for n in names], free=self.config.free_teams) \
+            if self.config.grammar else None
         run_stage(record, self.backend, tokens, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.rng)
         if constraint is None:
@@ -142,7 +150,8 @@ class Planner:
         if self.config.grammar:
             team_skills = [s for s in skills.values() if any(s.name in r.skills for r in team)]
             constraint = PlanConstraint(scene, SkillSet(team_skills), team_size=len(team), comments=opts.comments,
-                                        function_names=[f.name for f in decomposed.functions])
+                                        function_names=[f.name for f in decomposed.functions],
+                                        team=None if self.config.free_teams else team)
         run_stage(record, self.backend, tokens, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.rng)
         self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))

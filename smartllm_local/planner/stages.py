@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import PlanError, UserError
 from .backends.base import Backend, Sampling
 from .constraints import Choose, Constraint
+from .grammar import Grammar
 from .generation import BudgetError, run_constraint
 from .prompts import Example
 
@@ -116,6 +117,14 @@ def run_stage(
 
     def force(text: str) -> int:
         tokens = backend.tokenize(text)
+        if backend.detokenize(tokens) != text:
+            # The tokenizer adds something (a leading space): let the model write it under a grammar instead.
+            tokens = []
+            for line in text.splitlines(keepends=True):
+                literal = Grammar({"root": line})
+                result = backend.generate(context + tokens, grammar=literal, max_tokens=len(line) + 1,
+                                          sampling=sampling, rng=rng)  # type: ignore[call-arg]
+                tokens += result.tokens
         context.extend(tokens)
         record.forced_tokens += len(tokens)
         return len(tokens)

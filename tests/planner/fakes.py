@@ -21,6 +21,9 @@ class FakeBackend:
     def tokenize(self, text: str, *, bos: bool = False) -> list[int]:
         return [0] * (len(text) // 4 + 1 + int(bos))
 
+    def detokenize(self, tokens) -> str:
+        return "x" * (4 * len(tokens))
+
     def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None) -> Generated:
         self.calls += 1
         if grammar is None:

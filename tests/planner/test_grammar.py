@@ -60,3 +60,17 @@ def test_llguidance_accepts_the_gbnf_and_the_lark_forms():
     g = Grammar({"obj": alt("'Apple'", "'Fridge'"), "root": seq("PutObject(", Ref("obj"), ")\n")})
     for fmt, text in (("gbnf", g.to_gbnf()), ("lark", g.to_lark())):
         assert llguidance.LLMatcher.validate_grammar(llguidance.grammar_from(fmt, text)) == ""
+
+
+def test_the_matcher_follows_text_and_knows_what_is_forced():
+    from smartllm_local.planner.grammar import Matcher
+
+    g = Grammar({"obj": alt("'Apple'", "'Fridge'"), "root": seq("    PutObject(", Ref("obj"), ", 'Bowl')\n")})
+    m = Matcher(g)
+    assert m.forced() == "    PutObject('"
+    assert m.advance("    PutObject('") and m.forced() == ""
+    assert not m.advance("B") and m.advance("Fri")
+    assert m.forced() == "dge', 'Bowl')\n"
+    assert m.advance("dge', 'Bowl')\n") and m.accepting and m.forced() == ""
+    optional = Matcher(Grammar({"root": alt("", "abc\n")}))
+    assert optional.accepting and optional.forced() == ""

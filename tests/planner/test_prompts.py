@@ -23,7 +23,7 @@ def catalogue():
 
 def plan_with(backend, catalogue, **options):
     planner = Planner(backend, catalogue, PlannerConfig(prompts=PromptOptions(**options)))
-    return planner.plan(INSTRUCTION, 6, [1, 24, 25])
+    return planner.plan(INSTRUCTION, 6, [29, 24, 25])
 
 
 def test_the_three_prompts_have_their_parts(catalogue):

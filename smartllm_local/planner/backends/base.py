@@ -36,6 +36,9 @@ class Backend(Protocol):
     def tokenize(self, text: str, *, bos: bool = False) -> list[int]:
         """Token ids of ``text``; ``bos`` adds the model's beginning-of-sequence token if it uses one."""
 
+    def detokenize(self, tokens: Sequence[int]) -> str:
+        """The text of token ids."""
+
     def generate(
         self,
         context: Sequence[int],

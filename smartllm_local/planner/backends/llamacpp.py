@@ -27,7 +27,7 @@ from typing import Sequence
 import numpy as np
 
 from ...errors import BackendUnavailableError, ModelError
-from ..grammar import Grammar, GrammarError
+from ..grammar import Grammar, GrammarError, Matcher
 from .base import Generated, Sampling
 
 _TOP = 64
@@ -191,17 +191,30 @@ class LlamaCppBackend:
             max_tokens = self.n_ctx - len(context) - 1
         self._sync(context)
         sampler = self._grammar_sampler(grammar) if grammar is not None else None
+        matcher = Matcher(grammar) if grammar is not None else None
         out: list[int] = []
+        text = ""
         try:
             while len(out) < max_tokens:
-                token = self._pick(self._logits(), sampler, sampling, rng)
-                if self._lib.llama_vocab_is_eog(self._vocab, token):
-                    return Generated(out, self.detokenize(out), "eos")
-                if sampler is not None:
-                    self._lib.llama_sampler_accept(sampler, token)
-                out.append(token)
-                self._eval([token])
-                text = self.detokenize(out)
+                forced = self._forced_tokens(matcher) if matcher is not None else []
+                if forced:
+                    # What the grammar forces is written in one batch rather than sampled token by token.
+                    for token in forced:
+                        self._lib.llama_sampler_accept(sampler, token)
+                    out.extend(forced)
+                    self._eval(forced)
+                else:
+                    token = self._pick(self._logits(), sampler, sampling, rng)
+                    if self._lib.llama_vocab_is_eog(self._vocab, token):
+                        return Generated(out, text, "eos")
+                    if sampler is not None:
+                        self._lib.llama_sampler_accept(sampler, token)
+                    out.append(token)
+                    self._eval([token])
+                new_text = self.detokenize(out)
+                if matcher is not None:
+                    matcher.advance(new_text[len(text):])
+                text = new_text
                 if sampler is not None and text.endswith("\n"):
                     return Generated(out, text, "line")
                 for s in stop:
@@ -211,6 +224,14 @@ class LlamaCppBackend:
         finally:
             if sampler is not None:
                 self._lib.llama_sampler_free(sampler)
+
+    def _forced_tokens(self, matcher: Matcher) -> list[int]:
+        """Tokens for the text the grammar forces next, if they spell it exactly (some tokenizers add a space)."""
+        forced = matcher.forced()
+        if len(forced) < 2:
+            return []
+        tokens = self.tokenize(forced)
+        return tokens if tokens and self.detokenize(tokens) == forced else []
 
     def close(self) -> None:
         llm, self.llm = getattr(self, "llm", None), None
