@@ -115,7 +115,9 @@ class TransformersBackend:
             return
         common = min(common, len(context) - 1)
         if self._cache is not None and common > 0:
-            self._cache.crop(common)
+            surplus = len(self._tokens) - common
+            if surplus:
+                self._cache.crop(-surplus)  # transformers 5 takes the number of tokens to drop, negated
         else:
             self._cache, common = None, 0
         self._tokens = self._tokens[:common]
