@@ -25,7 +25,7 @@ from typing import Any, Sequence
 from ..robots import Robot
 from ..skills import Skill, SkillSet, has_affordance
 from ..world.navigation import Box, facing_yaw
-from ..world.object_types import SLICE_RESULTS, base_type
+from ..world.object_types import OPEN_TOPPED, SLICE_RESULTS, base_type
 
 KNIVES = frozenset({"Knife", "ButterKnife"})
 # Scene masses are float32 values (a 0.4 kg cup is 0.4000000059604645): a capacity that equals
@@ -126,7 +126,14 @@ class TeamWorld:
         if held:
             return held[0]
         x, z = self.position(near)
-        return min(matches, key=lambda o: (round(Box.of(o).distance(x, z), 6), o["objectId"]))
+        shut = self._shut_away()
+        # Prefer instances the robots can get at (not in a closed fridge or drawer), then the nearest.
+        return min(matches, key=lambda o: (o["objectId"] in shut, round(Box.of(o).distance(x, z), 6), o["objectId"]))
+
+    def _shut_away(self) -> set[str]:
+        closed = {o["objectId"] for o in self.objects
+                  if o.get("openable") and o.get("receptacle") and not o.get("isOpen") and o["objectType"] not in OPEN_TOPPED}
+        return {o["objectId"] for o in self.objects if set(o.get("parentReceptacles") or ()) & closed}
 
     def _carried_mass(self, obj: dict[str, Any]) -> float:
         by_id = {o["objectId"]: o for o in self.objects}

@@ -100,6 +100,10 @@ RECEPTACLE_ONLY_ACCEPTS: Final = {
     "HandTowelHolder": frozenset({"HandTowel"}),
 }
 
+#: Openable receptacles that do not shut their contents away: what sits on a Toilet (its lid or
+#: tank) stays within reach when the lid is down.
+OPEN_TOPPED = frozenset({"Toilet"})
+
 #: Sources that change the temperature of what they hold (switched on, where toggleable).
 HEAT_SOURCES: Final = frozenset({"Microwave", "StoveBurner", "Toaster", "CoffeeMachine"})
 COLD_SOURCES: Final = frozenset({"Fridge"})

@@ -19,7 +19,7 @@ from typing import Any, Callable
 
 from . import rules
 from .navigation import Box, ReachableGrid
-from .object_types import RECEPTACLE_ONLY_ACCEPTS, SLICE_RESULTS
+from .object_types import OPEN_TOPPED, RECEPTACLE_ONLY_ACCEPTS, SLICE_RESULTS
 from .scenes import floor_plan_name, load_scene
 
 DEFAULT_VISIBILITY_DISTANCE = 1.5
@@ -158,7 +158,8 @@ class Simulator:
         """True when the object sits inside a closed openable receptacle (a shut fridge, drawer...)."""
         for parent_id in obj.get("parentReceptacles") or []:
             parent = self.objects.get(parent_id)
-            if parent and parent.get("openable") and not parent.get("isOpen"):
+            if parent and parent.get("openable") and not parent.get("isOpen") \
+                    and parent["objectType"] not in OPEN_TOPPED:
                 return True
             if parent and parent.get("parentReceptacles") and self.is_enclosed(parent):
                 return True

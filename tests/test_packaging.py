@@ -1,0 +1,28 @@
+"""The wheel carries the data folders (benchmark/, prompts/) and both console scripts."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_the_wheel_holds_the_benchmark_and_the_prompts(tmp_path):
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+                    "-w", str(tmp_path), str(ROOT)], check=True, timeout=300)
+    wheel = next(tmp_path.glob("smartllm_local-*.whl"))
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for required in ("smartllm_local/_data/benchmark/tasks.jsonl", "smartllm_local/_data/benchmark/infeasible.jsonl",
+                     "smartllm_local/_data/benchmark/robots.json", "smartllm_local/_data/benchmark/task.schema.json",
+                     "smartllm_local/_data/benchmark/reference_plans/kitchen-01.py",
+                     "smartllm_local/_data/prompts/examples.json",
+                     "smartllm_local/_data/prompts/decomposition/toast.py",
+                     "smartllm_local/world/thor_server.py"):
+        assert required in names, required
+    entry_points = next(n for n in names if n.endswith("entry_points.txt"))
+    text = zipfile.ZipFile(wheel).read(entry_points).decode()
+    assert "smartllm-local = smartllm_local.cli:main" in text
+    assert "smartllm-thor-server = smartllm_local.world.thor_server:main" in text
