@@ -83,13 +83,11 @@ class MetadataEncoder:
             parts.append(self._object_tail(sim, agent_id, oid))
         return b"".join(parts)
 
-    def _agent(self, sim: Simulator, agent_id: int, sequence_id: int, *, with_objects: bool = True) -> bytes:
-        agent = sim.agents[agent_id]
-        action, result = self.last_results[agent_id]
-        held = sim.objects.get(agent.held) if agent.held else None
-        fields = {
+    def _result_fields(self, agent_id: int, scene_name: str, action: str, result: ActionResult,
+                       sequence_id: int) -> dict[str, Any]:
+        return {
             "agentId": agent_id,
-            "sceneName": sim.scene_name + "_physics",
+            "sceneName": scene_name,
             "lastAction": action,
             "lastActionSuccess": result.success,
             "errorMessage": result.error_message,
@@ -98,6 +96,14 @@ class MetadataEncoder:
             "sequenceId": sequence_id,
             "screenWidth": self.width,
             "screenHeight": self.height,
+        }
+
+    def _agent(self, sim: Simulator, agent_id: int, sequence_id: int, *, with_objects: bool = True) -> bytes:
+        agent = sim.agents[agent_id]
+        action, result = self.last_results[agent_id]
+        held = sim.objects.get(agent.held) if agent.held else None
+        fields = {
+            **self._result_fields(agent_id, sim.scene_name + "_physics", action, result, sequence_id),
             "agent": {
                 "name": "agent",
                 "position": {"x": agent.x, "y": agent.y, "z": agent.z},
@@ -148,16 +154,7 @@ class MetadataEncoder:
     def encode_bare(self, *, scene_name: str, sequence_id: int, result: ActionResult, action: str) -> bytes:
         """Metadata for the moments before a scene is loaded (the greeting, GetScenesInBuild)."""
         agent = {
-            "agentId": 0,
-            "sceneName": scene_name,
-            "lastAction": action,
-            "lastActionSuccess": result.success,
-            "errorMessage": result.error_message,
-            "errorCode": result.error_code,
-            "actionReturn": result.action_return,
-            "sequenceId": sequence_id,
-            "screenWidth": self.width,
-            "screenHeight": self.height,
+            **self._result_fields(0, scene_name, action, result, sequence_id),
             "thirdPartyCameras": [],
             "objects": [],
             "agent": {"name": "agent", "position": {"x": 0.0, "y": 0.0, "z": 0.0},

@@ -58,3 +58,13 @@ class Backend(Protocol):
 
     def close(self) -> None:
         """Free the model."""
+
+
+def shared_prefix(cached: Sequence[int], context: Sequence[int]) -> int:
+    """How many leading tokens a cache already holds of a new context."""
+    common = 0
+    for a, b in zip(cached, context):
+        if a != b:
+            break
+        common += 1
+    return common

@@ -28,7 +28,7 @@ import numpy as np
 
 from ...errors import BackendUnavailableError, ModelError
 from ..grammar import Grammar, GrammarError, Matcher
-from .base import Generated, Sampling
+from .base import Generated, Sampling, shared_prefix
 
 _TOP = 64
 
@@ -93,11 +93,7 @@ class LlamaCppBackend:
         context = list(context)
         if len(context) >= self.n_ctx:
             raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
-        common = 0
-        for a, b in zip(self._tokens, context):
-            if a != b:
-                break
-            common += 1
+        common = shared_prefix(self._tokens, context)
         if common == len(context) == len(self._tokens) and self._fresh:
             return
         common = min(common, len(context) - 1)  # re-evaluate at least one token for its logits

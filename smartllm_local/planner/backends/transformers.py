@@ -22,7 +22,7 @@ import numpy as np
 from ...errors import BackendUnavailableError, ModelError
 from ..grammar import Grammar, GrammarError
 from ..models import EMBEDDED, embedded_model_path, is_gguf
-from .base import Generated, Sampling
+from .base import Generated, Sampling, shared_prefix
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
     os.environ[_switch] = "1"
@@ -106,11 +106,7 @@ class TransformersBackend:
         context = list(context)
         if len(context) >= self.n_ctx:
             raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
-        common = 0
-        for a, b in zip(self._tokens, context):
-            if a != b:
-                break
-            common += 1
+        common = shared_prefix(self._tokens, context)
         if common == len(context) == len(self._tokens) and self._logits is not None:
             return
         common = min(common, len(context) - 1)
