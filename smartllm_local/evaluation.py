@@ -96,8 +96,9 @@ def run_benchmark(
         live.append(outcome)
 
     def stage(name: str, step: Callable[[TaskOutcome], None]) -> None:
-        for k, outcome in enumerate(list(live), start=1):
-            progress(f"{name} {k}/{len(live)}: {outcome.task.id}")
+        batch = list(live)
+        for k, outcome in enumerate(batch, start=1):
+            progress(f"{name} {k}/{len(batch)}: {outcome.task.id}")
             try:
                 step(outcome)
             except SmartLLMError as exc:

@@ -41,7 +41,7 @@ from typing import Sequence
 
 from ..robots import Robot
 from ..skills import SkillSet
-from .feasibility import Need, Step, feasible_lists, feasible_teams
+from .feasibility import Step, feasible_lists
 from .grammar import Grammar, Node, Ref, alt, chars, opt, rep, seq
 from .scene_context import SceneObjects
 
@@ -107,12 +107,12 @@ def robot_list(team_size: int, need: int, separator: str, *, ordered: bool = Fal
     return seq(robot, rep(seq(separator, robot), max(0, need - 1), team_size - 1))
 
 
-def _text(charset: frozenset[str], length: int) -> Node:
+def text_run(charset: frozenset[str], length: int) -> Node:
     return rep(chars(charset), 1, length)
 
 
-def _refusal() -> Node:
-    return seq(REFUSAL_PREFIX, _text(COMMENT_CHARS, COMMENT_LEN), "\n")
+def refusal_line() -> Node:
+    return seq(REFUSAL_PREFIX, text_run(COMMENT_CHARS, COMMENT_LEN), "\n")
 
 
 class Constraint(ABC):
@@ -156,7 +156,7 @@ class Constraint(ABC):
         return self._offered
 
 
-def _length(node: Node, rules: dict[str, Node]) -> int:
+def longest(node: Node, rules: dict[str, Node]) -> int:
     return Grammar({**rules, "root": node}).max_length()
 
 
@@ -260,8 +260,8 @@ class PlanConstraint(Constraint):
         rules["goto"] = alt(*(self._call(s, [scene.types_for(a) for a in s.arguments]) for s in goto))
         rules["action"] = self._actions(_Function(""))
         rules["sleep"] = seq(INDENT, "time.sleep(", chars("123456789"), ")\n")
-        rules["comment"] = seq(INDENT, "# ", _text(COMMENT_CHARS, COMMENT_LEN), "\n")
-        rules["refusal"] = _refusal()
+        rules["comment"] = seq(INDENT, "# ", text_run(COMMENT_CHARS, COMMENT_LEN), "\n")
+        rules["refusal"] = refusal_line()
         rules["skills"] = ordered_subset(self.skill_names, ", ")
         return rules
 
@@ -313,24 +313,24 @@ class PlanConstraint(Constraint):
         return seq(f"def subtask{k}_", chars(NAME_FIRST), rep(chars(NAME_REST), 0, NAME_LEN - 1), f"({params}):\n")
 
     def _summary_line(self, k: int) -> Node:
-        return seq(f"# SubTask {k}: ", _text(SUMMARY_CHARS, SUMMARY_LEN), " (skills: ", Ref("skills"), ")\n")
+        return seq(f"# SubTask {k}: ", text_run(SUMMARY_CHARS, SUMMARY_LEN), " (skills: ", Ref("skills"), ")\n")
 
     def _lengths(self) -> None:
         r = self.rules
-        self.action_len = _length(Ref("action"), r)
-        self.goto_len = max(_length(Ref("goto"), r), _length(Ref("sleep"), r))
-        self.comment_len = _length(Ref("comment"), r)
+        self.action_len = longest(Ref("action"), r)
+        self.goto_len = max(longest(Ref("goto"), r), longest(Ref("sleep"), r))
+        self.comment_len = longest(Ref("comment"), r)
         name_len = max((len(n) for n in self.fixed_names), default=len("subtask9_") + NAME_LEN)
         robots_len = self._robot_list_len(self.team_size) if self.allocated else 0
         self.thread_len = len("t9 = threading.Thread(target=") + name_len + len(", args=(,)") * self.allocated \
             + robots_len + 2
         self.call_len = name_len + robots_len + 3
         self.header_len = max((len(f"def {n}(robot_list):\n") for n in self.fixed_names),
-                              default=_length(self._header(self.max_subtasks), r))
+                              default=longest(self._header(self.max_subtasks), r))
         self.def_min = self.header_len + self.action_len + 1 + self.call_len  # a def with one action, launched
-        self.summary_len = _length(self._summary_line(9), r)
+        self.summary_len = longest(self._summary_line(9), r)
         self.order_len = len("# ") + ORDER_LEN + 1
-        self.refusal_len = _length(Ref("refusal"), r)
+        self.refusal_len = longest(Ref("refusal"), r)
 
     @staticmethod
     def _robot_list_len(n: int) -> int:
@@ -390,7 +390,7 @@ class PlanConstraint(Constraint):
         after = self.order_len + 1 + (k + 1) * self.def_min
         if k < self.max_subtasks and self.summary_len + after <= remaining:
             options["summary"] = self._summary_line(k + 1)
-        options["order"] = seq("# ", _text(COMMENT_CHARS, ORDER_LEN), "\n")
+        options["order"] = seq("# ", text_run(COMMENT_CHARS, ORDER_LEN), "\n")
         return self._choose(self.rules, options)
 
     def _header_choice(self, remaining: int) -> Forced | Choose | None:
@@ -529,73 +529,3 @@ class PlanConstraint(Constraint):
         elif kind == "direct":
             self.launched.append(piece.split("(", 1)[0])
             self.phase = "orch" if self._unlaunched() else "done"
-
-
-class CoalitionConstraint(Constraint):
-    """Stage 2: one comment line per sub-task naming the robot or team of the team that does it.
-
-    Robots are named only as ``robots[i]`` with i inside the team: the free
-    text of a line admits no digits or brackets, except in a mass (``2.5 kg``).
-    With the sub-tasks' needs known, a line admits only teams that can do the
-    sub-task, and a refusal is the only answer when some sub-task has none
-    (``free=True`` leaves both choices to the model). A line's reason is made of
-    up to six pieces (a run of words, a robot, a mass); fewer when the budget
-    left must also cover the lines still to come.
-    """
-
-    PIECE = 24  # longest piece of a reason
-    MAX_PIECES = 6
-
-    def __init__(self, function_names: Sequence[str], team: Sequence[Robot] | int, *,
-                 needs: Sequence[Need] | None = None, free: bool = False, allow_refusal: bool = True):
-        super().__init__()
-        self.names = list(function_names)
-        self.team_size = team if isinstance(team, int) else len(team)
-        self.allow_refusal = allow_refusal
-        self.lines = 0
-        teams: list[list[tuple[int, ...]] | None] = [None] * len(self.names)
-        if needs is not None and not free and not isinstance(team, int):
-            teams = [feasible_teams(team, need) for need in needs]
-        # The model decides on refusing unless every sub-task's teams are known.
-        self.free = any(t is None for t in teams)
-        self.must_refuse = allow_refusal and any(t == [] for t in teams)
-        mass = seq(rep(chars(string.digits), 1, 3), opt(seq(".", rep(chars(string.digits), 1, 2))), " kg")
-        self.rules: dict[str, Node] = {
-            "robot": alt(*(f"robots[{i}]" for i in range(self.team_size))),
-            "piece": alt(_text(REASON_CHARS, self.PIECE), Ref("robot"), mass),
-            "refusal": _refusal(),
-        }
-        for k, allowed in enumerate(teams):
-            if allowed:
-                self.rules[f"team-{k}"] = alt(*(" and ".join(f"robots[{i}]" for i in c) for c in allowed))
-            else:
-                self.rules[f"team-{k}"] = robot_list(self.team_size, 1, " and ")
-        self.fixed = [len(self._prefix(k)) + _length(Ref(f"team-{k}"), self.rules) + len("; ") + 1
-                      for k in range(len(self.names))]
-        self.refusal_len = _length(Ref("refusal"), self.rules)
-
-    def _prefix(self, k: int) -> str:
-        return f"# SubTask {k + 1} ({self.names[k]}): "
-
-    def minimum_budget(self) -> int:
-        if self.must_refuse:
-            return self.refusal_len
-        return sum(f + self.PIECE for f in self.fixed)
-
-    def next(self, remaining: int) -> Choose | None:
-        k = self.lines
-        if self.refusal is not None or k == len(self.names):
-            return None
-        if self.must_refuse:
-            return self._choose(self.rules, {"refusal": Ref("refusal")})
-        reserve = sum(f + self.PIECE for f in self.fixed[k + 1:])
-        pieces = min(self.MAX_PIECES, (remaining - reserve - self.fixed[k]) // self.PIECE)
-        options: dict[str, Node] = {}
-        if self.allow_refusal and self.free and self.refusal_len <= remaining:
-            options["refusal"] = Ref("refusal")
-        options["line"] = seq(self._prefix(k), Ref(f"team-{k}"), "; ", rep(Ref("piece"), 1, max(1, pieces)), "\n")
-        return self._choose(self.rules, options)
-
-    def _advance(self, kind: str, piece: str) -> None:
-        if kind == "line":
-            self.lines += 1

@@ -20,7 +20,8 @@ from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
 from ..skills import SkillSet
 from .backends.base import Backend, Sampling
-from .constraints import REFUSAL_PREFIX, CoalitionConstraint, PlanConstraint
+from .coalition import CoalitionConstraint
+from .constraints import REFUSAL_PREFIX, PlanConstraint
 from .feasibility import function_needs
 from .prompts import (
     Example,

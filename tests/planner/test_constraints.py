@@ -7,7 +7,8 @@ import random
 import pytest
 
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.constraints import CoalitionConstraint, PlanConstraint
+from smartllm_local.planner.coalition import CoalitionConstraint
+from smartllm_local.planner.constraints import PlanConstraint
 from smartllm_local.planner.generation import BudgetError, accepts, run_constraint, sample_output
 from smartllm_local.planner.prompts import load_examples
 from smartllm_local.planner.scene_context import scene_objects
