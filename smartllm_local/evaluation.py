@@ -34,7 +34,7 @@ class TaskOutcome:
     task: Task
     result: PlanResult | None = None
     scores: Scores | None = None
-    seconds: float = 0.0
+    seconds: float = 0.0  # this task's own time: its stages and its execution, not its wait for the others
     error: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
 
@@ -88,7 +88,6 @@ def run_benchmark(
 ) -> list[TaskOutcome]:
     """Plan, execute and score every task; write per-task artifacts and results.jsonl under ``out``."""
     outcomes = [TaskOutcome(task) for task in tasks]
-    started = {o.task.id: time.perf_counter() for o in outcomes}
     live: list[TaskOutcome] = []
     for outcome in outcomes:
         task = outcome.task
@@ -133,6 +132,7 @@ def run_benchmark(
             Planner.conclude(result)
             if not outcome.error and result.error:
                 outcome.error = result.error
+            started = time.perf_counter()
             if outcome.task.feasible and result.plan is not None and not outcome.error:
                 progress(f"execution: {outcome.task.id}")
                 try:
@@ -143,7 +143,7 @@ def run_benchmark(
                         max_trans=outcome.task.max_trans, controller=controller)
                 except SmartLLMError as exc:
                     outcome.error = f"execution: {exc}"
-            outcome.seconds = time.perf_counter() - started[outcome.task.id]
+            outcome.seconds = time.perf_counter() - started + sum(r.seconds for r in result.stages)
             if out is not None:
                 write_artifacts(result, out / outcome.task.id, {"outcome": outcome.as_json()})
     finally:

@@ -38,6 +38,14 @@ from .scene_context import SceneObjects, scene_objects
 from .stages import StageRecord, check_output, fit_prompt, run_stage
 
 DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 512, "allocation": 1280}
+
+
+def allocation_budget(decomposition: StageRecord, functions: int, ceiling: int) -> int:
+    """The allocated plan restates the decomposed one with robots, plus a thread, start and join per
+    function: twice its tokens and 64 a function is ample, and the tighter budget leaves room for
+    more examples in a 4,096-token context."""
+    written = decomposition.generated_tokens + decomposition.forced_tokens
+    return min(ceiling, 2 * written + 64 * functions + 128)
 _COALITION_LINE = re.compile(r"^# (SubTask \d+ \(.*\): .*|INFEASIBLE: .*)$")
 
 
@@ -141,7 +149,7 @@ class Planner:
         decomposition = result.stages[0].output
         examples = examples_for("allocation", self.examples, opts)
         ranked = rank_by_relevance(examples, result.instruction, plan_object_types(decomposition, scene))
-        budget = self.config.budgets["allocation"]
+        budget = allocation_budget(result.stages[0], len(decomposed.functions), self.config.budgets["allocation"])
         skills = self.catalogue.skills
         record.prompt, tokens, kept, dropped = fit_prompt(
             lambda ex: allocation_prompt(decomposition, coalition, team, skills, self.catalogue.robots, ex, opts),

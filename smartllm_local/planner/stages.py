@@ -42,6 +42,7 @@ class StageRecord:
     generated_tokens: int = 0
     forced_tokens: int = 0
     seconds: float = 0.0
+    output_budget: int = 0
     examples: list[str] = field(default_factory=list)
     dropped: list[str] = field(default_factory=list)
     error: str = ""
@@ -54,7 +55,8 @@ class StageRecord:
     def timings(self) -> dict[str, float | int | list[str]]:
         return {
             "prompt_tokens": self.prompt_tokens, "generated_tokens": self.generated_tokens,
-            "forced_tokens": self.forced_tokens, "seconds": round(self.seconds, 3),
+            "forced_tokens": self.forced_tokens, "output_budget": self.output_budget,
+            "seconds": round(self.seconds, 3),
             "tokens_per_second": round(self.tokens_per_second, 2),
             "examples": self.examples, "dropped_examples": self.dropped,
         }
@@ -99,6 +101,7 @@ def run_stage(
     """Generate a stage's output into ``record`` (constrained, or free with stop strings)."""
     context = list(prompt_tokens)
     record.prompt_tokens = len(prompt_tokens)
+    record.output_budget = output_budget
     started = time.perf_counter()
     if constraint is None:
         result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,

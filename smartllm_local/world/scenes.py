@@ -140,7 +140,42 @@ def load_scene(
             if text is None:
                 raise SceneDataError(f"could not cache the scene data for {name} under {scene_dir}")
         _memo[key] = text
-    return json.loads(_memo[key])
+    return untangle_containment(json.loads(_memo[key]))
+
+
+def untangle_containment(objects: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Break the containment cycles the metadata dump has (a CounterTop "inside" the Plate on it).
+
+    Overlapping boxes make some of AI2-THOR's parentReceptacles mutual (in FloorPlan5,
+    16, 18, 21, 30, 310, 329). Left in, they loop containment walks and put a counter
+    inside a plate. A link in a cycle is kept only where a pickupable object sits in
+    a fixed one, the one direction that is physically possible.
+    """
+    by_id = {o["objectId"]: o for o in objects}
+
+    def ancestors(oid: str) -> set[str]:
+        seen: set[str] = set()
+        stack = list(by_id[oid].get("parentReceptacles") or [])
+        while stack:
+            cur = stack.pop()
+            if cur not in seen and cur in by_id:
+                seen.add(cur)
+                stack.extend(by_id[cur].get("parentReceptacles") or [])
+        return seen
+
+    dropped = [
+        (obj["objectId"], parent)
+        for obj in objects
+        for parent in obj.get("parentReceptacles") or []
+        if parent in by_id and obj["objectId"] in ancestors(parent)
+        and not (obj.get("pickupable") and not by_id[parent].get("pickupable"))
+    ]
+    for child, parent in dropped:
+        kept = [p for p in by_id[child]["parentReceptacles"] if p != parent]
+        by_id[child]["parentReceptacles"] = kept or None
+        holds = [c for c in by_id[parent].get("receptacleObjectIds") or [] if c != child]
+        by_id[parent]["receptacleObjectIds"] = holds or None
+    return objects
 
 
 def _read_cached(path: Path) -> str | None:

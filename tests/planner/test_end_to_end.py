@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 
 from smartllm_local.evaluation import run_benchmark, summary_table
 from smartllm_local.plan_language import parse_plan
@@ -21,8 +22,13 @@ from smartllm_local.tasks import load_tasks
 def test_every_benchmark_task_goes_through_all_stages_and_executes(smollm2, tmp_path):
     catalogue = load_catalogue()
     tasks = load_tasks()
+    started = time.perf_counter()
     outcomes = run_benchmark(tasks, Planner(smollm2, catalogue), catalogue, out=tmp_path)
+    elapsed = time.perf_counter() - started
     assert len(outcomes) == len(tasks) >= 42
+    own = [o.seconds for o in outcomes]
+    assert all(o.seconds >= sum(r.seconds for r in o.result.stages) > 0 for o in outcomes)
+    assert sum(own) <= elapsed, "each task's seconds are its own, not its wait for the other tasks"
     for outcome in outcomes:
         result = outcome.result
         assert not outcome.error, (outcome.task.id, outcome.error)

@@ -70,6 +70,18 @@ def test_examples_are_dropped_least_relevant_first_when_the_context_is_short(cat
         plan_with(FakeBackend(n_ctx=1500), catalogue)
 
 
+def test_the_allocation_budget_follows_the_decomposition(catalogue):
+    budgets = {"decomposition": 1024, "coalition": 512, "allocation": 9000}
+    planner = Planner(FakeBackend(n_ctx=16384), catalogue, PlannerConfig(budgets=budgets))
+    decomposition, _, allocation = planner.plan(INSTRUCTION, 6, [29, 24, 25]).stages
+    written = decomposition.generated_tokens + decomposition.forced_tokens
+    functions = len(decomposition.plan.functions)
+    assert written and functions
+    assert allocation.output_budget == 2 * written + 64 * functions + 128 < 9000
+    assert decomposition.output_budget == 1024
+    assert allocation.generated_tokens + allocation.forced_tokens <= allocation.output_budget
+
+
 def test_relevance_keeps_the_closest_example():
     from smartllm_local.planner.prompts import rank_by_relevance
 

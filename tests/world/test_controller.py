@@ -17,6 +17,7 @@ from ai2thor.controller import Controller
 from ai2thor.server import MultiAgentEvent
 
 from smartllm_local.errors import UnknownFloorPlanError, UserError, WorldError
+from smartllm_local.world import scenes
 from smartllm_local.world.controller import open_controller
 from smartllm_local.world.navigation import Box
 from smartllm_local.world.thor_server import ThorStandIn
@@ -124,6 +125,17 @@ def test_reset_restores_the_scene():
         event = controller.reset("FloorPlan6")
         assert _object(event, "LightSwitch")["isToggled"]
         assert len(event.events) == 2, "reset keeps the Initialize parameters"
+    finally:
+        controller.stop()
+
+
+def test_every_floor_plan_is_served_to_a_two_agent_team():
+    controller = open_controller(1, agent_count=2)
+    try:
+        for plan in scenes.all_floor_plans():
+            event = controller.reset(plan, agentCount=2)
+            assert [e.metadata["lastActionSuccess"] for e in event.events] == [True, True], plan
+            assert event.events[1].metadata["objects"], plan
     finally:
         controller.stop()
 

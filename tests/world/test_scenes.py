@@ -64,6 +64,39 @@ def test_reference_facts_about_floorplan6():
     assert sum(o["objectType"] == "Cabinet" for o in objects) == 15
 
 
+def test_containment_has_no_cycles_and_keeps_objects_on_counters():
+    for plan in scenes.all_floor_plans():
+        objects = {o["objectId"]: o for o in scenes.load_scene(plan)}
+        for oid, obj in objects.items():
+            seen, stack = set(), list(obj.get("parentReceptacles") or [])
+            while stack:
+                cur = stack.pop()
+                assert cur != oid, f"{plan}: {oid} is inside itself"
+                if cur not in seen and cur in objects:
+                    seen.add(cur)
+                    stack.extend(objects[cur].get("parentReceptacles") or [])
+            for child in obj.get("receptacleObjectIds") or []:
+                assert child not in objects or oid in (objects[child].get("parentReceptacles") or []), plan
+    fp5 = {o["objectId"]: o for o in scenes.load_scene(5)}
+    assert fp5["Plate|-01.12|+00.90|-01.65"]["parentReceptacles"] == ["CounterTop|+01.16|+00.95|-02.01"]
+    assert not fp5["CounterTop|+01.16|+00.95|-02.01"]["parentReceptacles"]
+
+
+def test_untangling_keeps_a_pickupable_in_a_fixed_receptacle_and_drops_fixed_in_fixed():
+    objects = [
+        {"objectId": "Plate|1", "pickupable": True, "parentReceptacles": ["Counter|1"], "receptacleObjectIds": ["Counter|1"]},
+        {"objectId": "Counter|1", "pickupable": False, "parentReceptacles": ["Plate|1"], "receptacleObjectIds": ["Plate|1"]},
+        {"objectId": "Cabinet|a", "parentReceptacles": ["Cabinet|b"], "receptacleObjectIds": ["Cabinet|b"]},
+        {"objectId": "Cabinet|b", "parentReceptacles": ["Cabinet|a"], "receptacleObjectIds": ["Cabinet|a"]},
+        {"objectId": "Cup|1", "pickupable": True, "parentReceptacles": ["Cabinet|a"], "receptacleObjectIds": None},
+    ]
+    by_id = {o["objectId"]: o for o in scenes.untangle_containment(objects)}
+    assert by_id["Plate|1"]["parentReceptacles"] == ["Counter|1"] and by_id["Counter|1"]["receptacleObjectIds"] == ["Plate|1"]
+    assert by_id["Counter|1"]["parentReceptacles"] is None and by_id["Plate|1"]["receptacleObjectIds"] is None
+    assert by_id["Cabinet|a"]["parentReceptacles"] is None and by_id["Cabinet|b"]["parentReceptacles"] is None
+    assert by_id["Cup|1"]["parentReceptacles"] == ["Cabinet|a"]
+
+
 def test_load_scene_returns_independent_copies():
     first = scenes.load_scene(6)
     first[0]["objectType"] = "Mangled"
