@@ -46,6 +46,8 @@ def allocation_budget(decomposition: StageRecord, functions: int, ceiling: int) 
     more examples in a 4,096-token context."""
     written = decomposition.generated_tokens + decomposition.forced_tokens
     return min(ceiling, 2 * written + 64 * functions + 128)
+
+
 _COALITION_LINE = re.compile(r"^# (SubTask \d+ \(.*\): .*|INFEASIBLE: .*)$")
 
 
