@@ -8,6 +8,9 @@ Measures, for 1 and 4 agents on FloorPlan6:
   ``RotateRight`` (the agent turns: a patch without objects), ``Teleport``
   (the agent moves: a patch with its object list), ``ToggleObjectOn/Off`` (an
   object changes: every agent's full view is sent), and a mix of all four;
+- the same again with every agent's metadata filtered by AI2-THOR's
+  ``SetObjectFilter`` to the objects a plan on the light, the fridge, an apple
+  and a mug can involve, as the executor does;
 - scene load: reading a floor plan's objects from the cache, building the
   simulator, and ``controller.reset`` to another floor plan.
 
@@ -22,9 +25,13 @@ import argparse
 import statistics
 import time
 
+from smartllm_local.executor.focus import focus_ids
 from smartllm_local.world.controller import open_controller
 from smartllm_local.world.scenes import _memo, all_floor_plans, load_scene
 from smartllm_local.world.simulator import Simulator
+
+
+FOCUS = ("LightSwitch", "Fridge", "Apple", "Mug")
 
 
 def rate(controller, actions, n: int) -> float:
@@ -55,11 +62,15 @@ def main() -> None:
                        dict(action="ToggleObjectOn", objectId=light, forceAction=True)],
         }
         workloads["mixed"] = [a for group in zip(*(w[:8] for w in workloads.values() if len(w) >= 2)) for a in group]
+        focus = focus_ids(objects, FOCUS)
         print(f"{agents} agent(s): Controller start-up {startup:.2f} s")
+        print(f"  {'':<12} {'all ' + str(len(objects)) + ' objects':>14} {'filtered to ' + str(len(focus)):>16}")
+        rates = {name: [rate(controller, actions, args.n)] for name, actions in workloads.items()}
+        for agent in range(agents):
+            controller.step(action="SetObjectFilter", objectIds=focus, agentId=agent)
         for name, actions in workloads.items():
-            if name == "Teleport":
-                actions = [a for a in actions if a["agentId"] < agents]
-            print(f"  {name:<12} {rate(controller, actions, args.n):8.0f} steps/s")
+            rates[name].append(rate(controller, actions, args.n))
+            print(f"  {name:<12} {rates[name][0]:8.0f} steps/s {rates[name][1]:10.0f} steps/s")
         controller.stop()
 
     plans = all_floor_plans()

@@ -27,6 +27,7 @@ def run_plan(
     build: str | None = None,
     skills: SkillSet = DEFAULT_SKILL_SET,
     max_ticks: int = DEFAULT_MAX_TICKS,
+    object_filter: bool = True,
 ) -> Execution:
     """Execute ``plan`` on ``floor_plan`` with ``team``.
 
@@ -36,9 +37,9 @@ def run_plan(
     scene = floor_plan_name(floor_plan)
     if controller is not None:
         controller.reset(scene, agentCount=len(team))
-        return execute(plan, controller, team, skills=skills, max_ticks=max_ticks)
+        return execute(plan, controller, team, skills=skills, max_ticks=max_ticks, object_filter=object_filter)
     controller = open_controller(scene, agent_count=len(team), build=build)
     try:
-        return execute(plan, controller, team, skills=skills, max_ticks=max_ticks)
+        return execute(plan, controller, team, skills=skills, max_ticks=max_ticks, object_filter=object_filter)
     finally:
         controller.stop()

@@ -122,8 +122,12 @@ def execute(
     *,
     skills: SkillSet = DEFAULT_SKILL_SET,
     max_ticks: int = DEFAULT_MAX_TICKS,
+    object_filter: bool = True,
 ) -> Execution:
     """Run an allocated plan with ``team`` through ``controller`` (its agents are the team, in order).
+
+    ``object_filter`` has the agents report only the objects the plan can involve while it
+    runs (:mod:`.focus`): the same run, with much less metadata to decode.
 
     Raises:
         UserError: the plan is decomposed (it names no robots) or names robots outside the team.
@@ -140,7 +144,8 @@ def execute(
                 _robots_used(plan, fn, bind(fn, step.args, {}, team_size), team_size)
     except RobotIndexError as exc:
         raise UserError(f"the plan does not fit this team of {team_size}: {exc.message}") from None
-    world = TeamWorld(controller, team, skills)
+    names = {name for call in plan.skill_calls() for name in call.objects} if object_filter else None
+    world = TeamWorld(controller, team, skills, focus=names)
     trace: list[TraceEntry] = []
     pending: list[_Task] = []
     running: list[_Task] = []
@@ -227,6 +232,7 @@ def execute(
         if isinstance(waiting_for, int):
             waiting_for -= 1
         advance_main()
+    world.release()
     return Execution(
         trace=trace,
         transitions=max(0, len(begin_ticks) - 1),

@@ -20,12 +20,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Collection, Sequence
 
 from ..robots import Robot
 from ..skills import Skill, SkillSet, has_affordance
 from ..world.navigation import Box, facing_yaw
 from ..world.object_types import OPEN_TOPPED, SLICE_RESULTS, base_type
+from .focus import CREATING_ACTIONS, focus_ids
 
 KNIVES = frozenset({"Knife", "ButterKnife"})
 # Scene masses are float32 values (a 0.4 kg cup is 0.4000000059604645): a capacity that equals
@@ -44,9 +45,14 @@ class Outcome:
 
 
 class TeamWorld:
-    """The team's view of the world: the latest event, and the Controller to act through."""
+    """The team's view of the world: the latest event, and the Controller to act through.
 
-    def __init__(self, controller: Any, team: Sequence[Robot], skills: SkillSet):
+    With ``focus`` (the object names a plan uses), every agent reports only the
+    objects those names can involve (see :mod:`.focus`) until :meth:`release`.
+    """
+
+    def __init__(self, controller: Any, team: Sequence[Robot], skills: SkillSet,
+                 *, focus: Collection[str] | None = None):
         self.controller = controller
         self.team = list(team)
         self.skills = skills
@@ -56,6 +62,38 @@ class TeamWorld:
         self.cells = [(p["x"], p["z"]) for p in reply.metadata["actionReturn"] or []]
         self.cell_y = (reply.metadata["actionReturn"] or [{"y": 0.9}])[0]["y"]
         self.helping: dict[int, str] = {}  # member -> object it helps carry
+        self.focus = set(focus) if focus is not None else None
+        if self.focus is not None:
+            self._set_filter()
+
+    # ---------------------------------------------------------------- filter
+
+    def _set_filter(self) -> None:
+        """Filter every agent's objects down to the focus; reads the full list from the current event."""
+        ids = focus_ids(self.objects, self.focus or ())
+        try:
+            first = self.controller.step(action="SetObjectFilter", objectIds=ids, agentId=0)
+        except ValueError:  # a build without the action: ai2thor raises on InvalidAction
+            first = None
+        if first is None or not first.events[0].metadata["lastActionSuccess"]:
+            self.focus = None
+            return
+        self.event = first
+        for member in range(1, len(self.event.events)):
+            self._step(member, action="SetObjectFilter", objectIds=ids)
+
+    def release(self) -> None:
+        """Lift the filter, so that the latest event holds every object of the scene."""
+        if self.focus is None:
+            return
+        for member in reversed(range(len(self.event.events))):
+            self._step(member, action="ResetObjectFilter")
+        self.focus = None
+
+    def _refocus(self) -> None:
+        """After objects appeared: read the full list through agent 0, then filter everyone again."""
+        self._step(0, action="ResetObjectFilter")
+        self._set_filter()
 
     # ------------------------------------------------------------------ state
 
@@ -276,6 +314,8 @@ class TeamWorld:
         view = self._step(actor, action=skill.action, objectId=target["objectId"])
         if not view["lastActionSuccess"]:
             return Outcome(False, view["errorMessage"], target["objectId"], skill.action, actor)
+        if skill.action in CREATING_ACTIONS and self.focus is not None:
+            self._refocus()
         return Outcome(True, object_id=target["objectId"], action=skill.action, actor=actor)
 
     def _switch_for(self, name: str, actor: int, members: Sequence[int]) -> dict[str, Any] | None:

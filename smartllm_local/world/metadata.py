@@ -20,6 +20,12 @@ from .simulator import ActionResult, Simulator
 
 _AGENT_FIELDS = ("distance", "visible", "isInteractable")
 _pack = msgpack.Packer(use_bin_type=True).pack
+# The per-agent fields packed by hand (they are packed for every object at every move):
+# "distance" as a float64, then "visible" and "isInteractable", which are equal.
+_FLOAT = struct.Struct(">Bd")
+_TAIL_KEYS = (_pack("distance"), _pack("visible"))
+_TRUE_TWICE = _pack(True) + _pack("isInteractable") + _pack(True)
+_FALSE_TWICE = _pack(False) + _pack("isInteractable") + _pack(False)
 
 
 def _map_header(n: int) -> bytes:
@@ -68,15 +74,16 @@ class MetadataEncoder:
             obj = sim.objects[oid]
             pos = obj["position"]
             distance = math.sqrt((pos["x"] - agent.x) ** 2 + (pos["y"] - agent.y) ** 2 + (pos["z"] - agent.z) ** 2)
-            visible = sim.is_visible(agent_id, obj)
-            tail = _pack_items({"distance": distance, "visible": visible, "isInteractable": visible})
+            tail = _TAIL_KEYS[0] + _FLOAT.pack(0xCB, distance) + _TAIL_KEYS[1] \
+                + (_TRUE_TWICE if sim.is_visible(agent_id, obj) else _FALSE_TWICE)
             cached = (agent.version, version, tail)
             self._tail[key] = cached
         return cached[2]
 
     def _objects(self, sim: Simulator, agent_id: int) -> bytes:
-        parts = [_array_header(len(sim.objects))]
-        for oid in sim.objects:
+        reported = sim.reported_objects(agent_id)
+        parts = [_array_header(len(reported))]
+        for oid in reported:
             base, n = self._object_base(sim, oid)
             parts.append(_map_header(n + len(_AGENT_FIELDS)))
             parts.append(base)

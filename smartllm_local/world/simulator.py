@@ -58,6 +58,8 @@ class Agent:
     horizon: float = 0.0
     standing: bool = True
     held: str | None = None
+    # AI2-THOR's SetObjectFilter: the objectIds this agent's metadata reports (None: all).
+    object_filter: frozenset[str] | None = None
     # Changes whenever the agent's position does: what it can reach depends on nothing else.
     version: int = field(default_factory=lambda: next(_clock))
 
@@ -107,6 +109,8 @@ class Simulator:
             "Crouch": lambda a, act: self._stand(a, False),
             "Done": self._noop,
             "Pass": self._noop,
+            "SetObjectFilter": self._set_object_filter,
+            "ResetObjectFilter": self._reset_object_filter,
             "PickupObject": self._pickup,
             "PutObject": self._put,
             "DropHandObject": self._drop,
@@ -300,6 +304,28 @@ class Simulator:
 
     def _noop(self, agent_id: int, action: dict[str, Any]) -> ActionResult:
         return ActionResult()
+
+    def _set_object_filter(self, agent_id: int, action: dict[str, Any]) -> ActionResult:
+        """Report only these objects in this agent's metadata, as AI2-THOR's ProcTHOR-era speed-up does.
+
+        Ids of no object in the scene are ignored, and objects created later (slices) stay out
+        until the filter is set again."""
+        if "objectIds" not in action:
+            raise ActionFailed("SetObjectFilter requires objectIds", "MissingArguments")
+        ids = action["objectIds"]
+        if not isinstance(ids, list) or not all(isinstance(i, str) for i in ids):
+            raise ActionFailed(f"SetObjectFilter: objectIds must be a list of strings, got {ids!r}", "InvalidArgument")
+        self.agents[agent_id].object_filter = frozenset(i for i in ids if i in self.objects)
+        return ActionResult()
+
+    def _reset_object_filter(self, agent_id: int, action: dict[str, Any]) -> ActionResult:
+        self.agents[agent_id].object_filter = None
+        return ActionResult()
+
+    def reported_objects(self, agent_id: int) -> list[str]:
+        """The objectIds an agent's metadata carries, in scene order."""
+        kept = self.agents[agent_id].object_filter
+        return list(self.objects) if kept is None else [oid for oid in self.objects if oid in kept]
 
     # ------------------------------------------------------------- objects
 

@@ -61,7 +61,7 @@ class ThorStandIn:
         generation = sim_before.generation if sim_before else -1
         valid_agent = sim_before is not None and isinstance(agent_id, int) and not isinstance(agent_id, bool) \
             and 0 <= agent_id < len(sim_before.agents)
-        pose = sim_before.agents[agent_id].version if valid_agent else -1
+        view = self._view(sim_before, agent_id) if valid_agent else None
         try:
             result = self._dispatch(name, action, agent_id)
         except Exception as exc:  # a bug here must not kill the Controller's session
@@ -74,10 +74,16 @@ class ThorStandIn:
         active = agent_id if valid_agent else 0
         self.encoder.last_results[active] = (str(name), result)
         if self.sim is sim_before and valid_agent and self.sim.generation == generation and name not in _FULL_EVENT_ACTIONS:
-            moved = self.sim.agents[active].version != pose
+            moved = self._view(self.sim, active) != view
             body = self.encoder.encode_patch(self.sim, agent_id=active, sequence_id=self.sequence_id, with_objects=moved)
             return METADATA_PATCH, body
         return METADATA, self.encoder.encode(self.sim, active_agent=active, sequence_id=self.sequence_id)
+
+    @staticmethod
+    def _view(sim: Simulator, agent_id: int) -> tuple[int, frozenset[str] | None]:
+        """What an agent's list of objects depends on when no object changes: its pose and its filter."""
+        agent = sim.agents[agent_id]
+        return agent.version, agent.object_filter
 
     def _dispatch(self, name: Any, action: dict[str, Any], agent_id: Any) -> ActionResult:
         if name == "GetScenesInBuild":

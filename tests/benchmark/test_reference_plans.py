@@ -9,7 +9,12 @@ import pytest
 
 import smartllm_local.benchmark as bench
 from smartllm_local.benchmark import ReferenceResult, category_table, check_reference_plans
+from smartllm_local.executor import run_plan
+from smartllm_local.plan_language import read_plan
 from smartllm_local.tasks import CATEGORIES, find_task
+from smartllm_local.world.controller import open_controller
+
+from ..executor.helpers import run_record
 
 
 @pytest.fixture(scope="module")
@@ -145,3 +150,18 @@ def test_a_complex_task_fails_without_its_team(all_tasks, catalogue, tmp_path, t
     [result] = check_reference_plans([find_task(all_tasks, task_id)], tmp_path, catalogue=catalogue)
     assert not result.passed and result.scores.GCR < 1.0
     assert error in result.problem
+
+
+def test_the_object_filter_changes_no_reference_run(feasible, catalogue):
+    """The executor has the agents report only the objects a plan can involve; every reference plan
+    must take the same steps, with the same outcomes, to the same final scene without that filter."""
+    controller = open_controller(1)
+    try:
+        for task in feasible:
+            team = catalogue.team(task.robots)
+            plan = read_plan(bench.default_plans_dir() / f"{task.id}.py", form="allocated", team_size=len(team))
+            runs = [run_record(run_plan(plan, task.floor_plan, team, controller=controller, object_filter=f))
+                    for f in (True, False)]
+            assert runs[0] == runs[1], task.id
+    finally:
+        controller.stop()

@@ -41,3 +41,14 @@ def steps(execution: Execution) -> list[tuple[int, str, tuple[int, ...], bool]]:
 def agent_position(controller: Any, member: int) -> tuple[float, float]:
     pos = controller.last_event.events[member].metadata["agent"]["position"]
     return pos["x"], pos["z"]
+
+
+_PER_AGENT = frozenset({"distance", "visible", "isInteractable"})
+
+
+def run_record(execution: Execution) -> dict[str, Any]:
+    """What a run did and left behind, without the fields that depend on which agent reported the scene."""
+    objects = sorted(({k: v for k, v in o.items() if k not in _PER_AGENT} for o in execution.final_objects),
+                     key=lambda o: o["objectId"])
+    return {"trace": [e.as_dict() for e in execution.trace], "transitions": execution.transitions,
+            "ticks": execution.ticks, "starts": execution.starts, "objects": objects}

@@ -14,7 +14,7 @@ from smartllm_local.scoring import score_execution
 from smartllm_local.skills import DEFAULT_SKILLS
 from smartllm_local.world.scenes import load_scene
 
-from .helpers import CATALOGUE
+from .helpers import CATALOGUE, run_record
 
 # The scene's own types, plus a few it lacks (failures are part of what must not crash).
 TYPES = sorted({o["objectType"] for o in load_scene("FloorPlan6")}) + ["Banana", "AppleSliced", "Television"]
@@ -159,3 +159,6 @@ def test_random_valid_plans_never_crash_the_executor(fp6_controller, drawn):
         used = [r for e in entries for r in e.robots]
         assert len(used) == len(set(used)), (tick, [(e.subtask, e.robots) for e in entries])
     assert all(0 <= e.tick < execution.ticks for e in execution.trace)
+    # the object filter the executor sets changes what the Controller sends, never what happens
+    unfiltered = run_plan(plan, 6, team, controller=fp6_controller, skills=CATALOGUE.skills, object_filter=False)
+    assert run_record(unfiltered) == run_record(execution)

@@ -6,7 +6,7 @@ import pytest
 
 from smartllm_local.world.navigation import Box
 
-from .helpers import CATALOGUE, agent_position, one, run, scores, steps
+from .helpers import CATALOGUE, agent_position, one, run, run_record, scores, steps
 
 APPLE = "Apple|-00.48|+00.97|+00.41"
 
@@ -157,3 +157,37 @@ def test_the_strong_member_acts_first_when_listed_first(c):
 def test_a_team_with_the_whole_team_reference(c):
     ex = run("GoToObject(robots, 'Apple')\nPickupObject(robots, 'Apple')\n", [7, 8, 5], c)
     assert steps(ex) == [(0, "GoToObject", (7, 8, 5), True), (1, "PickupObject", (7, 8, 5), True)]
+
+
+class _WithoutObjectFilter:
+    """A Controller for a build that predates SetObjectFilter: ai2thor raises on an unknown action."""
+
+    def __init__(self, controller):
+        self._controller = controller
+
+    def __getattr__(self, name):
+        return getattr(self._controller, name)
+
+    def step(self, action=None, **kwargs):
+        name = action.get("action") if isinstance(action, dict) else kwargs.get("action", action)
+        if name == "SetObjectFilter":
+            raise ValueError("Invalid action: SetObjectFilter")
+        return self._controller.step(action, **kwargs)
+
+
+def test_a_build_without_the_object_filter_runs_the_plan_unfiltered(fp6_controller):
+    plan = """
+    def chill(robot_list):
+        GoToObject(robot_list[0], 'Fridge')
+        OpenObject(robot_list[0], 'Fridge')
+        GoToObject(robot_list[0], 'Apple')
+        PickupObject(robot_list[0], 'Apple')
+        GoToObject(robot_list[0], 'Fridge')
+        PutObject(robot_list[0], 'Apple', 'Fridge')
+    chill([robots[0]])
+    """
+    filtered = run(plan, [1, 2], fp6_controller)
+    fallback = run(plan, [1, 2], _WithoutObjectFilter(fp6_controller))
+    assert run_record(fallback) == run_record(filtered)
+    assert all(e.success for e in fallback.trace)
+    assert len(fallback.final_objects) == len(filtered.final_objects) == 68

@@ -153,12 +153,15 @@ def test_patched_events_match_a_full_encoding():
         ids = [o["objectId"] for o in controller.last_event.metadata["objects"]]
         for i in range(120):
             agent = rng.randrange(3)
-            kind = rng.choice(["Teleport", "RotateLeft", "Pass", "PickupObject", "PutObject", "OpenObject", "LookDown"])
+            kind = rng.choice(["Teleport", "RotateLeft", "Pass", "PickupObject", "PutObject", "OpenObject", "LookDown",
+                               "SetObjectFilter", "ResetObjectFilter"])
             step = {"action": kind, "agentId": agent}
             if kind == "Teleport":
                 step["position"] = rng.choice(positions)
             elif kind in ("PickupObject", "PutObject", "OpenObject"):
                 step["objectId"] = rng.choice(ids)
+            elif kind == "SetObjectFilter":
+                step["objectIds"] = rng.sample(ids, rng.randrange(0, 12))
             event = controller.step(dict(step))
             replay.handle(dict(step, sequenceId=i + 10))
             expected = msgpack.unpackb(replay.encoder.encode(replay.sim, active_agent=agent, sequence_id=0), raw=False)
@@ -168,6 +171,34 @@ def test_patched_events_match_a_full_encoding():
                 assert got["objects"] == want["objects"], (i, step, a)
                 assert got["agent"] == want["agent"]
                 assert got["inventoryObjects"] == want["inventoryObjects"]
+    finally:
+        controller.stop()
+
+
+def test_an_object_filter_narrows_one_agents_metadata_as_ai2thor_does():
+    controller = open_controller(6, agent_count=2)
+    try:
+        every = {o["objectType"]: o["objectId"] for o in controller.last_event.metadata["objects"]}
+        kept = [every["Bread"], every["Knife"], "Ghost|+0.00|+0.00|+0.00"]
+        event = controller.step(action="SetObjectFilter", objectIds=kept, agentId=0)
+        assert event.metadata["lastActionSuccess"]
+        assert sorted(o["objectId"] for o in event.events[0].metadata["objects"]) == sorted(kept[:2]), \
+            "unknown ids are ignored"
+        assert len(event.events[1].metadata["objects"]) == 68, "the other agent still reports everything"
+        for step in (dict(action="PickupObject", objectId=every["Knife"]),
+                     dict(action="SliceObject", objectId=every["Bread"])):
+            event = controller.step(forceAction=True, agentId=0, **step)
+            assert event.metadata["lastActionSuccess"], event.metadata["errorMessage"]
+        filtered = {o["objectType"] for o in event.events[0].metadata["objects"]}
+        assert filtered == {"Bread", "Knife"}, "slices made after the filter was set stay out of it"
+        assert "BreadSliced" in {o["objectType"] for o in event.events[1].metadata["objects"]}
+        event = controller.step(action="ResetObjectFilter", agentId=0)
+        assert "BreadSliced" in {o["objectType"] for o in event.events[0].metadata["objects"]}
+        with pytest.raises(ValueError, match="requires objectIds"):
+            controller.step(action="SetObjectFilter", agentId=1)
+        with pytest.raises(ValueError, match="list of strings"):
+            controller.step(action="SetObjectFilter", objectIds="Bread", agentId=1)
+        assert len(controller.step(action="Pass", agentId=1).events[1].metadata["objects"]) > 68
     finally:
         controller.stop()
 
