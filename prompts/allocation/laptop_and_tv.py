@@ -1,13 +1,17 @@
 def subtask1_laptop_to_sofa(robot_list):
-    # the whole team lifts the laptop together
+    # the laptop is too heavy for one of them: the whole team goes to it
     GoToObject(robot_list, 'Laptop')
+    # and lifts it together
     PickupObject(robot_list, 'Laptop')
     # bring it across the room
     GoToObject(robot_list, 'Sofa')
+    # set it on the sofa
     PutObject(robot_list, 'Laptop', 'Sofa')
 
 def subtask2_tv_on(robot_list):
+    # go to the television
     GoToObject(robot_list[0], 'Television')
+    # turn it on
     SwitchOn(robot_list[0], 'Television')
 
 t1 = threading.Thread(target=subtask1_laptop_to_sofa, args=([robots[0], robots[1]],))

@@ -3,11 +3,15 @@
 # The two are independent and can run in parallel.
 
 def subtask1_coffee_machine_on():
+    # go to the coffee machine
     GoToObject('CoffeeMachine')
+    # press its switch
     SwitchOn('CoffeeMachine')
 
 def subtask2_toaster_on():
+    # go to the toaster
     GoToObject('Toaster')
+    # press its switch
     SwitchOn('Toaster')
 
 t1 = threading.Thread(target=subtask1_coffee_machine_on)

@@ -3,24 +3,33 @@
 # SubTask 1 and SubTask 2 touch different things, so they can run in parallel.
 
 def subtask1_rinse_tomato():
-    # carry the tomato to the sink
+    # walk to the tomato
     GoToObject('Tomato')
+    # lift it
     PickupObject('Tomato')
+    # carry it to the sink
     GoToObject('SinkBasin')
+    # set it down in the basin
     PutObject('Tomato', 'SinkBasin')
-    # run the water for a moment, then stop it
+    # run the water over it
     SwitchOn('Faucet')
+    # give the water a moment
     time.sleep(2)
+    # stop the water again
     SwitchOff('Faucet')
 
 def subtask2_chill_egg():
-    # take the egg to the fridge
+    # walk to the egg
     GoToObject('Egg')
+    # lift it
     PickupObject('Egg')
+    # take it to the fridge
     GoToObject('Fridge')
     # the fridge must be open before anything goes in
     OpenObject('Fridge')
+    # place the egg inside
     PutObject('Egg', 'Fridge')
+    # shut the door to keep the cold in
     CloseObject('Fridge')
 
 t1 = threading.Thread(target=subtask1_rinse_tomato)

@@ -3,16 +3,23 @@
 # Either order works; the sub-tasks could run in parallel if there are robots for both.
 
 def subtask1_soap_to_drawer():
+    # go to the soap bar
     GoToObject('SoapBar')
+    # pick it up
     PickupObject('SoapBar')
+    # carry it to a drawer
     GoToObject('Drawer')
-    # open the drawer, put the soap in, shut it again
+    # a closed drawer has to be opened first
     OpenObject('Drawer')
+    # put the soap inside
     PutObject('SoapBar', 'Drawer')
+    # shut the drawer again
     CloseObject('Drawer')
 
 def subtask2_light_off():
+    # go to the light switch
     GoToObject('LightSwitch')
+    # flip it off
     SwitchOff('LightSwitch')
 
 t1 = threading.Thread(target=subtask1_soap_to_drawer)

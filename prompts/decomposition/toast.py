@@ -3,18 +3,25 @@
 # SubTask 2 needs the slices SubTask 1 makes, so they run one after the other.
 
 def subtask1_slice_bread():
-    # slicing needs a knife in hand
+    # slicing needs a knife in hand: fetch one
     GoToObject('Knife')
+    # hold the knife
     PickupObject('Knife')
+    # go to the loaf
     GoToObject('Bread')
+    # cut it into slices
     SliceObject('Bread')
 
 def subtask2_toast_slice():
-    # the toaster only takes bread slices
+    # go to one of the new slices
     GoToObject('BreadSliced')
+    # pick the slice up
     PickupObject('BreadSliced')
+    # carry it to the toaster
     GoToObject('Toaster')
+    # the toaster only takes bread slices
     PutObject('BreadSliced', 'Toaster')
+    # start toasting
     SwitchOn('Toaster')
 
 subtask1_slice_bread()

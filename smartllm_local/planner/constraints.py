@@ -47,6 +47,7 @@ from .scene_context import SceneObjects
 
 COMMENT_CHARS = frozenset(c for c in string.printable if c not in "\t\n\r\x0b\x0c")
 SUMMARY_CHARS = COMMENT_CHARS - set("()")
+ORDER_CHARS = COMMENT_CHARS - set(":")  # so the order line cannot pass for one more "# SubTask k: ..."
 REASON_CHARS = frozenset(string.ascii_letters + " ,.;:'-")
 NAME_FIRST = frozenset(string.ascii_lowercase)
 NAME_REST = frozenset(string.ascii_lowercase + string.digits + "_")
@@ -57,7 +58,6 @@ REASON_LEN = 100
 NAME_LEN = 30
 MAX_SUBTASKS = 8
 MAX_STEPS = 12
-MAX_COMMENTS = 3  # per function
 INDENT = "    "
 REFUSAL_PREFIX = "# INFEASIBLE: "
 EOS = 1  # the end-of-sequence token that closes a stage
@@ -390,7 +390,7 @@ class PlanConstraint(Constraint):
         after = self.order_len + 1 + (k + 1) * self.def_min
         if k < self.max_subtasks and self.summary_len + after <= remaining:
             options["summary"] = self._summary_line(k + 1)
-        options["order"] = seq("# ", text_run(COMMENT_CHARS, ORDER_LEN), "\n")
+        options["order"] = seq("# ", text_run(ORDER_CHARS, ORDER_LEN), "\n")
         return self._choose(self.rules, options)
 
     def _header_choice(self, remaining: int) -> Forced | Choose | None:
@@ -416,7 +416,8 @@ class PlanConstraint(Constraint):
                 options["sleep"] = Ref("sleep")
         if fn.steps < self.max_steps and self.action_len + self._finish(True) <= remaining:
             options["action"] = self._actions(fn)
-        if self.comments and fn.last != "comment" and fn.steps < self.max_steps and fn.comments < MAX_COMMENTS and \
+        # Line-by-line comments: at most one before each step.
+        if self.comments and fn.last != "comment" and fn.steps < self.max_steps and fn.comments <= fn.steps and \
                 self.comment_len + self.action_len + self._finish(True) <= remaining:
             options["comment"] = Ref("comment")
         if fn.last == "action":

@@ -212,13 +212,16 @@ def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects
 
 def allocation_prompt(decomposed: str, coalition: str | None, team: Sequence[Robot], skills: SkillSet,
                       catalogue: dict[int, Robot], examples: Sequence[Example], options: PromptOptions) -> str:
+    """Decompositions appear here without their line comments: the allocated code restates every
+    line with its comment, and the saving keeps more examples within a 4,096-token context."""
+    bare = PromptOptions(comments=False, summary=options.summary)
     parts = [skills_header(skills), "\n", ALLOCATION_INTRO]
     for k, ex in enumerate(examples, start=1):
         ex_team = [catalogue[i] for i in ex.robots]
         coalition_part = f"# Coalition:\n{ex.coalition}" if options.coalition else ""
         allocated = shape(ex.allocation or "", PromptOptions(comments=options.comments, summary=True))
-        parts.append(f"\n# Example {k}\n{shape(ex.decomposition, options)}{robots_list(ex_team)}"
+        parts.append(f"\n# Example {k}\n{shape(ex.decomposition, bare)}{robots_list(ex_team)}"
                      f"{coalition_part}# Allocated plan:\n{allocated}")
     coalition_part = f"# Coalition:\n{coalition}" if options.coalition and coalition else ""
-    parts.append(f"\n# Your plan\n{shape(decomposed, options)}{robots_list(team)}{coalition_part}# Allocated plan:\n")
+    parts.append(f"\n# Your plan\n{shape(decomposed, bare)}{robots_list(team)}{coalition_part}# Allocated plan:\n")
     return "".join(parts)

@@ -1,0 +1,84 @@
+"""The worked examples under prompts/: written as the paper's stages write, and correct plans."""
+
+from __future__ import annotations
+
+import ast
+
+import pytest
+
+from smartllm_local.executor import run_plan
+from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.constraints import PlanConstraint
+from smartllm_local.planner.generation import accepts
+from smartllm_local.planner.prompts import PromptOptions, load_examples, shape
+from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.robots import load_catalogue
+from smartllm_local.scoring import parse_goals, score_execution
+from smartllm_local.skills import DEFAULT_SKILL_SET
+from smartllm_local.world.controller import open_controller
+
+EXAMPLES = load_examples()
+
+
+def _body_lines(code: str) -> list[list[str]]:
+    """Each function's body lines, stripped."""
+    bodies, current = [], None
+    for line in code.splitlines():
+        if line.startswith("def "):
+            current = []
+            bodies.append(current)
+        elif line.startswith("    ") and current is not None:
+            current.append(line.strip())
+        elif line.strip() == "":
+            current = None
+    return bodies
+
+
+@pytest.mark.parametrize("ex", EXAMPLES, ids=lambda e: e.name)
+def test_every_step_has_its_comment_in_decompositions_and_allocations(ex):
+    for code in filter(None, (ex.decomposition, ex.allocation)):
+        for body in _body_lines(code):
+            steps = [i for i, line in enumerate(body) if not line.startswith("#")]
+            assert steps and all(i > 0 and body[i - 1].startswith("#") for i in steps), (ex.name, body)
+        bare = shape(code, PromptOptions(comments=False))
+        assert not any(line.strip().startswith("#") for body in _body_lines(bare) for line in body)
+        assert ast.dump(ast.parse(bare)) == ast.dump(ast.parse(code)), "the ablation removes comments only"
+
+
+def test_the_grammar_admits_a_comment_before_each_step_but_not_two_in_a_row():
+    scene = scene_objects(2)
+    rinse = next(e for e in EXAMPLES if e.name == "rinse_and_chill")
+    assert accepts(PlanConstraint(scene, DEFAULT_SKILL_SET), rinse.decomposition)
+    doubled = rinse.decomposition.replace("    # lift it\n", "    # lift it\n    # and hold it\n", 1)
+    assert not accepts(PlanConstraint(scene, DEFAULT_SKILL_SET), doubled)
+    assert not accepts(PlanConstraint(scene, DEFAULT_SKILL_SET, comments=False), rinse.decomposition)
+
+
+@pytest.fixture(scope="module")
+def controller():
+    c = open_controller(2, agent_count=2)
+    yield c
+    c.stop()
+
+
+@pytest.mark.parametrize("ex", [e for e in EXAMPLES if e.allocation], ids=lambda e: e.name)
+def test_every_allocated_example_reaches_sr_1(ex, controller):
+    catalogue = load_catalogue()
+    team = catalogue.team(ex.robots)
+    plan = parse_plan(ex.allocation, form="allocated", team_size=len(team), skills=catalogue.skills)
+    execution = run_plan(plan, ex.floor_plan, team, controller=controller, skills=catalogue.skills)
+    scores = score_execution(execution, parse_goals(list(ex.goals)), trans=ex.trans, max_trans=ex.max_trans)
+    assert (scores.SR, scores.GCR, scores.Exe) == (1.0, 1.0, 1.0), (ex.name, scores, execution.trace)
+    assert scores.transitions == ex.trans, ex.name
+
+
+def test_the_order_line_cannot_pass_for_another_sub_task():
+    scene = scene_objects(2)
+    rinse = next(e for e in EXAMPLES if e.name == "rinse_and_chill")
+    order = "# SubTask 1 and SubTask 2 touch different things, so they can run in parallel.\n"
+    assert order in rinse.decomposition
+    # Summary lines are numbered in turn, so this one can only be the order line.
+    posing = rinse.decomposition.replace(order, "# SubTask 2: the egg goes in after the tomato\n")
+    plain = rinse.decomposition.replace(order, "# SubTask 2 - the egg goes in after the tomato\n")
+    assert not accepts(PlanConstraint(scene, DEFAULT_SKILL_SET), posing)
+    assert accepts(PlanConstraint(scene, DEFAULT_SKILL_SET), plain)
