@@ -156,7 +156,11 @@ def run_benchmark(
 
 
 def summary_table(outcomes: Sequence[TaskOutcome]) -> str:
-    """Mean metrics per category (feasible tasks) and the refusal rate on infeasible ones."""
+    """Mean metrics per category (feasible tasks) and the refusal rate on infeasible ones.
+
+    A task that produced no run (an error, a refusal) scores 0; a metric a run cannot be judged
+    on (no goal conditions, no ground-truth transitions: some imported tasks) is left out of
+    that metric's mean rather than counted as 0, and a mean with nothing to average is n/a."""
     lines = [f"{'category':<14}{'tasks':>6}{'errors':>7}" + "".join(f"{m:>7}" for m in METRICS) + f"{'refused':>9}"]
     groups = [(c, [o for o in outcomes if o.task.feasible and o.task.category == c]) for c in (*CATEGORIES, "uncategorized")]
     groups.append(("all feasible", [o for o in outcomes if o.task.feasible]))
@@ -167,10 +171,10 @@ def summary_table(outcomes: Sequence[TaskOutcome]) -> str:
         means = []
         for metric in METRICS:
             values = [getattr(o.scores, metric) if o.scores else 0.0 for o in group]
-            known = [v if v is not None else 0.0 for v in values]
-            means.append(sum(known) / len(known))
+            known = [v for v in values if v is not None]
+            means.append(f"{sum(known) / len(known):>7.2f}" if known else f"{'n/a':>7}")
         refused = sum(1 for o in group if o.refused)
-        lines.append(f"{name:<14}{len(group):>6}{errors:>7}" + "".join(f"{m:>7.2f}" for m in means) + f"{refused:>9}")
+        lines.append(f"{name:<14}{len(group):>6}{errors:>7}" + "".join(means) + f"{refused:>9}")
     infeasible = [o for o in outcomes if not o.task.feasible]
     if infeasible:
         refused = sum(1 for o in infeasible if o.refused)

@@ -1,17 +1,22 @@
 # kitchen-14 (FloorPlan1): Warm the potato up in the microwave.
 # Team: robots[0] = robot17 (opens, closes, carries; cannot switch),
 #       robots[1] = robot24 (only switches).
-# No robot can heat it alone, so the two work as one team on the sub-task.
+# robot17 shuts the potato in the microwave; only then can robot24 start it.
 
 
-def heat_potato(robot_list):
-    GoToObject(robot_list, 'Potato')
-    PickupObject(robot_list, 'Potato')
-    GoToObject(robot_list, 'Microwave')
-    OpenObject(robot_list, 'Microwave')
-    PutObject(robot_list, 'Potato', 'Microwave')
-    CloseObject(robot_list, 'Microwave')
-    SwitchOn(robot_list, 'Microwave')
+def potato_into_microwave(robot_list):
+    GoToObject(robot_list[0], 'Potato')
+    PickupObject(robot_list[0], 'Potato')
+    GoToObject(robot_list[0], 'Microwave')
+    OpenObject(robot_list[0], 'Microwave')
+    PutObject(robot_list[0], 'Potato', 'Microwave')
+    CloseObject(robot_list[0], 'Microwave')
 
 
-heat_potato([robots[0], robots[1]])
+def start_microwave(robot_list):
+    GoToObject(robot_list[0], 'Microwave')
+    SwitchOn(robot_list[0], 'Microwave')
+
+
+potato_into_microwave([robots[0]])
+start_microwave([robots[1]])

@@ -234,6 +234,10 @@ class TeamWorld:
         target = self.resolve(name, skill.arguments[0], actor, members)
         if target is None:
             return Outcome(False, f"there is no pickupable {name!r} free to pick up", action=skill.action, actor=actor)
+        if target["objectId"] in self._shut_away():
+            # Say so, rather than that the teammates (who cannot see it either) are out of reach.
+            return Outcome(False, f"{target['objectId']} is inside a closed receptacle; open it first",
+                           target["objectId"], skill.action, actor)
         mass = self._carried_mass(target)
         lifters = [actor]
         capacity = self.team[actor].mass_capacity

@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections import Counter
 
 from smartllm_local.plan_language import read_plan
-from smartllm_local.plan_language.ir import Call, ParamList, RobotGroup, Start, WholeTeam
+from smartllm_local.plan_language.ir import Call, NewThread, ParamList, RobotGroup, SkillCall, Start, WholeTeam, bind
 from smartllm_local.scoring import condition_holds
 from smartllm_local.tasks import benchmark_dir, default_task_files
 from smartllm_local.world.scenes import load_scene, scene_info
@@ -94,6 +94,7 @@ def test_team_sizes(all_tasks):
         assert 1 <= len(task.robots) <= 4, task.id
         if task.category == "elemental":
             assert len(task.robots) <= 2, task.id
+    assert {len(t.robots) for t in all_tasks if t.feasible} == {1, 2, 3, 4}, "teams of every size from 1 to 4"
 
 
 def test_instructions_are_distinct(all_tasks):
@@ -201,3 +202,24 @@ def test_complex_tasks_need_a_team(feasible, catalogue):
         alone = [r.name for r in team if used <= r.skills and heaviest <= r.mass_capacity]
         assert not alone, f"{task.id}: {alone} could do it all alone"
         assert team_calls(plan), f"{task.id}: the reference plan never acts as a team"
+        assert any(_inseparable(task, plan, fn, catalogue) for fn in plan.functions), \
+            f"{task.id}: its team work could be split into one-robot sub-tasks run one after another"
+
+
+def _inseparable(task, plan, fn, catalogue) -> bool:
+    """Whether a sub-task needs several robots at the same moment: lifting what none of its robots
+    lifts alone, or slicing with a knife that only a robot without SliceObject can hold."""
+    team = catalogue.team(task.robots)
+    launch = next(s for s in plan.main if isinstance(s, (Call, NewThread)) and s.function == fn.name)
+    env = bind(fn, launch.args, {}, len(team))
+    members = [team[i] for i in sorted(set().union(*env.values()))]
+    if len(members) < 2:
+        return False
+    calls = [c for c in fn.body if isinstance(c, SkillCall)]
+    objects = load_scene(task.floor_plan)
+    lifted = [min(float(o["mass"]) for o in objects if o["objectType"] == c.objects[0])
+              for c in calls if c.skill == "PickupObject" and any(o["objectType"] == c.objects[0] for o in objects)]
+    if lifted and max(lifted) > max(r.mass_capacity for r in members):
+        return True
+    slicing = any(c.skill == "SliceObject" for c in calls)
+    return slicing and not any({"PickupObject", "SliceObject"} <= r.skills for r in members)

@@ -139,7 +139,9 @@ def test_category_table_counts_failures_and_averages_runs(all_tasks):
     ("task_id", "team_call", "alone", "error"),
     [
         ("living-07", "laptop_to_sofa([robots[0], robots[1]])", "laptop_to_sofa([robots[1]])", "weighs 2.3 kg"),
-        ("kitchen-14", "heat_potato([robots[0], robots[1]])", "heat_potato([robots[0]])", "cannot SwitchOn"),
+        ("bedroom-09", "args=([robots[0], robots[1]],)", "args=([robots[0]],)", "weighs 2.3 kg"),
+        ("kitchen-16", "slice_apple, args=([robots[0], robots[1]],)", "slice_apple, args=([robots[0]],)",
+         "cannot SliceObject"),
     ],
 )
 def test_a_complex_task_fails_without_its_team(all_tasks, catalogue, tmp_path, task_id, team_call, alone, error):

@@ -51,6 +51,8 @@ def test_bad_json(tmp_path):
     ("changes", "message"),
     [
         ({"trans": ...}, "(line): 'trans' is a required property"),
+        ({"feasible": False}, "(line): 'missing_skills' is a required property"),
+        ({"feasible": False, "missing_skills": []}, "missing_skills: [] should be non-empty"),
         ({"category": "cooking"},
          "category: 'cooking' is not one of ['elemental', 'simple', 'compound', 'complex', 'uncategorized']"),
         ({"robots": []}, "robots: [] should be non-empty"),

@@ -191,3 +191,11 @@ def test_a_build_without_the_object_filter_runs_the_plan_unfiltered(fp6_controll
     assert run_record(fallback) == run_record(filtered)
     assert all(e.success for e in fallback.trace)
     assert len(fallback.final_objects) == len(filtered.final_objects) == 68
+
+
+def test_a_team_is_told_a_shut_away_object_must_be_let_out_first(c):
+    pots = [o for o in c.last_event.metadata["objects"] if o["objectType"] == "Pot"]
+    assert pots and all(o["parentReceptacles"] for o in pots)
+    ex = run("GoToObject([robots[0], robots[1]], 'Pot')\nPickupObject([robots[0], robots[1]], 'Pot')\n", [8, 9], c)
+    assert not ex.trace[1].success
+    assert ex.trace[1].error.endswith("is inside a closed receptacle; open it first"), ex.trace[1].error
