@@ -112,6 +112,16 @@ def cache_root() -> Path:
     return Path(base) / "smartllm-local"
 
 
+def check_scene_data() -> Path:
+    """Fail with :class:`SceneDataError` now if the scene data cannot be read; return its cache folder.
+
+    A process that loads scenes later (the stand-in) can only report the problem
+    as a failed action; checking first in the parent gives the user the one-line
+    fix. Costs a stat once the per-scene cache exists.
+    """
+    return _ensure_cache(source_path(), cache_root())
+
+
 def load_scene(
     floor_plan: int | str,
     *,
@@ -151,7 +161,8 @@ def untangle_containment(objects: list[dict[str, Any]]) -> list[dict[str, Any]]:
     Overlapping boxes make some of AI2-THOR's parentReceptacles mutual (in FloorPlan5,
     16, 18, 21, 30, 310, 329). Left in, they loop containment walks and put a counter
     inside a plate. A link in a cycle is kept only where a pickupable object sits in
-    a fixed one, the one direction that is physically possible.
+    a fixed one, the one direction that is physically possible. Then only the
+    innermost of an object's holders are kept (see :func:`_keep_innermost_holders`).
     """
     by_id = {o["objectId"]: o for o in objects}
 
@@ -173,11 +184,50 @@ def untangle_containment(objects: list[dict[str, Any]]) -> list[dict[str, Any]]:
         and not (obj.get("pickupable") and not by_id[parent].get("pickupable"))
     ]
     for child, parent in dropped:
-        kept = [p for p in by_id[child]["parentReceptacles"] if p != parent]
-        by_id[child]["parentReceptacles"] = kept or None
+        _unlink(by_id, child, parent)
+    return _keep_innermost_holders(objects)
+
+
+def _keep_innermost_holders(objects: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Drop a parent that also holds another of the object's parents (the burner under the pot).
+
+    Some dumps (FloorPlan5, 14, 317, ...) list a Spatula in both its Pot and the
+    StoveBurner under the Pot. The outer link does not move with the Pot, so the
+    burner would go on heating a spatula that is no longer on it. Keeping only
+    the innermost holders loses nothing: the outer one still holds the object
+    through them. Expects a containment graph without cycles.
+    """
+    by_id = {o["objectId"]: o for o in objects}
+    memo: dict[str, frozenset[str]] = {}
+
+    def ancestors(oid: str) -> frozenset[str]:
+        if oid not in memo:
+            memo[oid] = frozenset()  # guards against a cycle left in the data
+            found: set[str] = set()
+            for parent in by_id[oid].get("parentReceptacles") or []:
+                if parent in by_id:
+                    found.add(parent)
+                    found |= ancestors(parent)
+            memo[oid] = frozenset(found)
+        return memo[oid]
+
+    dropped = [
+        (obj["objectId"], parent)
+        for obj in objects
+        for parent in obj.get("parentReceptacles") or []
+        if any(parent in ancestors(other) for other in obj["parentReceptacles"] if other != parent and other in by_id)
+    ]
+    for child, parent in dropped:
+        _unlink(by_id, child, parent)
+    return objects
+
+
+def _unlink(by_id: dict[str, dict[str, Any]], child: str, parent: str) -> None:
+    kept = [p for p in by_id[child].get("parentReceptacles") or [] if p != parent]
+    by_id[child]["parentReceptacles"] = kept or None
+    if parent in by_id:
         holds = [c for c in by_id[parent].get("receptacleObjectIds") or [] if c != child]
         by_id[parent]["receptacleObjectIds"] = holds or None
-    return objects
 
 
 def _read_cached(path: Path) -> str | None:
@@ -205,8 +255,14 @@ def _ensure_cache(src: Path, root: Path) -> Path:
     if (scene_dir / "complete").is_file():
         return scene_dir
     dump = _read_dump(src)
-    root.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix="scenes-", dir=root))
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix="scenes-", dir=root))
+    except OSError as exc:
+        raise SceneDataError(
+            f"cannot write the scene cache under {root} ({exc.strerror or exc}); "
+            "set SMARTLLM_CACHE_DIR to a writable folder"
+        ) from exc
     try:
         for key, base, _ in ROOM_BLOCKS:
             for i, objects in enumerate(dump[key]):

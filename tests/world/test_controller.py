@@ -11,14 +11,17 @@ import textwrap
 import time
 from pathlib import Path
 
+import contextlib
+import json
+
 import msgpack
 import pytest
 from ai2thor.controller import Controller
 from ai2thor.server import MultiAgentEvent
 
-from smartllm_local.errors import UnknownFloorPlanError, UserError, WorldError
+from smartllm_local.errors import SceneDataError, UnknownFloorPlanError, UserError, WorldError
 from smartllm_local.world import scenes
-from smartllm_local.world.controller import open_controller
+from smartllm_local.world.controller import open_controller, stand_in_command
 from smartllm_local.world.navigation import Box
 from smartllm_local.world.thor_server import ThorStandIn
 
@@ -311,3 +314,120 @@ def test_stopping_leaves_no_process_behind():
     proc = controller.server.unity_proc
     controller.stop()
     assert proc.poll() is not None
+
+
+class _Hung(BaseException):
+    """Raised by the alarm when a call that must end by itself did not (BaseException: nothing swallows it)."""
+
+
+@contextlib.contextmanager
+def _must_return_within(seconds: float):
+    def ring(signum, frame):
+        raise _Hung(f"still blocked after {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, ring)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+@pytest.mark.parametrize("wrapped", [False, True], ids=["direct", "behind-a-shell-script"])
+def test_a_process_that_never_opens_its_pipe_is_stopped_at_the_start_deadline(tmp_path, pid_file, wrapped):
+    build = _fake_build(tmp_path, "time.sleep(600)\n")
+    if wrapped:  # the shell stays as the parent of the sleeper, which must not be left behind
+        wrapper = tmp_path / "run-thor.sh"
+        wrapper.write_text(f"#!/bin/sh\n{build}\necho done\n")
+        wrapper.chmod(0o755)
+        build = wrapper
+    started = time.monotonic()
+    with _must_return_within(30), pytest.raises(WorldError, match=r"did not greet within 2(\.0)? s"):
+        open_controller(6, build=build, server_timeout=1, server_start_timeout=2)
+    assert time.monotonic() - started < 10
+    _assert_gone(pid_file)
+
+
+@pytest.mark.parametrize("then", ["time.sleep(600)", "sys.exit(4)"])
+def test_a_process_that_greets_and_never_opens_the_action_pipe_fails(tmp_path, pid_file, then):
+    build = _fake_build(
+        tmp_path,
+        f"""
+        out = open(os.environ["AI2THOR_FIFO_SERVER_PIPE_PATH"], "wb")
+        greet(out)
+        {then}
+        """,
+    )
+    started = time.monotonic()
+    with _must_return_within(30), pytest.raises(WorldError, match="action pipe|status 4"):
+        open_controller(6, build=build, server_timeout=1.5)
+    assert time.monotonic() - started < 10, "after the greeting, server_timeout applies, not server_start_timeout"
+    _assert_gone(pid_file)
+
+
+def test_a_slow_start_within_the_deadline_succeeds(tmp_path):
+    """The deadline only ends a start that is late, not one that is slow."""
+    slow = tmp_path / "slow-thor"
+    slow.write_text(f"#!/bin/sh\nsleep 1.5\nexec {stand_in_command()}\n")
+    slow.chmod(0o755)
+    controller = open_controller(6, build=slow, server_timeout=5, server_start_timeout=4)
+    try:
+        assert controller.step(action="Pass").metadata["lastActionSuccess"]
+    finally:
+        controller.stop()
+
+
+def test_a_relative_build_path_is_run_from_the_current_folder(tmp_path, monkeypatch, pid_file):
+    monkeypatch.chdir(tmp_path)
+    _fake_build(tmp_path, "sys.exit(3)\n")
+    with pytest.raises(WorldError, match="status 3"):
+        open_controller(6, build="./fake-thor", server_timeout=30)
+    _assert_gone(pid_file)
+    monkeypatch.setenv("SMARTLLM_THOR_BUILD", "fake-thor")
+    with pytest.raises(WorldError, match=f"{tmp_path}/fake-thor.*status 3"):
+        open_controller(6, server_timeout=30)
+
+
+@pytest.mark.parametrize(
+    "content, why",
+    [
+        ("echo no interpreter line\n", "Exec format error"),
+        ("#!/no/such/interpreter\n", "No such file"),
+    ],
+)
+def test_a_build_that_cannot_be_executed_is_a_user_error(tmp_path, monkeypatch, content, why):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "bad-thor").write_text(content)
+    (tmp_path / "bad-thor").chmod(0o755)
+    with pytest.raises(UserError, match=why) as info:
+        open_controller(6, build="bad-thor")
+    assert not isinstance(info.value, WorldError)
+    assert str(tmp_path / "bad-thor") in str(info.value) and "\n" not in str(info.value)
+
+
+def _broken_procthor(root: Path, dump: str | None) -> Path:
+    """A procthor package whose scene dump is absent (None) or holds ``dump``."""
+    package = root / "procthor"
+    (package / "databases").mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    if dump is not None:
+        (package / "databases" / "ai2thor-object-metadata.json").write_text(dump)
+    return root
+
+
+@pytest.mark.parametrize("problem", ["not installed", "no dump", "corrupt dump", "wrong shape"])
+def test_broken_scene_data_is_reported_before_the_stand_in_starts(tmp_path, monkeypatch, problem):
+    monkeypatch.setenv("SMARTLLM_CACHE_DIR", str(tmp_path / "cache"))
+    scenes._memo.clear()
+    if problem == "not installed":
+        monkeypatch.setattr(scenes.importlib.util, "find_spec", lambda name: None)
+    else:
+        dump = {"no dump": None, "corrupt dump": '{"kitchens": [', "wrong shape": json.dumps({"kitchens": []})}[problem]
+        fake = _broken_procthor(tmp_path / "site", dump)
+        monkeypatch.syspath_prepend(str(fake))
+        monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(fake), os.environ.get("PYTHONPATH")])))
+    with _must_return_within(60), pytest.raises(SceneDataError) as info:
+        open_controller(6)
+    message = str(info.value)
+    assert "procthor==0.0.1.dev2" in message and "\n" not in message

@@ -82,6 +82,50 @@ def test_containment_has_no_cycles_and_keeps_objects_on_counters():
     assert not fp5["CounterTop|+01.16|+00.95|-02.01"]["parentReceptacles"]
 
 
+def test_no_object_lists_a_holder_of_another_of_its_holders():
+    """An outer holder listed beside the inner one would not let go when the inner one moves."""
+    for plan in scenes.all_floor_plans():
+        objects = {o["objectId"]: o for o in scenes.load_scene(plan)}
+
+        def ancestors(oid):
+            seen, stack = set(), list(objects[oid].get("parentReceptacles") or [])
+            while stack:
+                cur = stack.pop()
+                if cur not in seen and cur in objects:
+                    seen.add(cur)
+                    stack.extend(objects[cur].get("parentReceptacles") or [])
+            return seen
+
+        for oid, obj in objects.items():
+            parents = [p for p in obj.get("parentReceptacles") or [] if p in objects]
+            for parent in parents:
+                outer = [other for other in parents if other != parent and parent in ancestors(other)]
+                assert not outer, f"{plan}: {oid} lists {parent}, which holds {outer}"
+                assert oid in (objects[parent].get("receptacleObjectIds") or []), f"{plan}: {parent} / {oid}"
+            for other in objects.values():
+                if oid in (other.get("receptacleObjectIds") or []):
+                    assert other["objectId"] in parents, f"{plan}: {other['objectId']} still lists {oid}"
+    fp14 = {o["objectId"]: o for o in scenes.load_scene(14)}
+    assert fp14["Spatula|+01.70|+01.08|+00.07"]["parentReceptacles"] == ["Pot|+01.53|+00.91|+00.06"]
+    assert fp14["StoveBurner|+01.55|+00.91|+00.08"]["receptacleObjectIds"] == ["Pot|+01.53|+00.91|+00.06"]
+
+
+def test_untangling_keeps_only_the_innermost_holders():
+    objects = [
+        {"objectId": "Burner|1", "parentReceptacles": None, "receptacleObjectIds": ["Pot|1", "Spatula|1"]},
+        {"objectId": "Pot|1", "parentReceptacles": ["Burner|1"], "receptacleObjectIds": ["Spatula|1"]},
+        {"objectId": "Spatula|1", "parentReceptacles": ["Burner|1", "Pot|1"], "receptacleObjectIds": None},
+        {"objectId": "Shelf|1", "parentReceptacles": None, "receptacleObjectIds": ["Bowl|1"]},
+        {"objectId": "Shelf|2", "parentReceptacles": None, "receptacleObjectIds": ["Bowl|1"]},
+        {"objectId": "Bowl|1", "parentReceptacles": ["Shelf|1", "Shelf|2"], "receptacleObjectIds": None},
+    ]
+    by_id = {o["objectId"]: o for o in scenes.untangle_containment(objects)}
+    assert by_id["Spatula|1"]["parentReceptacles"] == ["Pot|1"]
+    assert by_id["Burner|1"]["receptacleObjectIds"] == ["Pot|1"]
+    assert by_id["Pot|1"]["receptacleObjectIds"] == ["Spatula|1"]
+    assert by_id["Bowl|1"]["parentReceptacles"] == ["Shelf|1", "Shelf|2"], "unrelated holders both stay"
+
+
 def test_untangling_keeps_a_pickupable_in_a_fixed_receptacle_and_drops_fixed_in_fixed():
     objects = [
         {"objectId": "Plate|1", "pickupable": True, "parentReceptacles": ["Counter|1"], "receptacleObjectIds": ["Counter|1"]},

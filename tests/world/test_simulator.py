@@ -104,6 +104,21 @@ def test_stove_burner_heats_through_its_knob_and_a_pan(sim):
     assert sim.objects[burner]["isToggled"] and sim.objects[other_burner]["isToggled"]
 
 
+def test_a_burner_stops_holding_what_stays_in_a_pot_moved_off_it():
+    """FloorPlan14's dump lists the Spatula in both the Pot and the burner under it."""
+    sim = Simulator("FloorPlan14")
+    pot, spatula = oid(sim, "Pot"), oid(sim, "Spatula")
+    burner = sim.objects[pot]["parentReceptacles"][0]
+    knob = next(i for i, o in sim.objects.items() if burner in (o.get("controlledObjects") or []))
+    carry(sim, "Pot")
+    put(sim, oid(sim, "CounterTop"))
+    ok(act(sim, "ToggleObjectOn", objectId=knob))
+    assert sim.objects[spatula]["temperature"] == "RoomTemp"
+    assert sim.objects[pot]["temperature"] == "RoomTemp"
+    assert spatula not in (sim.objects[burner].get("receptacleObjectIds") or [])
+    assert sim.objects[spatula]["parentReceptacles"] == [pot], "the spatula travels in the pot"
+
+
 def test_stove_burner_cannot_be_switched_directly(sim):
     result = act(sim, "ToggleObjectOn", objectId=oid(sim, "StoveBurner"))
     assert not result.success and "not toggleable" in result.error_message
