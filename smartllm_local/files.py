@@ -11,9 +11,44 @@ from typing import Any
 from .errors import UserError
 
 
-def write_atomic(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path`` through a temporary file in the same folder, then rename it."""
+def check_output_file(path: str | Path, what: str = "output file") -> Path:
+    """Fail early, before any work is done, when ``path`` can never be written as a file:
+    it is an existing folder, or one of its parents is an existing file."""
     path = Path(path)
+    if path.is_dir():
+        raise UserError(f"{what} {path} is an existing folder: give a file name, e.g. {path / 'out.json'}")
+    _check_parents(path, what)
+    return path
+
+
+def check_output_folder(path: str | Path, what: str = "output folder") -> Path:
+    """Fail early, before any work is done, when ``path`` can never be used as a folder:
+    it is an existing file, or one of its parents is."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise UserError(f"{what} {path} is an existing file: give a folder (it is created if missing)")
+    _check_parents(path, what)
+    return path
+
+
+def _check_parents(path: Path, what: str) -> None:
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise UserError(f"cannot write {what} {path}: {parent} is a file, not a folder")
+            return
+
+
+def write_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path`` through a temporary file in the same folder, then rename it.
+
+    Raises:
+        UserError: when the folder cannot be made or the file cannot be written or replaced
+            (``path`` is a folder, no permission, disk full); nothing is left behind.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise UserError(f"cannot write {path}: it is a folder; give a file name")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
@@ -23,11 +58,14 @@ def write_atomic(path: str | Path, text: str) -> Path:
         with os.fdopen(fd, "w", encoding="utf-8") as handle:
             handle.write(text)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(exc, OSError):
+            reason = "it is a folder; give a file name" if isinstance(exc, IsADirectoryError) else exc.strerror or exc
+            raise UserError(f"cannot write {path}: {reason}") from exc
         raise
     return path
 

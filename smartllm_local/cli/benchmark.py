@@ -9,7 +9,7 @@ from typing import Optional
 import typer
 
 from ..errors import UserError
-from ..files import write_atomic
+from ..files import check_output_file, write_atomic
 from ..robots import load_catalogue
 from ..tasks import CATEGORIES, default_task_files, load_tasks
 
@@ -26,13 +26,16 @@ def list_tasks(
     if category is not None and category not in (*CATEGORIES, "uncategorized"):
         raise UserError(f"--category must be one of {', '.join(CATEGORIES)}, not {category!r}")
     chosen = [t for t in load_tasks(tasks or default_task_files()) if category in (None, t.category)]
-    for task in chosen:
-        if as_json:
+    if as_json:
+        for task in chosen:
             typer.echo(json.dumps(task.as_json()))
-        else:
-            flag = "" if task.feasible else "  [infeasible]"
-            typer.echo(f"{task.id:<16}{task.category:<12}{task.floor_plan:<14}{str(list(task.robots)):<16}"
-                       f"{task.instruction}{flag}")
+        return
+    rows = [(task.id, task.category, task.floor_plan, str(list(task.robots)),
+             task.instruction + ("" if task.feasible else "  [infeasible]")) for task in chosen]
+    # Each column as wide as its longest cell (at least as before), two spaces apart.
+    widths = [max([minimum - 2, *(len(row[k]) for row in rows)]) for k, minimum in enumerate((16, 12, 14, 16))]
+    for row in rows:
+        typer.echo("".join(f"{cell:<{width + 2}}" for cell, width in zip(row, widths)) + row[-1])
 
 
 @app.command("check")
@@ -62,6 +65,7 @@ def import_smartllm(
     """Import SMART-LLM's data/final_test/FloorPlan<N>.json files as a task file."""
     from ..importer import import_smartllm as run_import
 
+    check_output_file(out, "--out")
     report = run_import(source, catalogue=load_catalogue())
     for note in report.notes:
         typer.echo(str(note))

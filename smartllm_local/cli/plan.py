@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Optional
@@ -11,6 +12,7 @@ import typer
 
 from ..errors import UserError
 from ..evaluation import execute_and_score, run_benchmark, summary_table
+from ..files import check_output_folder
 from ..planner.backends import BACKENDS, Sampling, load_backend
 from ..planner.models import DEFAULT_MODEL, EMBEDDED
 from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
@@ -22,6 +24,8 @@ from ..world.scenes import floor_plan_name
 MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
               f"demonstration model: {', '.join(EMBEDDED)} (default: {DEFAULT_MODEL}).")
 
+MAX_SEED = 2**32 - 1  # llama.cpp takes an unsigned 32-bit seed
+
 
 class ModelOptions:
     """The options every planning command shares, turned into a Planner."""
@@ -31,8 +35,10 @@ class ModelOptions:
                  no_grammar: bool, free_teams: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
-        if temperature < 0:
-            raise UserError("--temperature must be 0 (greedy) or more")
+        if not math.isfinite(temperature) or temperature < 0:
+            raise UserError(f"--temperature must be a number, 0 (greedy) or more, not {temperature}")
+        if not 0 <= seed <= MAX_SEED:
+            raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
         if n_ctx < 512:
             raise UserError("--n-ctx must be at least 512 tokens")
         self.model, self.backend, self.n_ctx, self.threads = model, backend, n_ctx, threads
@@ -97,6 +103,8 @@ def plan_command(
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams)
+    if out is not None:
+        check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
     goals, trans, max_trans = (), None, None
     if task is not None:
@@ -167,6 +175,7 @@ def benchmark_run(
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams)
+    check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
     chosen = load_tasks(tasks or default_task_files(), catalogue=cat)
     if category is not None:

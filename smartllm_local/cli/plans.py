@@ -10,7 +10,7 @@ import typer
 
 from ..errors import UserError
 from ..executor import run_plan
-from ..files import read_json, write_json
+from ..files import check_output_file, read_json, write_json
 from ..plan_language import read_plan
 from ..robots import load_catalogue, parse_robot_ids
 from ..scoring import parse_goals, score_execution
@@ -44,6 +44,15 @@ def validate(
     )
 
 
+def check_transitions(trans: int | None, max_trans: int | None) -> None:
+    """RU (and so SR) needs both the ground-truth and the maximum transitions, 0 <= trans <= max_trans."""
+    if (trans is None) != (max_trans is None):
+        given, missing = ("--trans", "--max-trans") if max_trans is None else ("--max-trans", "--trans")
+        raise UserError(f"{given} needs {missing} too: RU and SR are scored from both")
+    if trans is not None and max_trans is not None and max_trans < trans:
+        raise UserError(f"--max-trans ({max_trans}) must be at least --trans ({trans})")
+
+
 def execute(
     plan: Path = typer.Argument(..., help="The allocated plan file (.py)."),
     floor_plan: Optional[str] = typer.Option(None, help="Floor plan, e.g. 6 or FloorPlan6."),
@@ -59,6 +68,12 @@ def execute(
     thor_build: Optional[Path] = typer.Option(None, help=THOR_BUILD_HELP),
 ) -> None:
     """Run a plan with a robot team in AI2-THOR and print SR, TCR, GCR, RU and Exe."""
+    for name, value in (("--trans", trans), ("--max-trans", max_trans)):
+        if value is not None and value < 0:
+            raise UserError(f"{name} must be 0 or more, not {value}")
+    given_transitions = trans is not None or max_trans is not None
+    if trace is not None:
+        check_output_file(trace, "--trace")
     cat = load_catalogue(catalogue)
     if task is not None:
         if floor_plan or robots or goal:
@@ -74,6 +89,11 @@ def execute(
             raise UserError("execute needs --floor-plan, --robots and --goal (or --task ID)")
         scene, team_ids = floor_plan_name(floor_plan), parse_robot_ids(robots)
         goals = list(parse_goals(read_json(goal, "goal file"), where=str(goal)))
+        if not goals:
+            raise UserError(f"goal file {goal}: a goal file needs at least one condition, "
+                            'e.g. [{"name": "Fridge", "contains": ["Apple"], "state": null}]')
+    if given_transitions:
+        check_transitions(trans, max_trans)
     team = cat.team(team_ids)
     parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team))
     execution = run_plan(parsed, scene, team, build=str(thor_build) if thor_build else None, skills=cat.skills)

@@ -7,7 +7,8 @@ from dataclasses import asdict
 
 import typer
 
-from ..world.scenes import all_floor_plans, load_scene, scene_info, summarize_scene
+from ..errors import UserError
+from ..world.scenes import ROOM_BLOCKS, all_floor_plans, load_scene, scene_info, summarize_scene
 
 app = typer.Typer(help="List the iTHOR floor plans and show their objects.", no_args_is_help=True)
 
@@ -18,10 +19,16 @@ def list_scenes(
     as_json: bool = typer.Option(False, "--json", help="Print JSON lines instead of a table."),
 ) -> None:
     """Floor plans with their room type and object count."""
+    wanted = None
+    if room is not None:
+        wanted = " ".join(room.replace("_", " ").lower().split())
+        room_types = [room_type for _, _, room_type in ROOM_BLOCKS]
+        if wanted not in room_types:
+            raise UserError(f"--room must be one of {', '.join(repr(r) for r in room_types)}, not {room!r}")
     rows = []
     for name in all_floor_plans():
         info = scene_info(name)
-        if room and info.room_type != room.replace("_", " ").lower():
+        if wanted is not None and info.room_type != wanted:
             continue
         objects = load_scene(name)
         rows.append({"floor_plan": name, "room_type": info.room_type, "objects": len(objects),

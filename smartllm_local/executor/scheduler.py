@@ -50,7 +50,10 @@ class TraceEntry:
     error: str
 
     def as_dict(self) -> dict[str, Any]:
-        return dict(self.__dict__)
+        """The entry as ``execute --trace`` writes it, with AI2-THOR's names for the action's fields."""
+        return {"tick": self.tick, "subtask": self.subtask, "robots": list(self.robots), "skill": self.skill,
+                "objects": list(self.objects), "action": self.action, "objectId": self.object_id,
+                "success": self.success, "errorMessage": self.error}
 
 
 @dataclass

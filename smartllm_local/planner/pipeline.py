@@ -15,6 +15,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..errors import UserError
 from ..files import write_atomic, write_json
 from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
@@ -218,19 +219,34 @@ class Planner:
             result.plan = last.plan  # type: ignore[assignment]
 
 
+STAGE_FILES = ("prompt.txt", "grammar.gbnf", "raw_output.txt", "timings.json")
+STAGE_OUTPUTS = {"decomposition": "decomposed.py", "coalition": "coalition.txt", "allocation": "allocated.py"}
+
+
 def write_artifacts(result: PlanResult, out: Path, extra: dict | None = None) -> None:
-    """Write prompts, grammars, raw outputs, timings and the stage outputs under ``out``."""
-    names = {"decomposition": "decomposed.py", "coalition": "coalition.txt", "allocation": "allocated.py"}
+    """Write prompts, grammars, raw outputs, timings and the stage outputs under ``out``.
+
+    Artifacts an earlier run left in ``out`` for stages not run this time (``--no-coalition``, a
+    refusal, a failed stage) are removed, so the folder shows this run only; nothing else in
+    ``out`` is touched.
+    """
+    out = Path(out)
+    written: set[Path] = set()
+
+    def write(path: Path, text: str) -> None:
+        write_atomic(path, text)
+        written.add(path)
+
     for record in result.stages:
         folder = out / record.stage
-        write_atomic(folder / "prompt.txt", record.prompt)
+        write(folder / "prompt.txt", record.prompt)
         if record.grammars:
-            write_atomic(folder / "grammar.gbnf", "".join(
+            write(folder / "grammar.gbnf", "".join(
                 f"# grammar {k + 1} of {len(record.grammars)} offered for a line of this stage\n{g}\n"
                 for k, g in enumerate(record.grammars)))
-        write_atomic(folder / "raw_output.txt", record.raw)
-        write_json(folder / "timings.json", record.timings())
-        write_atomic(out / names[record.stage], record.output)
+        write(folder / "raw_output.txt", record.raw)
+        write(folder / "timings.json", json.dumps(record.timings(), indent=2) + "\n")
+        write(out / STAGE_OUTPUTS[record.stage], record.output)
     summary = {
         "instruction": result.instruction, "floor_plan": result.floor_plan, "robots": result.robots,
         "refusal": result.refusal, "error": result.error or None, "notices": result.notices,
@@ -238,8 +254,26 @@ def write_artifacts(result: PlanResult, out: Path, extra: dict | None = None) ->
         **(extra or {}),
     }
     write_json(out / "result.json", summary)
+    written.add(out / "result.json")
     if result.allocated and not any(r.stage == "allocation" for r in result.stages):
-        write_atomic(out / "allocated.py", result.allocated)
+        write(out / "allocated.py", result.allocated)
+    _remove_stale_artifacts(out, written)
+
+
+def _remove_stale_artifacts(out: Path, written: set[Path]) -> None:
+    """Remove the files write_artifacts writes that this run did not write; a stage folder goes
+    too once it is empty. Anything else (the user's files, other folders) stays."""
+    for stage, output in STAGE_OUTPUTS.items():
+        candidates = [out / output, *(out / stage / name for name in STAGE_FILES)]
+        for path in candidates:
+            if path not in written and path.is_file() and not path.is_symlink():
+                try:
+                    path.unlink()
+                except OSError as exc:
+                    raise UserError(f"cannot remove the stale artifact {path}: {exc.strerror or exc}") from exc
+        folder = out / stage
+        if folder.is_dir() and not folder.is_symlink() and not any(folder.iterdir()):
+            folder.rmdir()
 
 
 def result_json(result: PlanResult) -> str:

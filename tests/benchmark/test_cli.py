@@ -71,3 +71,31 @@ def test_check_fails_on_a_bad_reference_plan(tmp_path, broken):
     assert done.returncode == 1
     assert done.stdout.splitlines()[2].split()[:3] == ["elemental", "2", "1/2"]
     assert "FAILED bathroom-01: " in done.stdout and "FAILED living-01" not in done.stdout
+
+
+def test_list_columns_fit_long_categories_and_teams(tmp_path):
+    import json
+    import re
+
+    base = {"floor_plan": 6, "goals": [{"name": "LightSwitch", "contains": [], "state": "OFF"}],
+            "trans": 0, "max_trans": 1, "feasible": True}
+    rows = [
+        {**base, "id": "FloorPlan6-1", "category": "uncategorized", "robots": [23, 24, 25, 26],
+         "instruction": "Turn off the light switch"},
+        {**base, "id": "a-much-longer-task-id", "category": "simple", "robots": [1],
+         "instruction": "Turn off the light"},
+    ]
+    tasks = tmp_path / "tasks.jsonl"
+    tasks.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    done = cli("benchmark", "list", "--tasks", str(tasks))
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    row = re.compile(r"^(\S+) {2,}(\S+) {2,}(\S+) {2,}(\[[\d, ]*\]) {2,}(\S.*)$")
+    parsed = [row.match(line) for line in lines]
+    assert all(parsed), lines
+    assert [m.groups() for m in parsed] == [
+        ("FloorPlan6-1", "uncategorized", "FloorPlan6", "[23, 24, 25, 26]", "Turn off the light switch"),
+        ("a-much-longer-task-id", "simple", "FloorPlan6", "[1]", "Turn off the light"),
+    ]
+    for column in range(2, 6):  # every column starts at the same place on every row
+        assert len({m.start(column) for m in parsed}) == 1, lines

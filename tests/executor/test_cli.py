@@ -141,12 +141,15 @@ def test_execute_writes_the_trace(files):
     actions = trace["actions"]
     assert len(actions) == 8
     for entry in actions:
-        assert {"tick", "robots", "skill", "action", "object_id", "success", "error"} <= set(entry)
+        # AI2-THOR's names for what the action did, plus which sub-task and skill it carried out
+        assert list(entry) == ["tick", "subtask", "robots", "skill", "objects", "action", "objectId", "success",
+                               "errorMessage"]
         assert isinstance(entry["tick"], int) and isinstance(entry["success"], bool)
     assert [(a["tick"], a["robots"], a["skill"], a["action"]) for a in actions[:4]] == [
         (0, [1], "GoToObject", "Teleport"), (0, [2, 3], "GoToObject", "Teleport"),
         (1, [1], "PickupObject", "PickupObject"), (1, [2, 3], "PickupObject", "PickupObject")]
-    assert actions[1]["object_id"].startswith("Potato|") and actions[1]["error"] == ""
+    assert actions[1]["objectId"].startswith("Potato|") and actions[1]["errorMessage"] == ""
+    assert actions[1]["subtask"] == "heat_potato" and actions[1]["objects"] == ["Potato"]
     assert [a["tick"] for a in actions if a["robots"] == [1]] == [0, 1, 2, 3, 4, 7]  # 2 ticks of sleep
     assert actions[-1]["skill"] == "SwitchOff" and actions[-1]["success"] is True
 
@@ -184,3 +187,63 @@ def test_execute_bad_input_exits_2_with_one_line_and_no_trace(files, args, parts
     assert_one_line_error(result, *parts)
     assert result.stdout == ""
     assert not (files / "trace.json").exists()
+
+
+def test_execute_trace_names_the_failure_with_error_message(files):
+    (files / "weak.py").write_text("GoToObject(robots[0], 'Apple')\nPickupObject(robots[0], 'Apple')\n")
+    (files / "apple.json").write_text('[{"name": "Apple", "state": "PICKED"}]')
+    result = cli("execute", "weak.py", "--floor-plan", "6", "--robots", "7", "--goal", "apple.json",
+                 "--trace", "trace.json", "--json", cwd=files)
+    assert result.returncode == 0, result.stderr
+    failed = json.loads((files / "trace.json").read_text(encoding="utf-8"))["actions"][-1]
+    assert (failed["action"], failed["success"]) == ("PickupObject", False)
+    assert failed["objectId"].startswith("Apple|") and "weighs 0.2 kg" in failed["errorMessage"]
+    assert "object_id" not in failed and "error" not in failed
+
+
+@pytest.mark.parametrize("args, parts", [
+    (["--trans", "0"], ["--trans needs --max-trans too"]),
+    (["--max-trans", "1"], ["--max-trans needs --trans too"]),
+    (["--trans", "-1", "--max-trans", "1"], ["--trans must be 0 or more, not -1"]),
+    (["--trans", "0", "--max-trans", "-2"], ["--max-trans must be 0 or more, not -2"]),
+    (["--trans", "2", "--max-trans", "1"], ["--max-trans (1) must be at least --trans (2)"]),
+])
+def test_execute_rejects_incomplete_or_impossible_transitions(files, args, parts):
+    result = cli("execute", "plan.py", "--floor-plan", "6", "--robots", "1,2,3", "--goal", "goal.json", *args,
+                 "--trace", "trace.json", cwd=files)
+    assert_one_line_error(result, *parts)
+    assert result.stdout == "" and not (files / "trace.json").exists()
+
+
+def test_execute_equal_transitions_are_accepted(files):
+    result = cli("execute", "plan.py", "--floor-plan", "6", "--robots", "1,2,3", "--goal", "goal.json",
+                 "--trans", "0", "--max-trans", "0", "--json", cwd=files)
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout)["RU"] == 1.0
+
+
+def test_execute_a_task_with_only_trans_overridden_keeps_its_max_trans(files):
+    # kitchen-01 has trans 0 and max_trans 0 of its own: --trans alone overrides one of the pair
+    result = cli("execute", "plan.py", "--task", "kitchen-01", "--trans", "5", "--json", cwd=files)
+    assert_one_line_error(result, "--max-trans", "must be at least --trans (5)")
+
+
+def test_execute_rejects_an_empty_goal_file(files):
+    (files / "empty.json").write_text("[]")
+    result = cli("execute", "plan.py", "--floor-plan", "6", "--robots", "1,2,3", "--goal", "empty.json",
+                 "--trace", "trace.json", cwd=files)
+    assert_one_line_error(result, "empty.json", "a goal file needs at least one condition")
+    assert result.stdout == "" and not (files / "trace.json").exists()
+
+
+def test_execute_trace_into_a_folder_is_refused_before_the_run(files):
+    (files / "traces").mkdir()
+    result = cli("execute", "plan.py", "--floor-plan", "6", "--robots", "1,2,3", "--goal", "goal.json",
+                 "--trace", "traces", cwd=files)
+    assert_one_line_error(result, "--trace traces is an existing folder", "give a file name")
+    assert result.stdout == "" and list((files / "traces").iterdir()) == []
+    (files / "afile").write_text("keep me")
+    result = cli("execute", "plan.py", "--floor-plan", "6", "--robots", "1,2,3", "--goal", "goal.json",
+                 "--trace", "afile/trace.json", cwd=files)
+    assert_one_line_error(result, "afile is a file, not a folder")
+    assert (files / "afile").read_text() == "keep me"

@@ -107,3 +107,50 @@ def test_artifacts_hold_every_stage(catalogue, tmp_path):
     assert (tmp_path / "coalition.txt").read_text() == result.stages[1].output
     assert (tmp_path / "allocated.py").read_text() == result.allocated
     assert "root ::=" in (tmp_path / "allocation" / "grammar.gbnf").read_text()
+
+
+def _record(stage, output, grammars=("root ::= x",)):
+    from smartllm_local.planner.stages import StageRecord
+
+    return StageRecord(stage=stage, prompt=f"{stage} prompt", grammars=list(grammars), raw=output, output=output)
+
+
+def test_artifacts_of_stages_not_run_again_are_removed(tmp_path):
+    from smartllm_local.planner.pipeline import PlanResult
+
+    first = PlanResult("Put the apple in the fridge", "FloorPlan6", [1, 2], stages=[
+        _record("decomposition", "def f():\n    pass\n"), _record("coalition", "# SubTask 1 (f): robots[0]\n"),
+        _record("allocation", "f(robots[0])\n")], allocated="f(robots[0])\n")
+    write_artifacts(first, tmp_path)
+    assert (tmp_path / "coalition.txt").is_file() and (tmp_path / "coalition" / "prompt.txt").is_file()
+    (tmp_path / "notes.txt").write_text("mine")  # the user's own files are never touched
+    (tmp_path / "coalition" / "mine.txt").write_text("mine")
+    (tmp_path / "allocation" / "mine").mkdir()
+
+    # the same folder again, with --no-coalition and no grammar for the decomposition
+    second = PlanResult("Put the apple in the fridge", "FloorPlan6", [1, 2], stages=[
+        _record("decomposition", "def g():\n    pass\n", grammars=()), _record("allocation", "g(robots[1])\n")],
+        allocated="g(robots[1])\n")
+    write_artifacts(second, tmp_path)
+    assert not (tmp_path / "coalition.txt").exists()
+    assert sorted(p.name for p in (tmp_path / "coalition").iterdir()) == ["mine.txt"]
+    assert not (tmp_path / "decomposition" / "grammar.gbnf").exists()
+    assert (tmp_path / "decomposed.py").read_text() == "def g():\n    pass\n"
+    assert (tmp_path / "allocated.py").read_text() == "g(robots[1])\n"
+    assert (tmp_path / "allocation" / "grammar.gbnf").is_file() and (tmp_path / "allocation" / "mine").is_dir()
+    assert (tmp_path / "notes.txt").read_text() == "mine"
+
+    # a refusal at the decomposition: only its stage, the refusal as the plan, and result.json
+    (tmp_path / "coalition" / "mine.txt").unlink()
+    refusal = PlanResult("Lift the fridge", "FloorPlan6", [1], stages=[_record("decomposition", "# INFEASIBLE: x\n")],
+                         allocated="# INFEASIBLE: x\n", refusal="x")
+    write_artifacts(refusal, tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "allocated.py", "allocation", "decomposed.py", "decomposition", "notes.txt", "result.json"]
+    assert [p.name for p in (tmp_path / "allocation").iterdir()] == ["mine"]
+    assert (tmp_path / "allocated.py").read_text() == "# INFEASIBLE: x\n"
+
+    # no plan at all (a failed decomposition): no allocated.py left from before
+    failed = PlanResult("x", "FloorPlan6", [1], stages=[_record("decomposition", "")], error="decomposition: bad")
+    write_artifacts(failed, tmp_path)
+    assert not (tmp_path / "allocated.py").exists() and (tmp_path / "decomposed.py").read_text() == ""

@@ -1,0 +1,165 @@
+"""Bad command lines: one ``error: ...`` line on stderr, exit status 2, no traceback, nothing written.
+
+Run through the real CLI (``python -m smartllm_local``), as a user runs it; the last tests call
+``main()`` in-process to pin the exit codes that do not come from bad input.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import typer
+
+from smartllm_local.errors import UserError
+from smartllm_local.files import write_atomic
+
+
+def cli(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "smartllm_local", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, timeout=300)
+
+
+def one_line_error(result: subprocess.CompletedProcess, *parts: str) -> str:
+    assert result.returncode == 2, (result.stdout, result.stderr)
+    assert "Traceback" not in result.stderr + result.stdout
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
+    for part in parts:
+        assert part in lines[0], lines[0]
+    assert result.stdout == ""
+    return lines[0]
+
+
+# ----------------------------------------------------------------------------- click's usage errors
+
+
+@pytest.mark.parametrize("args, parts", [
+    (["execute", "plan.py", "--trans", "x"], ["Invalid value for '--trans'", "usage: ", "execute [OPTIONS]",
+                                               "execute --help"]),
+    (["execute", "plan.py", "--bogus"], ["No such option: --bogus"]),
+    (["execute"], ["Missing argument", "plan"]),
+    (["plan", "x", "--seed", "one"], ["Invalid value for '--seed'", "plan --help"]),
+    (["scenes", "show"], ["Missing argument"]),
+    (["benchmark", "list", "--category"], ["'--category' requires an argument"]),
+    (["no-such-command"], ["No such command 'no-such-command'"]),
+])
+def test_usage_errors_are_one_line(tmp_path, args, parts):
+    line = one_line_error(cli(*args, cwd=tmp_path), *parts)
+    assert "╭" not in line and "│" not in line
+
+
+def test_help_and_bare_groups_behave_as_before(tmp_path):
+    done = cli("--help", cwd=tmp_path)
+    assert done.returncode == 0 and "execute" in done.stdout and done.stderr == ""
+    done = cli("execute", "--help", cwd=tmp_path)
+    assert done.returncode == 0 and "--max-trans" in done.stdout and done.stderr == ""
+    for args in ([], ["scenes"], ["benchmark"]):  # no command: the group's help, exit 2
+        done = cli(*args, cwd=tmp_path)
+        assert done.returncode == 2 and "Usage" in done.stdout and "error" not in done.stderr, args
+
+
+# ----------------------------------------------------------------------------- bad values
+
+
+@pytest.mark.parametrize("args, parts", [
+    (["--seed", "-1"], ["--seed must be between 0 and 4294967295, not -1"]),
+    (["--seed", str(2**32)], ["--seed must be between 0 and"]),
+    (["--temperature", "nan"], ["--temperature must be a number, 0 (greedy) or more, not nan"]),
+    (["--temperature", "inf"], ["--temperature", "not inf"]),
+    (["--temperature", "-inf"], ["--temperature", "not -inf"]),
+    (["--temperature", "-0.5"], ["--temperature", "not -0.5"]),
+])
+@pytest.mark.parametrize("command", [
+    ["plan", "Put the apple in the fridge", "--floor-plan", "6", "--robots", "1", "--out", "out"],
+    ["benchmark", "run", "--out", "out"],
+])
+def test_seed_and_temperature_are_checked_before_any_work(tmp_path, command, args, parts):
+    one_line_error(cli(*command, *args, cwd=tmp_path), *parts)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", [
+    ["plan", "Put the apple in the fridge", "--floor-plan", "6", "--robots", "1"],
+    ["benchmark", "run"],
+])
+def test_out_that_is_a_file_is_refused_before_any_work(tmp_path, command):
+    (tmp_path / "out").write_text("keep me")
+    one_line_error(cli(*command, "--out", "out", cwd=tmp_path), "--out out is an existing file")
+    assert (tmp_path / "out").read_text() == "keep me"
+
+
+def test_import_into_a_folder_is_refused(tmp_path):
+    (tmp_path / "tasks").mkdir()
+    one_line_error(cli("benchmark", "import-smartllm", "nowhere", "--out", "tasks", cwd=tmp_path),
+                   "--out tasks is an existing folder")
+
+
+def test_scenes_list_rejects_an_unknown_room(tmp_path):
+    one_line_error(cli("scenes", "list", "--room", "garage", cwd=tmp_path),
+                   "--room must be one of 'kitchen', 'living room', 'bedroom', 'bathroom', not 'garage'")
+    done = cli("scenes", "list", "--room", "Living_Room", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    rows = done.stdout.splitlines()[1:]
+    assert len(rows) == 30 and all(" living room " in row for row in rows)
+
+
+# ----------------------------------------------------------------------------- write_atomic
+
+
+def test_write_atomic_onto_a_folder_is_a_user_error(tmp_path):
+    (tmp_path / "folder").mkdir()
+    with pytest.raises(UserError, match="it is a folder"):
+        write_atomic(tmp_path / "folder", "text")
+    (tmp_path / "file").write_text("keep me")
+    with pytest.raises(UserError, match="cannot write"):
+        write_atomic(tmp_path / "file" / "inner.txt", "text")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "folder"]  # no temporary file left
+    assert list((tmp_path / "folder").iterdir()) == []
+
+
+def test_write_atomic_that_cannot_replace_the_target_leaves_nothing(tmp_path, monkeypatch):
+    import os
+
+    def refuse(src, dst):
+        raise IsADirectoryError(21, "Is a directory")
+
+    monkeypatch.setattr(os, "replace", refuse)
+    with pytest.raises(UserError, match=r"cannot write .*target\.json: it is a folder"):
+        write_atomic(tmp_path / "target.json", "{}")
+    assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------------------- main()'s exit codes
+
+
+@pytest.mark.parametrize("raised, code, stderr", [
+    (KeyboardInterrupt(), 130, ""),
+    (typer.Exit(3), 3, ""),
+    (typer.Abort(), 1, "Aborted.\n"),
+    (UserError("bad input"), 2, "error: bad input\n"),
+])
+def test_main_keeps_its_exit_codes(monkeypatch, capsys, raised, code, stderr):
+    from smartllm_local.cli import main, plans
+
+    def fail(*args, **kwargs):
+        raise raised
+
+    monkeypatch.setattr(plans, "load_catalogue", fail)
+    monkeypatch.setattr(sys, "argv", ["smartllm-local", "validate", "plan.py"])
+    with pytest.raises(SystemExit) as exited:
+        main()
+    assert exited.value.code == code
+    assert capsys.readouterr().err == stderr
+
+
+def test_main_exits_0_after_a_command_that_succeeds(monkeypatch, capsys):
+    from smartllm_local.cli import main
+
+    monkeypatch.setattr(sys, "argv", ["smartllm-local", "scenes", "show", "6", "--json"])
+    with pytest.raises(SystemExit) as exited:
+        main()
+    assert exited.value.code == 0
+    assert '"floor_plan": "FloorPlan6"' in capsys.readouterr().out
