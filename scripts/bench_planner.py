@@ -3,6 +3,13 @@
 tokens/s, with the grammars and without them (free generation with stop strings); then the
 model's raw prompt-evaluation and decoding speed on the decomposition prompt.
 
+The run with grammars plans the task through all stages. The free run measures
+every stage the grammar run reached, each on the same input: a free stage is fed
+the grammar run's outputs of the earlier stages (free output is seldom a valid
+plan, so a free pipeline would stop after the first stage), and its prompt is
+checked to be the grammar run's. "valid" says whether the output is a valid
+plan (decomposition, allocation) or list of coalition lines, or a refusal.
+
 Each configuration gets a freshly loaded model, so both start with an empty
 cache. A stage's seconds include evaluating its prompt, less what the key/value
 cache already held; forced tokens (text the grammar admits in one way only) are
@@ -10,23 +17,27 @@ written in one batch rather than decoded one by one.
 
 Usage::
 
-    python scripts/bench_planner.py [--task kitchen-09] [--model smollm2|gemma3-270m|PATH] [--threads N]
+    python scripts/bench_planner.py [--task kitchen-09] [--backend llamacpp|transformers]
+                                    [--model smollm2|gemma3-270m|PATH] [--threads N] [--n-gpu-layers N]
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from typing import Sequence
 
-from smartllm_local.planner.backends import Sampling, load_backend
-from smartllm_local.planner.pipeline import Planner, PlannerConfig
+from smartllm_local.planner.backends import BACKENDS, Sampling, load_backend
+from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
+from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.stages import StageRecord
 from smartllm_local.robots import load_catalogue
-from smartllm_local.tasks import find_task, load_tasks
+from smartllm_local.tasks import Task, find_task, load_tasks
 
 
-def raw_speed(model: str | None, threads: int | None, prompt: str, n: int = 64) -> tuple[float, float, int]:
+def raw_speed(args: argparse.Namespace, prompt: str, n: int = 64) -> tuple[float, float, int]:
     """(prompt tokens/s, decode tokens/s, decoded tokens): the prompt once, then n free tokens after it."""
-    backend = load_backend("llamacpp", model, threads=threads)
+    backend = load(args)
     try:
         tokens = backend.tokenize(prompt, bos=True)
         started = time.perf_counter()
@@ -39,32 +50,91 @@ def raw_speed(model: str | None, threads: int | None, prompt: str, n: int = 64) 
         backend.close()
 
 
+def load(args: argparse.Namespace):
+    return load_backend(args.backend, args.model, threads=args.threads, n_gpu_layers=args.n_gpu_layers)
+
+
+def free_stages(planner: Planner, task: Task, guided: PlanResult) -> list[StageRecord]:
+    """Each stage the grammar run reached, run free on the grammar run's outputs of the earlier stages."""
+    catalogue = planner.catalogue
+    team = catalogue.team(task.robots)
+    scene = scene_objects(task.floor_plan)
+    done = {record.stage: record for record in guided.stages}
+    records = []
+
+    def fresh(*earlier: StageRecord) -> PlanResult:
+        return PlanResult(instruction=task.instruction, floor_plan=scene.floor_plan, robots=list(task.robots),
+                          stages=list(earlier))
+
+    if "decomposition" in done:
+        records.append(planner.decompose(fresh(), scene))
+    decomposition = done.get("decomposition")
+    if decomposition is not None and decomposition.plan is not None:
+        if "coalition" in done:
+            records.append(planner.form_coalition(fresh(decomposition), decomposition.plan, team, scene))
+        if "allocation" in done:
+            coalition = done["coalition"].output if "coalition" in done else None
+            records.append(planner.allocate(fresh(decomposition), decomposition.plan, coalition, team, scene))
+    return records
+
+
+def validity(record: StageRecord) -> str:
+    if record.refusal is not None:
+        return f"refusal: {record.refusal[:40]}"
+    if not record.error:
+        return "yes"
+    problems = record.error.split(" is not a valid plan: ", 1)[-1].replace(f"<{record.stage} output>:", "line ")
+    lines = problems.splitlines()
+    more = f" (+{len(lines) - 1} more)" if len(lines) > 1 else ""
+    return f"no: {lines[0][:60]}{more}"
+
+
+def print_table(label: str, records: Sequence[StageRecord], guided: Sequence[StageRecord] = ()) -> None:
+    print(f"\n{label}:")
+    print(f"  {'stage':<14}{'prompt tok':>11}{'gen tok':>9}{'forced':>8}{'seconds':>9}{'tok/s':>8}  valid")
+    prompts = {record.stage: record.prompt for record in guided}
+    for record in records:
+        same = "" if record.stage not in prompts or prompts[record.stage] == record.prompt else \
+            "  (prompt differs from the grammar run's!)"
+        print(f"  {record.stage:<14}{record.prompt_tokens:>11}{record.generated_tokens:>9}{record.forced_tokens:>8}"
+              f"{record.seconds:>9.1f}{record.tokens_per_second:>8.1f}  {validity(record)}{same}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--task", default="kitchen-09")
-    parser.add_argument("--model", default=None)
+    parser.add_argument("--backend", choices=BACKENDS, default="llamacpp")
+    parser.add_argument("--model", default=None, help="an embedded model name or a path (default: smollm2)")
     parser.add_argument("--threads", type=int, default=None)
+    parser.add_argument("--n-gpu-layers", type=int, default=0,
+                        help="llama.cpp: layers on the GPU (-1 all); transformers: all-or-nothing")
     args = parser.parse_args()
     catalogue = load_catalogue()
     task = find_task(load_tasks(), args.task)
     print(f"task {task.id}: {task.instruction!r} on {task.floor_plan} with robots {list(task.robots)}")
-    for grammar in (True, False):
-        backend = load_backend("llamacpp", args.model, threads=args.threads)
-        try:
-            planner = Planner(backend, catalogue, PlannerConfig(grammar=grammar))
-            result = planner.plan(task.instruction, task.floor_plan, task.robots)
-        finally:
-            backend.close()
-        label = "with grammar" if grammar else "without grammar"
-        print(f"\n{label} ({backend.model}):")
-        print(f"  {'stage':<14}{'prompt tok':>11}{'gen tok':>9}{'forced':>8}{'seconds':>9}{'tok/s':>8}  valid")
-        for record in result.stages:
-            valid = "refusal" if record.refusal else ("no: " + record.error[:40] if record.error else "yes")
-            print(f"  {record.stage:<14}{record.prompt_tokens:>11}{record.generated_tokens:>9}{record.forced_tokens:>8}"
-                  f"{record.seconds:>9.1f}{record.tokens_per_second:>8.1f}  {valid}")
-        if grammar:
-            first_prompt = result.stages[0].prompt
-    prompt_rate, decode_rate, decoded = raw_speed(args.model, args.threads, first_prompt)
+
+    backend = load(args)
+    try:
+        guided = Planner(backend, catalogue, PlannerConfig(grammar=True)).plan(task.instruction, task.floor_plan,
+                                                                               task.robots)
+    finally:
+        backend.close()
+    print_table(f"with grammar ({args.backend}, {backend.model})", guided.stages)
+
+    backend = load(args)
+    try:
+        free = free_stages(Planner(backend, catalogue, PlannerConfig(grammar=False)), task, guided)
+    finally:
+        backend.close()
+    print_table("without grammar (each stage fed the grammar run's outputs of the earlier stages)", free,
+                guided.stages)
+    missing = [stage for stage in ("decomposition", "coalition", "allocation")
+               if stage not in {record.stage for record in guided.stages}]
+    if missing:
+        print(f"  not run: {', '.join(missing)} (the grammar run stopped before them: "
+              f"{guided.refusal and 'refusal' or guided.error or 'no coalition stage'})")
+
+    prompt_rate, decode_rate, decoded = raw_speed(args, guided.stages[0].prompt)
     print(f"\nraw speed on the decomposition prompt: "
           f"prompt evaluation {prompt_rate:.0f} tok/s, decoding {decode_rate:.1f} tok/s ({decoded} tokens)")
 

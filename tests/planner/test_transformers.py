@@ -2,20 +2,56 @@
 
 from __future__ import annotations
 
-import pytest
+import logging
+import os
+import subprocess
+import sys
+import tempfile
 
+import pytest
+import torch
+
+from smartllm_local.errors import BackendUnavailableError
 from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.backends.base import Sampling
+from smartllm_local.planner.backends.transformers import _placement, _quiet_loading
 from smartllm_local.planner.grammar import Grammar, alt
+from smartllm_local.planner.models import embedded_model_path
 from smartllm_local.planner.pipeline import Planner, PlannerConfig
 from smartllm_local.robots import load_catalogue
+
+LOAD_STDERR: dict[str, str] = {}
+
+
+def _load_capturing_stderr(**kwargs):
+    """Load SmolLM2, keeping what the load writes on file descriptor 2 (tqdm bars, warnings)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile(mode="w+b") as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            backend = load_backend("transformers", "smollm2", **kwargs)
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+        sink.seek(0)
+        LOAD_STDERR["text"] = sink.read().decode(errors="replace")
+    return backend
 
 
 @pytest.fixture(scope="module")
 def hf_smollm2():
-    backend = load_backend("transformers", "smollm2", n_ctx=4096)
+    backend = _load_capturing_stderr(n_ctx=4096)
     yield backend
     backend.close()
+
+
+def test_loads_on_the_cpu_in_float32_without_a_progress_bar(hf_smollm2):
+    assert hf_smollm2.device.type == "cpu"
+    assert hf_smollm2.lm.dtype == torch.float32
+    assert "Converting" not in LOAD_STDERR["text"] and "%|" not in LOAD_STDERR["text"]
+    assert LOAD_STDERR["text"] == ""
 
 
 def test_constraints_bite_through_llguidance(hf_smollm2):
@@ -32,4 +68,106 @@ def test_a_task_planned_through_all_stages(hf_smollm2):
     result = Planner(hf_smollm2, load_catalogue(), config).plan("Turn off the light.", 6, [1])
     assert not result.error, result.error
     assert result.plan is not None
-    assert result.refusal is not None or [r.stage for r in result.stages] == ["decomposition", "coalition", "allocation"]
+    stages = [r.stage for r in result.stages]
+    assert result.refusal is not None or stages == ["decomposition", "coalition", "allocation"]
+
+
+# ------------------------------------------------------------------ loading quietly, failing clearly
+
+
+def test_quiet_loading_hides_progress_bars_but_not_warnings(capfd):
+    import transformers
+    import transformers.modeling_gguf_pytorch_utils as gguf_utils
+
+    class Keep(logging.Handler):
+        def emit(self, record):
+            kept.append(record.getMessage())
+
+    kept: list[str] = []
+    original, enabled = gguf_utils.tqdm, transformers.utils.logging.is_progress_bar_enabled()
+    logger = logging.getLogger("transformers.quantizers.quantizer_gguf")
+    handler = Keep()
+    logger.addHandler(handler)
+    try:
+        with _quiet_loading(transformers):
+            assert list(gguf_utils.tqdm(range(3), desc="Converting and de-quantizing GGUF tensors...")) == [0, 1, 2]
+            logger.warning("Loading a GGUF checkpoint with its weights packed is fastest in float32, and ...")
+            logger.warning("a real warning")
+    finally:
+        logger.removeHandler(handler)
+    assert kept == ["a real warning"]
+    assert gguf_utils.tqdm is original
+    assert transformers.utils.logging.is_progress_bar_enabled() == enabled
+    assert "Converting" not in capfd.readouterr().err
+
+
+def _corrupt_ggufs(folder):
+    truncated = folder / "truncated.gguf"
+    with open(embedded_model_path("smollm2"), "rb") as handle:
+        truncated.write_bytes(handle.read(1 << 20))
+    magic_only = folder / "magic-only.gguf"
+    magic_only.write_bytes(b"GGUF")
+    return [truncated, magic_only]
+
+
+def _plan_cli(*options):
+    return subprocess.run(
+        [sys.executable, "-m", "smartllm_local", "plan", "Put the apple in the fridge", "--floor-plan", "6",
+         "--robots", "1", "--backend", "transformers", *options],
+        capture_output=True, text=True, timeout=300,
+    )
+
+
+def test_the_cli_rejects_corrupt_gguf_files_with_status_2(tmp_path):
+    for path in _corrupt_ggufs(tmp_path):
+        proc = _plan_cli("--model", str(path))
+        assert proc.returncode == 2, proc.stderr
+        lines = proc.stderr.strip().splitlines()
+        assert len(lines) == 1, proc.stderr
+        assert lines[0].startswith("error: ") and "Traceback" not in proc.stderr
+        assert f"{path} is not a readable GGUF file" in lines[0]
+        assert "truncated or corrupt" in lines[0]
+
+
+@pytest.mark.skipif(torch.cuda.is_available(), reason="this machine has CUDA")
+def test_gpu_layers_without_cuda_say_how_to_run_on_the_cpu(monkeypatch):
+    with pytest.raises(BackendUnavailableError, match=r"has no CUDA support.*--n-gpu-layers 0"):
+        load_backend("transformers", "smollm2", n_gpu_layers=-1)
+    monkeypatch.setattr(torch.version, "cuda", "12.4")
+    with pytest.raises(BackendUnavailableError, match=r"finds no usable GPU.*--n-gpu-layers 0"):
+        _placement(torch, 20)
+    monkeypatch.undo()
+    proc = _plan_cli("--n-gpu-layers", "99")
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in proc.stderr
+    assert "--n-gpu-layers 99" in lines[0] and "has no CUDA" in lines[0] and "--n-gpu-layers 0" in lines[0]
+
+
+def test_gpu_layers_are_all_or_nothing(monkeypatch):
+    assert _placement(torch, 0) == (torch.float32, None)
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
+    monkeypatch.setattr(torch.cuda, "is_bf16_supported", lambda *a, **k: True)
+    assert _placement(torch, -1) == (torch.bfloat16, "cuda")
+    assert _placement(torch, 1) == (torch.bfloat16, "cuda")
+    monkeypatch.setattr(torch.cuda, "is_bf16_supported", lambda *a, **k: False)
+    assert _placement(torch, 99) == (torch.float16, "cuda")
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU")
+def test_runs_on_the_gpu_when_asked():
+    backend = load_backend("transformers", "smollm2", n_ctx=4096, n_gpu_layers=-1)
+    try:
+        assert backend.device.type == "cuda"
+        assert backend.lm.dtype in (torch.bfloat16, torch.float16)
+        context = backend.tokenize("The capital of France is", bos=True)
+        assert "Paris" in backend.generate(context, grammar=None, max_tokens=4, sampling=Sampling()).text
+        grammar = Grammar({"root": alt(" London.\n", " Rome.\n")})
+        for sampling in (Sampling(), Sampling(temperature=0.8, seed=3)):
+            forced = backend.generate(context, grammar=grammar, max_tokens=8, sampling=sampling)
+            assert forced.text in (" London.\n", " Rome.\n")
+        config = PlannerConfig(budgets={"decomposition": 600, "coalition": 300, "allocation": 700})
+        result = Planner(backend, load_catalogue(), config).plan("Turn off the light.", 6, [1])
+        assert not result.error, result.error
+    finally:
+        backend.close()

@@ -21,7 +21,11 @@ def load_backend(
     n_gpu_layers: int = 0,
     seed: int = 0,
 ) -> Backend:
-    """Load a model in a backend; ``model`` is a path or an embedded model name (None: the default)."""
+    """Load a model in a backend; ``model`` is a path or an embedded model name (None: the default).
+
+    ``n_gpu_layers``: layers to offload to a GPU (llama.cpp, -1 for all); for transformers it is
+    all-or-nothing: 0 runs on the CPU, any other value puts the whole model on the CUDA GPU.
+    """
     # No network, ever: these switches keep Hugging Face libraries off the hub.
     for switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
         os.environ[switch] = "1"
@@ -33,5 +37,5 @@ def load_backend(
     if name == "transformers":
         from .transformers import TransformersBackend
 
-        return TransformersBackend(model, n_ctx=n_ctx, threads=threads, seed=seed)
+        return TransformersBackend(model, n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers, seed=seed)
     raise UserError(f"unknown backend {name!r}; choose one of {', '.join(BACKENDS)}")

@@ -5,14 +5,29 @@ same GBNF grammars as llama.cpp's are compiled by llguidance into a token
 mask at every step (llguidance is the engine outlines uses for grammars; it
 is called directly, so there is no silent unconstrained fallback). A folder
 with a ``config.json`` loads as a checkpoint; a ``.gguf`` file loads through
-transformers' GGUF reader (dequantized to float32). The key/value cache of
+transformers' GGUF reader (dequantized). The key/value cache of
 the last context is kept, so a context that extends it only runs the new
 tokens. Nothing is fetched from a hub: the offline switches are set before
 transformers is imported.
+
+Devices: for this backend ``--n-gpu-layers`` is all-or-nothing (there is no
+partial offload as in llama.cpp). 0 (the default) runs on the CPU in float32;
+any other value (llama.cpp's -1 included) puts the whole model on the CUDA GPU
+(``cuda``, or ``cuda:$LOCAL_RANK``) in bfloat16, or float16 where the GPU has no
+bfloat16, and fails with a clear error when the installed torch has no CUDA.
+Every tensor given to the model (the input ids; the key/value cache the model
+makes) is on the model's device, and so are the logits and the grammar's mask
+applied to them; only llguidance's packed bitmask (which llguidance fills
+through a CPU pointer) and temperature sampling (numpy) live on the CPU.
+Loading shows no progress bars; transformers' warnings still show.
 """
 
 from __future__ import annotations
 
+import contextlib
+import importlib
+import importlib.util
+import logging
 import os
 from pathlib import Path
 from typing import Any, Sequence
@@ -28,6 +43,10 @@ for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE")
     os.environ[_switch] = "1"
 
 _EXTRA = "pip install 'smartllm-local[transformers]' (torch, transformers, gguf, accelerate, llguidance)"
+
+# Said by transformers whenever a GGUF is loaded in another dtype than float32, also for architectures it
+# dequantizes anyway (llama, gemma3); the dtype is this backend's choice and the user cannot act on it.
+_PACKED_DTYPE_NOTICE = "Loading a GGUF checkpoint with its weights packed is fastest in float32"
 
 
 def _locate(model: str | None) -> tuple[Path, str | None]:
@@ -48,10 +67,73 @@ def _locate(model: str | None) -> tuple[Path, str | None]:
     return path.parent, path.name
 
 
+def _placement(torch: Any, n_gpu_layers: int) -> tuple[Any, str | None]:
+    """(dtype, device_map) for ``--n-gpu-layers``: all on the CPU in float32 (0), or all on the GPU."""
+    if not n_gpu_layers:
+        return torch.float32, None
+    if not torch.cuda.is_available():
+        if torch.version.cuda is None:
+            why = f"the installed torch {torch.__version__} has no CUDA support (a CPU-only build)"
+            fix = "or install a CUDA build of torch"
+        else:
+            why = (f"torch {torch.__version__} (CUDA {torch.version.cuda}) finds no usable GPU "
+                   "(no NVIDIA driver, or CUDA_VISIBLE_DEVICES hides it)")
+            fix = "or fix the driver"
+        raise BackendUnavailableError(
+            f"--n-gpu-layers {n_gpu_layers} asks the transformers backend for a GPU, but {why}; "
+            f"run on the CPU with --n-gpu-layers 0, {fix}")
+    return (torch.bfloat16 if torch.cuda.is_bf16_supported() else torch.float16), "cuda"
+
+
+def _one_line(exc: BaseException, limit: int = 240) -> str:
+    text = (str(exc).strip().splitlines() or [""])[0]
+    cls = type(exc)
+    kind = cls.__qualname__ if cls.__module__ == "builtins" else f"{cls.__module__}.{cls.__qualname__}"
+    text = f"{kind}: {text}" if text else kind
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+class _DropNotice(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not str(record.msg).startswith(_PACKED_DTYPE_NOTICE)
+
+
+@contextlib.contextmanager
+def _quiet_loading(transformers: Any):
+    """No progress bars while loading; transformers' warnings still show.
+
+    The GGUF reader calls ``tqdm.auto.tqdm`` directly ("Converting and de-quantizing GGUF tensors"),
+    which transformers' progress-bar switch does not reach: it is pointed at transformers' own tqdm,
+    which obeys the switch, for the duration of the load.
+    """
+    log = transformers.utils.logging
+    was_enabled = log.is_progress_bar_enabled()
+    log.disable_progress_bar()
+    try:
+        gguf_utils = importlib.import_module("transformers.modeling_gguf_pytorch_utils")
+    except ImportError:
+        gguf_utils = None
+    original = getattr(gguf_utils, "tqdm", None)
+    if original is not None:
+        gguf_utils.tqdm = log.tqdm
+    notice_logger = logging.getLogger("transformers.quantizers.quantizer_gguf")
+    notice_filter = _DropNotice()
+    notice_logger.addFilter(notice_filter)
+    try:
+        yield
+    finally:
+        notice_logger.removeFilter(notice_filter)
+        if original is not None:
+            gguf_utils.tqdm = original
+        if was_enabled:
+            log.enable_progress_bar()
+
+
 class TransformersBackend:
     name = "transformers"
 
-    def __init__(self, model: str | None, *, n_ctx: int = 4096, threads: int | None = None, seed: int = 0):
+    def __init__(self, model: str | None, *, n_ctx: int = 4096, threads: int | None = None, n_gpu_layers: int = 0,
+                 seed: int = 0):
         try:
             import llguidance
             import llguidance.hf
@@ -63,23 +145,44 @@ class TransformersBackend:
         self._torch, self._llg = torch, llguidance
         folder, gguf = _locate(model)
         self.model = str(folder / gguf) if gguf else str(folder)
+        if gguf:
+            missing = [name for name in ("gguf", "accelerate") if importlib.util.find_spec(name) is None]
+            if missing:
+                raise BackendUnavailableError(
+                    f"loading a GGUF file with transformers needs {' and '.join(missing)}: {_EXTRA}")
+        dtype, device_map = _placement(torch, n_gpu_layers)
         if threads:
             torch.set_num_threads(threads)
         torch.manual_seed(seed)
         kwargs: dict[str, Any] = {"local_files_only": True}
         if gguf:
             kwargs["gguf_file"] = gguf
-        transformers.utils.logging.set_verbosity_error()
-        transformers.utils.logging.disable_progress_bar()
+        what = "GGUF file" if gguf else "Hugging Face checkpoint"
         try:
-            self.tokenizer = transformers.AutoTokenizer.from_pretrained(str(folder), **kwargs)
-            self.lm = transformers.AutoModelForCausalLM.from_pretrained(str(folder), dtype=torch.float32, **kwargs)
-        except (OSError, ValueError) as exc:
-            raise ModelError(f"transformers could not load {self.model}: {exc}") from exc
+            with _quiet_loading(transformers):
+                self.tokenizer = transformers.AutoTokenizer.from_pretrained(str(folder), **kwargs)
+                self.lm = transformers.AutoModelForCausalLM.from_pretrained(
+                    str(folder), dtype=dtype, device_map=device_map, **kwargs)
+                self.ll_tokenizer = llguidance.hf.from_tokenizer(self.tokenizer)
+        except (MemoryError, getattr(torch, "OutOfMemoryError", MemoryError)) as exc:
+            where = "GPU memory (run on the CPU with --n-gpu-layers 0)" if device_map else "memory"
+            raise ModelError(f"{self.model} does not fit in {where} ({_one_line(exc)}); use a smaller model") from exc
+        except ImportError as exc:
+            raise BackendUnavailableError(
+                f"transformers could not load {self.model} ({_one_line(exc)}): {_EXTRA}") from exc
+        except Exception as exc:  # the readers fail in many ways on a damaged file (struct.error, KeyError, ...)
+            if device_map and "cuda" in str(exc).lower():
+                raise ModelError(f"loading {self.model} on the GPU failed ({_one_line(exc)}); "
+                                 "run on the CPU with --n-gpu-layers 0") from exc
+            fix = ("it may be truncated or corrupt (download it again) or of an architecture transformers "
+                   "cannot read (try --backend llamacpp)") if gguf else \
+                  "its files may be incomplete or corrupt (config.json, tokenizer and weights must all be there)"
+            raise ModelError(f"{self.model} is not a readable {what} for the transformers backend "
+                             f"({_one_line(exc)}); {fix}") from exc
+        self.device = self.lm.get_input_embeddings().weight.device
         self.lm.eval()
         limit = getattr(self.lm.config, "max_position_embeddings", n_ctx) or n_ctx
         self.n_ctx = min(n_ctx, int(limit))
-        self.ll_tokenizer = llguidance.hf.from_tokenizer(self.tokenizer)
         self.n_vocab = self.ll_tokenizer.vocab_size
         self.eos = self.tokenizer.eos_token_id
         self._tokens: list[int] = []
@@ -96,9 +199,10 @@ class TransformersBackend:
     def _forward(self, tokens: list[int]) -> None:
         torch = self._torch
         with torch.no_grad():
-            out = self.lm(input_ids=torch.tensor([tokens]), past_key_values=self._cache, use_cache=True)
+            ids = torch.tensor([tokens], dtype=torch.long, device=self.device)
+            out = self.lm(input_ids=ids, past_key_values=self._cache, use_cache=True)
         self._cache = out.past_key_values
-        self._logits = out.logits[0, -1, :].float()
+        self._logits = out.logits[0, -1, :].float()  # on the model's device
         self._tokens.extend(tokens)
         self.evaluated_tokens += len(tokens)
 
@@ -131,7 +235,7 @@ class TransformersBackend:
             matcher = llg.LLMatcher(self.ll_tokenizer, llg.grammar_from("gbnf", grammar.to_gbnf()))
             if matcher.is_error():
                 raise GrammarError(f"llguidance rejected a grammar: {matcher.get_error()}")
-            mask = llg.torch.allocate_token_bitmask(1, self.n_vocab)
+            mask = llg.torch.allocate_token_bitmask(1, self.n_vocab)  # on the CPU: llguidance fills it there
         out: list[int] = []
         while len(out) < max_tokens:
             logits = self._logits[: self.n_vocab].clone().unsqueeze(0)
@@ -139,7 +243,8 @@ class TransformersBackend:
                 # llguidance's own apply function goes through torch.compile (seconds per call): unpack here.
                 llg.torch.fill_next_token_bitmask(matcher, mask, 0)
                 bits = np.unpackbits(mask.numpy().view(np.uint8), bitorder="little")[: self.n_vocab]
-                logits[0, torch.from_numpy(bits == 0)] = -float("inf")
+                blocked = torch.from_numpy(bits == 0).to(logits.device)
+                logits[0, blocked] = -float("inf")
             token = self._pick(logits[0], sampling, rng)
             if token == self.eos or (matcher is not None and matcher.is_stopped()):
                 return Generated(out, self.detokenize(out), "eos")
@@ -158,12 +263,14 @@ class TransformersBackend:
     def _pick(self, logits: Any, sampling: Sampling, rng: np.random.Generator) -> int:
         if sampling.temperature <= 0:
             return int(self._torch.argmax(logits))
-        scores = (logits / sampling.temperature).double().numpy()
+        scores = (logits / sampling.temperature).double().cpu().numpy()
         finite = np.isfinite(scores)
         probs = np.where(finite, np.exp(scores - scores[finite].max()), 0.0)
         probs /= probs.sum()
         return int(rng.choice(len(probs), p=probs))
 
     def close(self) -> None:
-        self._cache = None
+        self._cache = self._logits = None
         self.lm = None
+        if getattr(self, "device", None) is not None and self.device.type == "cuda":
+            self._torch.cuda.empty_cache()
