@@ -17,6 +17,7 @@ from __future__ import annotations
 from typing import Any, Collection, Iterable, Mapping
 
 from ..world.object_types import base_type
+from ..world.rules import linked
 
 #: AI2-THOR actions that add objects to the scene.
 CREATING_ACTIONS = frozenset({"SliceObject", "BreakObject"})
@@ -33,17 +34,6 @@ def focus_ids(objects: Iterable[Mapping[str, Any]], names: Collection[str]) -> l
     }
     named |= {o["objectId"] for o in objects if set(o.get("controlledObjects") or ()) & named}
     lifted = {oid for oid in named if by_id[oid].get("pickupable")}
-    keep = named | _closure(by_id, named, "parentReceptacles") | _closure(by_id, lifted, "receptacleObjectIds")
+    keep = named | linked(by_id, named, "parentReceptacles") | linked(by_id, lifted, "receptacleObjectIds")
     return [o["objectId"] for o in objects if o["objectId"] in keep]
 
-
-def _closure(by_id: Mapping[str, Mapping[str, Any]], start: set[str], field: str) -> set[str]:
-    """Every object reached from ``start`` by following ``field`` (parents, or contents) again and again."""
-    reached: set[str] = set()
-    stack = list(start)
-    while stack:
-        for other in by_id[stack.pop()].get(field) or ():
-            if other in by_id and other not in reached:
-                reached.add(other)
-                stack.append(other)
-    return reached

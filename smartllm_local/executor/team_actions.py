@@ -26,6 +26,7 @@ from ..robots import Robot
 from ..skills import Skill, SkillSet, has_affordance
 from ..world.navigation import Box, facing_yaw
 from ..world.object_types import OPEN_TOPPED, SLICE_RESULTS, base_type
+from ..world.rules import linked
 from .focus import CREATING_ACTIONS, focus_ids
 
 KNIVES = frozenset({"Knife", "ButterKnife"})
@@ -174,16 +175,10 @@ class TeamWorld:
         return {o["objectId"] for o in self.objects if set(o.get("parentReceptacles") or ()) & closed}
 
     def _carried_mass(self, obj: dict[str, Any]) -> float:
+        """Its mass and that of everything in it, nested contents included."""
         by_id = {o["objectId"]: o for o in self.objects}
-        total, stack, seen = 0.0, [obj["objectId"]], set()
-        while stack:
-            oid = stack.pop()
-            if oid in seen or oid not in by_id:
-                continue
-            seen.add(oid)
-            total += float(by_id[oid].get("mass") or 0.0)
-            stack.extend(by_id[oid].get("receptacleObjectIds") or [])
-        return total
+        inside = linked(by_id, [obj["objectId"]], "receptacleObjectIds") - {obj["objectId"]}
+        return float(obj.get("mass") or 0.0) + sum(float(by_id[i].get("mass") or 0.0) for i in sorted(inside))
 
     # ---------------------------------------------------------------- acting
 

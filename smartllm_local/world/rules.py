@@ -21,7 +21,7 @@ decay back to room temperature over time; the symbolic world has no clock).
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 from .object_types import COLD_SOURCES, HEAT_SOURCES, SLICE_RESULTS, TYPE_PROPERTIES, WATER_BASINS
 
@@ -43,6 +43,19 @@ def contents(objects: Objects, receptacle_id: str) -> Iterator[dict[str, Any]]:
         obj = objects[oid]
         yield obj
         stack.extend(obj.get("receptacleObjectIds") or [])
+
+
+def linked(objects: Objects, start: Iterable[str], field: str) -> set[str]:
+    """Every objectId reached from ``start`` by following ``field`` again and again
+    (``parentReceptacles``: the holders of holders; ``receptacleObjectIds``: nested contents)."""
+    reached: set[str] = set()
+    stack = [oid for oid in start if oid in objects]
+    while stack:
+        for other in objects[stack.pop()].get(field) or ():
+            if other in objects and other not in reached:
+                reached.add(other)
+                stack.append(other)
+    return reached
 
 
 def is_heating(objects: Objects, source: dict[str, Any]) -> bool:

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any, Final
 
 from ..errors import SceneDataError, UnknownFloorPlanError
+from .rules import linked
 
 SCENE_DATA_REQUIREMENT: Final = "procthor==0.0.1.dev2"
 _INSTALL_HINT: Final = f"install it with: pip install '{SCENE_DATA_REQUIREMENT}'"
@@ -165,22 +166,11 @@ def untangle_containment(objects: list[dict[str, Any]]) -> list[dict[str, Any]]:
     innermost of an object's holders are kept (see :func:`_keep_innermost_holders`).
     """
     by_id = {o["objectId"]: o for o in objects}
-
-    def ancestors(oid: str) -> set[str]:
-        seen: set[str] = set()
-        stack = list(by_id[oid].get("parentReceptacles") or [])
-        while stack:
-            cur = stack.pop()
-            if cur not in seen and cur in by_id:
-                seen.add(cur)
-                stack.extend(by_id[cur].get("parentReceptacles") or [])
-        return seen
-
     dropped = [
         (obj["objectId"], parent)
         for obj in objects
         for parent in obj.get("parentReceptacles") or []
-        if parent in by_id and obj["objectId"] in ancestors(parent)
+        if parent in by_id and obj["objectId"] in linked(by_id, [parent], "parentReceptacles")
         and not (obj.get("pickupable") and not by_id[parent].get("pickupable"))
     ]
     for child, parent in dropped:
@@ -198,24 +188,12 @@ def _keep_innermost_holders(objects: list[dict[str, Any]]) -> list[dict[str, Any
     through them. Expects a containment graph without cycles.
     """
     by_id = {o["objectId"]: o for o in objects}
-    memo: dict[str, frozenset[str]] = {}
-
-    def ancestors(oid: str) -> frozenset[str]:
-        if oid not in memo:
-            memo[oid] = frozenset()  # guards against a cycle left in the data
-            found: set[str] = set()
-            for parent in by_id[oid].get("parentReceptacles") or []:
-                if parent in by_id:
-                    found.add(parent)
-                    found |= ancestors(parent)
-            memo[oid] = frozenset(found)
-        return memo[oid]
-
     dropped = [
         (obj["objectId"], parent)
         for obj in objects
         for parent in obj.get("parentReceptacles") or []
-        if any(parent in ancestors(other) for other in obj["parentReceptacles"] if other != parent and other in by_id)
+        if any(parent in linked(by_id, [other], "parentReceptacles")
+               for other in obj["parentReceptacles"] if other != parent and other in by_id)
     ]
     for child, parent in dropped:
         _unlink(by_id, child, parent)
