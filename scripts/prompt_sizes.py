@@ -3,7 +3,8 @@
 
 Reads the ``results.jsonl`` that ``smartllm-local benchmark run --out DIR`` writes and prints, per
 stage, the number of tasks that reached it and the smallest, median and largest prompt (tokens),
-the mean number of tokens generated and the mean seconds.
+the mean number of tokens generated and the mean seconds, then how many tasks had to drop
+allocation examples to fit the context.
 
 Usage::
 
@@ -15,6 +16,7 @@ from __future__ import annotations
 import json
 import statistics
 import sys
+from collections import Counter
 from pathlib import Path
 
 STAGES = ("decomposition", "coalition", "allocation")
@@ -36,6 +38,17 @@ def main(paths: list[str]) -> None:
             print(f"  {stage:<14}{len(rows):>6}{min(prompts):>7}{statistics.median(prompts):>8.0f}{max(prompts):>7}"
                   f"{statistics.mean(r['generated'] for r in rows):>10.0f}"
                   f"{statistics.mean(r['seconds'] for r in rows):>8.1f}")
+        dropped = Counter(_dropped_examples(r) for r in results if "allocation" in r.get("tokens", {}))
+        print("  allocation examples dropped: "
+              + ", ".join(f"{n} in {count} tasks" for n, count in sorted(dropped.items())))
+
+
+def _dropped_examples(result: dict) -> int:
+    for notice in result.get("notices", []):
+        if notice.startswith("allocation: dropped example(s) "):
+            names = notice.removeprefix("allocation: dropped example(s) ").split(" to fit")[0]
+            return len(names.split(", "))
+    return 0
 
 
 if __name__ == "__main__":

@@ -55,6 +55,7 @@ def write_atomic(path: str | Path, text: str) -> Path:
     except OSError as exc:
         raise UserError(f"cannot write {path}: {exc.strerror or exc}") from exc
     try:
+        os.fchmod(fd, _mode_for(path))
         with os.fdopen(fd, "w", encoding="utf-8") as handle:
             handle.write(text)
         os.replace(tmp, path)
@@ -68,6 +69,17 @@ def write_atomic(path: str | Path, text: str) -> Path:
             raise UserError(f"cannot write {path}: {reason}") from exc
         raise
     return path
+
+
+def _mode_for(path: Path) -> int:
+    """The permissions a plain ``open(path, "w")`` would give, not mkstemp's owner-only 0600:
+    an existing file keeps its own, a new one gets 0666 less the umask."""
+    try:
+        return path.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def write_json(path: str | Path, data: Any) -> Path:

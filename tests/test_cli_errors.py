@@ -132,6 +132,22 @@ def test_write_atomic_that_cannot_replace_the_target_leaves_nothing(tmp_path, mo
     assert list(tmp_path.iterdir()) == []
 
 
+def test_write_atomic_gives_the_permissions_a_plain_write_would(tmp_path):
+    import os
+
+    old = os.umask(0o022)
+    try:
+        fresh = write_atomic(tmp_path / "fresh.json", "{}")
+        kept = tmp_path / "kept.json"
+        kept.write_text("old")
+        kept.chmod(0o640)
+        write_atomic(kept, "new")
+    finally:
+        os.umask(old)
+    assert fresh.stat().st_mode & 0o777 == 0o644  # not mkstemp's owner-only 0600
+    assert kept.stat().st_mode & 0o777 == 0o640 and kept.read_text() == "new"
+
+
 # ----------------------------------------------------------------------------- main()'s exit codes
 
 
