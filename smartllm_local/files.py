@@ -82,8 +82,13 @@ def _mode_for(path: Path) -> int:
         return 0o666 & ~umask
 
 
+def json_text(data: Any) -> str:
+    """JSON as every result file holds it: indented, ending with a newline."""
+    return json.dumps(data, indent=2) + "\n"
+
+
 def write_json(path: str | Path, data: Any) -> Path:
-    return write_atomic(path, json.dumps(data, indent=2) + "\n")
+    return write_atomic(path, json_text(data))
 
 
 def read_json(path: str | Path, what: str) -> Any:

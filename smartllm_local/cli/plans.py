@@ -46,6 +46,9 @@ def validate(
 
 def check_transitions(trans: int | None, max_trans: int | None) -> None:
     """RU (and so SR) needs both the ground-truth and the maximum transitions, 0 <= trans <= max_trans."""
+    for name, value in (("--trans", trans), ("--max-trans", max_trans)):
+        if value is not None and value < 0:
+            raise UserError(f"{name} must be 0 or more, not {value}")
     if (trans is None) != (max_trans is None):
         given, missing = ("--trans", "--max-trans") if max_trans is None else ("--max-trans", "--trans")
         raise UserError(f"{given} needs {missing} too: RU and SR are scored from both")
@@ -68,9 +71,6 @@ def execute(
     thor_build: Optional[Path] = typer.Option(None, help=THOR_BUILD_HELP),
 ) -> None:
     """Run a plan with a robot team in AI2-THOR and print SR, TCR, GCR, RU and Exe."""
-    for name, value in (("--trans", trans), ("--max-trans", max_trans)):
-        if value is not None and value < 0:
-            raise UserError(f"{name} must be 0 or more, not {value}")
     given_transitions = trans is not None or max_trans is not None
     if trace is not None:
         check_output_file(trace, "--trace")

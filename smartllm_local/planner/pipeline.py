@@ -16,7 +16,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import UserError
-from ..files import write_atomic, write_json
+from ..files import json_text, write_atomic
 from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
 from ..skills import SkillSet
@@ -245,7 +245,7 @@ def write_artifacts(result: PlanResult, out: Path, extra: dict | None = None) ->
                 f"# grammar {k + 1} of {len(record.grammars)} offered for a line of this stage\n{g}\n"
                 for k, g in enumerate(record.grammars)))
         write(folder / "raw_output.txt", record.raw)
-        write(folder / "timings.json", json.dumps(record.timings(), indent=2) + "\n")
+        write(folder / "timings.json", json_text(record.timings()))
         write(out / STAGE_OUTPUTS[record.stage], record.output)
     summary = {
         "instruction": result.instruction, "floor_plan": result.floor_plan, "robots": result.robots,
@@ -253,8 +253,7 @@ def write_artifacts(result: PlanResult, out: Path, extra: dict | None = None) ->
         "stages": {r.stage: r.timings() for r in result.stages},
         **(extra or {}),
     }
-    write_json(out / "result.json", summary)
-    written.add(out / "result.json")
+    write(out / "result.json", json_text(summary))
     if result.allocated and not any(r.stage == "allocation" for r in result.stages):
         write(out / "allocated.py", result.allocated)
     _remove_stale_artifacts(out, written)
