@@ -8,6 +8,10 @@ here:
   the AI2-THOR action is the one that meets its precondition (holds the object
   to put down, holds the knife, has a free hand), preferring members that have
   the skill themselves;
+- slicing needs a Knife or ButterKnife in the acting member's hand. AI2-THOR's
+  SliceObject does not check what the agent holds (ALFRED adds the same rule in
+  its own environment), so the skill refuses before any action is sent, and a
+  plan scores the same on a Unity build and on the stand-in;
 - picking something up needs lifting capacity for its mass (what it holds
   included): the acting robot's, plus that of free-handed team members within
   reach, who then help carry it until it is put down;
@@ -310,6 +314,10 @@ class TeamWorld:
         if target is None:
             need = f"{affordance} " if affordance else ""
             return Outcome(False, f"there is no {need}{name!r} to {skill.name}", action=skill.action, actor=actor)
+        if not ready(actor):  # only slicing has a precondition here: no member holds a knife
+            names = ", ".join(self.team[m].name for m in members)
+            return Outcome(False, f"SliceObject needs a Knife or ButterKnife in hand, and none is held by {names}",
+                           target["objectId"], skill.action, actor)
         view = self._step(actor, action=skill.action, objectId=target["objectId"])
         if not view["lastActionSuccess"]:
             return Outcome(False, view["errorMessage"], target["objectId"], skill.action, actor)

@@ -88,7 +88,16 @@ def test_put_into_a_closed_fridge_fails(c):
     assert (s.Exe, s.GCR) == (0.75, 0.5)
 
 
-def test_slice_needs_a_knife_in_hand(c):
+def test_slice_needs_a_knife_in_hand(c, monkeypatch):
+    """The skill refuses without a knife and sends nothing: AI2-THOR's SliceObject would slice anyway."""
+    sent = []
+    step = c.step
+
+    def recording(action=None, **args):
+        sent.append(action["action"] if isinstance(action, dict) else action)
+        return step(action, **args)
+
+    monkeypatch.setattr(c, "step", recording)
     ex = run("""\
         GoToObject(robots[0], 'Apple')
         SliceObject(robots[0], 'Apple')
@@ -100,7 +109,10 @@ def test_slice_needs_a_knife_in_hand(c):
         PickupObject(robots[0], 'Apple')
         """, [1], c)
     assert [e.success for e in ex.trace] == [True, False, True, True, True, True, True, True]
-    assert ex.trace[1].error == "SliceObject needs a Knife or ButterKnife in the agent's hand"
+    assert (ex.trace[1].action, ex.trace[1].object_id) == ("SliceObject", APPLE)
+    assert ex.trace[1].as_dict()["errorMessage"] == \
+        "SliceObject needs a Knife or ButterKnife in hand, and none is held by robot1"
+    assert sent.count("SliceObject") == 1, "the refused call sent no action"
     assert one(ex, "Apple")["isSliced"] is True
     slices = objects_of(ex, "AppleSliced")
     assert len(slices) >= 2

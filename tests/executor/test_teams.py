@@ -154,6 +154,25 @@ def test_the_strong_member_acts_first_when_listed_first(c):
     assert c.last_event.events[0].metadata["inventoryObjects"][0]["objectId"] == APPLE
 
 
+def test_the_member_holding_the_knife_slices_for_the_team(c):
+    # robot 12 can slice but not pick up; robot 25 can pick up the knife but not slice
+    ex = run("""\
+        def slice_apple(team):
+            GoToObject(team, 'Apple')
+            SliceObject(team, 'Apple')
+            GoToObject(team, 'Knife')
+            PickupObject(team, 'Knife')
+            GoToObject(team, 'Apple')
+            SliceObject(team, 'Apple')
+        slice_apple([robots[0], robots[1]])
+        """, [12, 25], c)
+    assert [e.success for e in ex.trace] == [True, False, True, True, True, True], ex.trace[-1].error
+    assert ex.trace[1].error == "SliceObject needs a Knife or ButterKnife in hand, and none is held by robot12, robot25"
+    assert ex.trace[3].object_id.startswith("Knife|")
+    assert c.last_event.events[1].metadata["inventoryObjects"][0]["objectId"] == ex.trace[3].object_id
+    assert one(ex, "Apple")["isSliced"] is True
+
+
 def test_a_team_with_the_whole_team_reference(c):
     ex = run("GoToObject(robots, 'Apple')\nPickupObject(robots, 'Apple')\n", [7, 8, 5], c)
     assert steps(ex) == [(0, "GoToObject", (7, 8, 5), True), (1, "PickupObject", (7, 8, 5), True)]

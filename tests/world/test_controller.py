@@ -119,6 +119,20 @@ def test_a_contextual_rule_through_the_controller():
         controller.stop()
 
 
+def test_slice_object_needs_no_knife_in_hand_as_in_unity():
+    """Unity's SliceObject does not check what the agent holds; the knife is the executor's rule."""
+    controller = open_controller(6)
+    try:
+        bread = _object(controller.last_event, "Bread")["objectId"]
+        event = controller.step(action="SliceObject", objectId=bread, forceAction=True)
+        assert event.metadata["lastActionSuccess"], event.metadata["errorMessage"]
+        assert event.metadata["inventoryObjects"] == []
+        assert _object(event, "Bread")["isSliced"]
+        assert "BreadSliced" in {o["objectType"] for o in event.metadata["objects"]}
+    finally:
+        controller.stop()
+
+
 def test_reset_restores_the_scene():
     controller = open_controller(6, agent_count=2)
     try:
