@@ -67,6 +67,8 @@ class TeamWorld:
         self.cells = [(p["x"], p["z"]) for p in reply.metadata["actionReturn"] or []]
         self.cell_y = (reply.metadata["actionReturn"] or [{"y": 0.9}])[0]["y"]
         self.helping: dict[int, str] = {}  # member -> object it helps carry
+        # Target box -> the cells nearest first; the cells are fixed for a TeamWorld, so no ranking goes stale.
+        self._ranked_cells: dict[tuple[float, float, float, float], list[tuple[float, float]]] = {}
         self.focus = set(focus) if focus is not None else None
         if self.focus is not None:
             self._set_filter()
@@ -209,14 +211,13 @@ class TeamWorld:
             return Outcome(False, f"there is no {name!r} to go to", action="Teleport")
         if target["objectId"] in self._held_by_team(members):
             return Outcome(True, object_id=target["objectId"], action="Teleport")
-        box = Box.of(target)
+        ranked = self._cells_nearest(Box.of(target))
         chosen: set[tuple[float, float]] = set()
         for member in members:
             others = {self.position(i) for i in range(len(self.event.events)) if i != member}
-            free = [c for c in self.cells if c not in others and c not in chosen]
-            if not free:
+            cell = next((c for c in ranked if c not in others and c not in chosen), None)
+            if cell is None:
                 return Outcome(False, f"no free place near {target['objectId']}", target["objectId"], "Teleport", member)
-            cell = min(free, key=lambda c: (round(box.distance(*c), 6), c))
             chosen.add(cell)
             yaw = facing_yaw(cell[0], cell[1], target["position"]["x"], target["position"]["z"])
             view = self._step(member, action="Teleport", position={"x": cell[0], "y": self.cell_y, "z": cell[1]},
@@ -224,6 +225,15 @@ class TeamWorld:
             if not view["lastActionSuccess"]:
                 return Outcome(False, view["errorMessage"], target["objectId"], "Teleport", member)
         return Outcome(True, object_id=target["objectId"], action="Teleport")
+
+    def _cells_nearest(self, box: Box) -> list[tuple[float, float]]:
+        """The reachable cells nearest to ``box`` first (ties by cell), ranked once per box rather than
+        scanned once per member and call: GoToObject's first free cell in this order is its nearest free one."""
+        key = (box.x0, box.x1, box.z0, box.z1)
+        ranked = self._ranked_cells.get(key)
+        if ranked is None:
+            ranked = self._ranked_cells[key] = sorted(self.cells, key=lambda c: (round(box.distance(*c), 6), c))
+        return ranked
 
     def _pickup(self, skill: Skill, name: str, members: Sequence[int]) -> Outcome:
         free = self._members_by_preference(skill, members, self.hand_free)

@@ -18,7 +18,8 @@ import msgpack
 
 from .simulator import ActionResult, Simulator
 
-_AGENT_FIELDS = ("distance", "visible", "isInteractable")
+#: The fields of an object that differ from agent to agent (the rest is the object's own).
+AGENT_FIELDS = ("distance", "visible", "isInteractable")
 _pack = msgpack.Packer(use_bin_type=True).pack
 # The per-agent fields packed by hand (they are packed for every object at every move):
 # "distance" as a float64, then "visible" and "isInteractable", which are equal.
@@ -42,6 +43,15 @@ def _pack_items(d: dict[str, Any]) -> bytes:
     return b"".join(_pack(k) + _pack(v) for k, v in d.items())
 
 
+def agent_view(sim: Simulator, agent_id: int, obj: dict[str, Any]) -> tuple[float, bool]:
+    """An object's per-agent fields: its ``distance`` from the agent, and whether it is ``visible``
+    to it (AI2-THOR's ``isInteractable`` says the same here)."""
+    agent = sim.agents[agent_id]
+    pos = obj["position"]
+    distance = math.sqrt((pos["x"] - agent.x) ** 2 + (pos["y"] - agent.y) ** 2 + (pos["z"] - agent.z) ** 2)
+    return distance, sim.is_visible(agent_id, obj)
+
+
 class MetadataEncoder:
     """Packs a :class:`Simulator`'s state as AI2-THOR's multi-agent metadata."""
 
@@ -60,7 +70,7 @@ class MetadataEncoder:
         version = sim.versions.get(oid, 0)
         cached = self._base.get(oid)
         if cached is None or cached[0] != version:
-            obj = {k: v for k, v in sim.objects[oid].items() if k not in _AGENT_FIELDS}
+            obj = {k: v for k, v in sim.objects[oid].items() if k not in AGENT_FIELDS}
             cached = (version, _pack_items(obj), len(obj))
             self._base[oid] = cached
         return cached[1], cached[2]
@@ -71,11 +81,9 @@ class MetadataEncoder:
         key = (agent_id, oid)
         cached = self._tail.get(key)
         if cached is None or cached[0] != agent.version or cached[1] != version:
-            obj = sim.objects[oid]
-            pos = obj["position"]
-            distance = math.sqrt((pos["x"] - agent.x) ** 2 + (pos["y"] - agent.y) ** 2 + (pos["z"] - agent.z) ** 2)
+            distance, visible = agent_view(sim, agent_id, sim.objects[oid])
             tail = _TAIL_KEYS[0] + _FLOAT.pack(0xCB, distance) + _TAIL_KEYS[1] \
-                + (_TRUE_TWICE if sim.is_visible(agent_id, obj) else _FALSE_TWICE)
+                + (_TRUE_TWICE if visible else _FALSE_TWICE)
             cached = (agent.version, version, tail)
             self._tail[key] = cached
         return cached[2]
@@ -85,7 +93,7 @@ class MetadataEncoder:
         parts = [_array_header(len(reported))]
         for oid in reported:
             base, n = self._object_base(sim, oid)
-            parts.append(_map_header(n + len(_AGENT_FIELDS)))
+            parts.append(_map_header(n + len(AGENT_FIELDS)))
             parts.append(base)
             parts.append(self._object_tail(sim, agent_id, oid))
         return b"".join(parts)
@@ -105,11 +113,12 @@ class MetadataEncoder:
             "screenHeight": self.height,
         }
 
-    def _agent(self, sim: Simulator, agent_id: int, sequence_id: int, *, with_objects: bool = True) -> bytes:
+    def agent_fields(self, sim: Simulator, agent_id: int, sequence_id: int) -> dict[str, Any]:
+        """One agent's metadata, all but its ``objects`` (see :func:`agent_view` for their per-agent fields)."""
         agent = sim.agents[agent_id]
         action, result = self.last_results[agent_id]
         held = sim.objects.get(agent.held) if agent.held else None
-        fields = {
+        return {
             **self._result_fields(agent_id, sim.scene_name + "_physics", action, result, sequence_id),
             "agent": {
                 "name": "agent",
@@ -134,6 +143,9 @@ class MetadataEncoder:
             "actionFloatsReturn": [],
             "actionVector3sReturn": [],
         }
+
+    def _agent(self, sim: Simulator, agent_id: int, sequence_id: int, *, with_objects: bool = True) -> bytes:
+        fields = self.agent_fields(sim, agent_id, sequence_id)
         if not with_objects:
             return _map_header(len(fields)) + _pack_items(fields)
         return _map_header(len(fields) + 1) + _pack_items(fields) + _pack("objects") + self._objects(sim, agent_id)

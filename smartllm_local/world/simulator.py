@@ -511,8 +511,10 @@ class Simulator:
         for piece in pieces:
             piece = copy.deepcopy(piece)
             self.objects[piece["objectId"]] = piece
-            self.versions[piece["objectId"]] = 0
             piece["parentReceptacles"] = parents or None
+            # A version of its own: version 0 means "as the scene data has it", and the encoder may
+            # still hold a piece cut elsewhere (before a reset) at that version.
+            self.touch(piece["objectId"])
             for parent_id in parents:
                 parent = self.objects[parent_id]
                 parent["receptacleObjectIds"] = [*(parent.get("receptacleObjectIds") or []), piece["objectId"]]

@@ -146,6 +146,36 @@ def test_reset_restores_the_scene():
         controller.stop()
 
 
+def _slice_bread_on_the_stool(controller):
+    """Move the Bread to a Stool, slice it there, and say where its slices lie."""
+    bread = _object(controller.last_event, "Bread")["objectId"]
+    stool = _object(controller.last_event, "Stool")["objectId"]
+    for step in [dict(action="PickupObject", objectId=bread), dict(action="PutObject", objectId=stool),
+                 dict(action="SliceObject", objectId=bread)]:
+        event = controller.step(forceAction=True, **step)
+        assert event.metadata["lastActionSuccess"], event.metadata["errorMessage"]
+    return [o["parentReceptacles"] for o in event.metadata["objects"] if o["objectType"] == "BreadSliced"]
+
+
+def test_slices_after_a_reset_are_reported_where_they_were_cut():
+    """A Controller reset and reused on the same floor plan reports the new run's slices, not an earlier run's."""
+    reused = open_controller(6)
+    try:
+        bread = _object(reused.last_event, "Bread")["objectId"]
+        assert reused.step(action="SliceObject", objectId=bread, forceAction=True).metadata["lastActionSuccess"]
+        reused.reset("FloorPlan6")
+        after_reset = _slice_bread_on_the_stool(reused)
+    finally:
+        reused.stop()
+    fresh = open_controller(6)
+    try:
+        expected = _slice_bread_on_the_stool(fresh)
+    finally:
+        fresh.stop()
+    assert expected and all(parents == [_object(fresh.last_event, "Stool")["objectId"]] for parents in expected)
+    assert after_reset == expected
+
+
 def test_every_floor_plan_is_served_to_a_two_agent_team():
     controller = open_controller(1, agent_count=2)
     try:
