@@ -54,3 +54,17 @@ class ModelError(UserError):
 
 class BackendUnavailableError(UserError):
     """An optional dependency needed by the chosen backend is not installed."""
+
+
+class GrammarMismatchError(SmartLLMError):
+    """The grammar engine (llama.cpp's, llguidance) let through text the planner's own grammar does not
+    allow, or refused text it forces: the two disagree, and no plan may be built on either."""
+
+    def __init__(self, text: str, why: str, stage: str = ""):
+        self.text, self.why, self.stage = text, why, stage
+        where = f"{stage} stage: " if stage else ""
+        super().__init__(f"{where}the grammars disagree about {text!r}: {why}")
+
+    def in_stage(self, stage: str) -> GrammarMismatchError:
+        """The same error, naming the stage it happened in."""
+        return GrammarMismatchError(self.text, self.why, stage)

@@ -14,6 +14,7 @@ from ..errors import UserError
 from ..evaluation import execute_and_score, run_benchmark, summary_table
 from ..files import check_output_folder
 from ..planner.backends import BACKENDS, Sampling, load_backend
+from ..planner.chat import CHAT_TEMPLATE_MODES, check_mode
 from ..planner.models import DEFAULT_MODEL, EMBEDDED
 from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
 from ..planner.prompts import PromptOptions
@@ -32,7 +33,8 @@ class ModelOptions:
 
     def __init__(self, model: Optional[str], backend: str, n_ctx: int, threads: Optional[int], n_gpu_layers: int,
                  seed: int, temperature: float, no_comments: bool, no_summary: bool, no_coalition: bool,
-                 no_grammar: bool, free_teams: bool = False):
+                 no_grammar: bool, free_teams: bool = False, chat_template: str = "auto",
+                 free_allocation: bool = False, no_world_check: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -41,6 +43,7 @@ class ModelOptions:
             raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
         if n_ctx < 512:
             raise UserError("--n-ctx must be at least 512 tokens")
+        check_mode(chat_template)
         self.model, self.backend, self.n_ctx, self.threads = model, backend, n_ctx, threads
         self.n_gpu_layers = n_gpu_layers
         self.config = PlannerConfig(
@@ -48,6 +51,9 @@ class ModelOptions:
             grammar=not no_grammar,
             free_teams=free_teams,
             prompts=PromptOptions(comments=not no_comments, summary=not no_summary, coalition=not no_coalition),
+            chat_template=chat_template,
+            restate=not free_allocation,
+            world_check=not no_world_check,
         )
         self.seed = seed
 
@@ -71,6 +77,16 @@ _NO_COALITION = typer.Option(False, "--no-coalition", help="Ablation: skip coali
 _NO_GRAMMAR = typer.Option(False, "--no-grammar", help="Generate freely (for comparison); the output may be invalid.")
 _FREE_TEAMS = typer.Option(False, "--free-teams", help="Let the model pick any team and refuse at will, rather than "
                                                        "only teams whose skills and strength suit each sub-task.")
+_CHAT_TEMPLATE = typer.Option("auto", "--chat-template", help=(
+    f"{' or '.join(CHAT_TEMPLATE_MODES)}. auto: a model whose file carries a chat template (an instruct "
+    "model) gets each stage's prompt as the user turn and writes its output as the assistant turn; "
+    "base models get raw text. none: raw text for every model."))
+_FREE_ALLOCATION = typer.Option(False, "--free-allocation", help=(
+    "Let the allocation stage rewrite every step (as the paper's prompts allow), rather than write the "
+    "decomposition's steps itself and leave the model only the robots and the orchestration."))
+_NO_WORLD_CHECK = typer.Option(False, "--no-world-check", help=(
+    "Offer steps whatever the scene's state, rather than only steps that succeed from the state the "
+    "steps so far produce (for measuring the check's effect)."))
 _CATALOGUE = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json).")
 _THOR_BUILD = typer.Option(None, help="A Unity AI2-THOR executable (default: the headless stand-in).")
 _TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
@@ -99,10 +115,14 @@ def plan_command(
     no_coalition: bool = _NO_COALITION,
     no_grammar: bool = _NO_GRAMMAR,
     free_teams: bool = _FREE_TEAMS,
+    chat_template: str = _CHAT_TEMPLATE,
+    free_allocation: bool = _FREE_ALLOCATION,
+    no_world_check: bool = _NO_WORLD_CHECK,
 ) -> None:
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
-                           no_summary, no_coalition, no_grammar, free_teams)
+                           no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
+                           no_world_check)
     if out is not None:
         check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
@@ -132,7 +152,7 @@ def plan_command(
     if execute and result.plan is not None and not result.error:
         scores = execute_and_score(result, goals, cat, trans=trans, max_trans=max_trans,
                                    build=str(thor_build) if thor_build else None)
-    extra = {"model": planner.backend.model, "backend": planner.backend.name}
+    extra = {"model": planner.backend.model, "backend": planner.backend.name, "chat_template": planner.chat_status}
     if scores is not None:
         extra["metrics"] = scores.metrics()
     if out is not None:
@@ -171,10 +191,14 @@ def benchmark_run(
     no_coalition: bool = _NO_COALITION,
     no_grammar: bool = _NO_GRAMMAR,
     free_teams: bool = _FREE_TEAMS,
+    chat_template: str = _CHAT_TEMPLATE,
+    free_allocation: bool = _FREE_ALLOCATION,
+    no_world_check: bool = _NO_WORLD_CHECK,
 ) -> None:
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
-                           no_summary, no_coalition, no_grammar, free_teams)
+                           no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
+                           no_world_check)
     check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
     chosen = load_tasks(tasks or default_task_files(), catalogue=cat)

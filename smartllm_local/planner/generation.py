@@ -8,6 +8,7 @@ from __future__ import annotations
 import random
 from typing import Callable
 
+from ..errors import SmartLLMError
 from .constraints import Choose, Constraint, Forced
 
 #: Writes one line for an offered grammar; returns the text and the tokens it cost.
@@ -18,6 +19,10 @@ Forcer = Callable[[str], int]
 
 class BudgetError(Exception):
     """The output budget cannot hold even the shortest complete output."""
+
+
+class GuaranteeError(SmartLLMError):
+    """A stage's output broke a guarantee its constraint gives (a bug in the planner)."""
 
 
 def run_constraint(constraint: Constraint, write: Writer, force: Forcer, budget: int) -> str:
@@ -39,8 +44,8 @@ def run_constraint(constraint: Constraint, write: Writer, force: Forcer, budget:
             text, cost = write(step, budget - used)
             used += cost
             constraint.feed(text)
-        if used > budget:
-            raise AssertionError(f"budget overrun: {used} > {budget}")  # the constraint's bookkeeping failed
+        if used > budget:  # the constraint's bookkeeping failed: a bug, reported, never a plan
+            raise GuaranteeError(f"the output used {used} tokens of a budget of {budget}: {constraint.text!r}")
 
 
 def sample_output(constraint: Constraint, rng: random.Random, budget: int = 10_000) -> str:

@@ -61,6 +61,7 @@ class Rep:
 
 Node = Union[Lit, Chars, Ref, Seq, Alt, Rep]
 NodeLike = Union[Node, str]
+_EMPTY = Lit("")
 
 
 def _node(x: NodeLike) -> Node:
@@ -68,7 +69,9 @@ def _node(x: NodeLike) -> Node:
 
 
 def seq(*items: NodeLike) -> Node:
-    nodes = tuple(_node(i) for i in items)
+    """Items in order; empty items (a repetition of at most zero) are left out, since llguidance
+    rejects ``{0,0}``."""
+    nodes = tuple(n for n in (_node(i) for i in items) if n != _EMPTY) or (_EMPTY,)
     return nodes[0] if len(nodes) == 1 else Seq(nodes)
 
 
@@ -82,7 +85,7 @@ def alt(*options: NodeLike) -> Node:
 def rep(item: NodeLike, low: int, high: int) -> Node:
     if not 0 <= low <= high:
         raise GrammarError(f"repetition {{{low},{high}}} is empty or negative")
-    return Rep(_node(item), low, high)
+    return _EMPTY if high == 0 else Rep(_node(item), low, high)
 
 
 def opt(item: NodeLike) -> Node:
@@ -190,27 +193,57 @@ class Grammar:
             return max(self._max(o, memo) for o in node.options)
         return node.max * self._max(node.item, memo)
 
-    def sample(self, rng: random.Random) -> str:
-        """A random string of the grammar (uniform choices, uniform repetition counts)."""
+    def min_length(self) -> int:
+        """The length of the shortest string the grammar admits."""
+        return self._min(self.rules["root"], {})
+
+    def _min(self, node: Node, memo: dict[str, int]) -> int:
+        if isinstance(node, Lit):
+            return len(node.text)
+        if isinstance(node, Chars):
+            return 1
+        if isinstance(node, Ref):
+            if node.name not in memo:
+                memo[node.name] = self._min(self.rules[node.name], memo)
+            return memo[node.name]
+        if isinstance(node, Seq):
+            return sum(self._min(i, memo) for i in node.items)
+        if isinstance(node, Alt):
+            return min(self._min(o, memo) for o in node.options)
+        return node.min * self._min(node.item, memo)
+
+    def sample(self, rng: random.Random, extreme: str = "") -> str:
+        """A random string of the grammar: uniform choices and repetition counts, or, with
+        ``extreme="longest"`` / ``"shortest"``, a random one among the longest / shortest strings
+        (the adversaries that test budget bookkeeping)."""
+        if extreme not in ("", "longest", "shortest"):
+            raise ValueError(f"extreme must be '', 'longest' or 'shortest', not {extreme!r}")
         out: list[str] = []
-        self._sample(self.rules["root"], rng, out)
+        self._sample(self.rules["root"], rng, out, extreme, {})
         return "".join(out)
 
-    def _sample(self, node: Node, rng: random.Random, out: list[str]) -> None:
+    def _sample(self, node: Node, rng: random.Random, out: list[str], extreme: str, memo: dict[str, int]) -> None:
         if isinstance(node, Lit):
             out.append(node.text)
         elif isinstance(node, Chars):
             out.append(rng.choice(sorted(node.chars)))
         elif isinstance(node, Ref):
-            self._sample(self.rules[node.name], rng, out)
+            self._sample(self.rules[node.name], rng, out, extreme, memo)
         elif isinstance(node, Seq):
             for item in node.items:
-                self._sample(item, rng, out)
+                self._sample(item, rng, out, extreme, memo)
         elif isinstance(node, Alt):
-            self._sample(rng.choice(node.options), rng, out)
+            options = node.options
+            if extreme:
+                measure = self._max if extreme == "longest" else self._min
+                lengths = [measure(o, memo) for o in options]
+                best = max(lengths) if extreme == "longest" else min(lengths)
+                options = tuple(o for o, n in zip(options, lengths) if n == best)
+            self._sample(rng.choice(options), rng, out, extreme, memo)
         else:
-            for _ in range(rng.randint(node.min, node.max)):
-                self._sample(node.item, rng, out)
+            count = {"": rng.randint(node.min, node.max), "longest": node.max, "shortest": node.min}[extreme]
+            for _ in range(count):
+                self._sample(node.item, rng, out, extreme, memo)
 
     def to_lark(self) -> str:
         """The same grammar in the Lark dialect llguidance reads (``start`` is root)."""

@@ -21,8 +21,13 @@ from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
 from ..skills import SkillSet
 from .backends.base import Backend, Sampling
+from .chat import chat_format
+from .coalition import LINE as COALITION_LINE
 from .coalition import CoalitionConstraint
-from .constraints import REFUSAL_PREFIX, PlanConstraint
+from .constraints import MAX_SUBTASKS, REFUSAL_PREFIX
+from .plan_constraint import PlanConstraint
+from .restated import RestatedAllocation, restated_bodies
+from .world_check import WorldCheck
 from .feasibility import function_needs
 from .prompts import (
     Example,
@@ -38,7 +43,7 @@ from .prompts import (
 from .scene_context import SceneObjects, scene_objects
 from .stages import StageRecord, check_output, fit_prompt, run_stage
 
-DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 512, "allocation": 1280}
+DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 896, "allocation": 1280}
 
 
 def allocation_budget(decomposition: StageRecord, functions: int, ceiling: int) -> int:
@@ -49,19 +54,27 @@ def allocation_budget(decomposition: StageRecord, functions: int, ceiling: int) 
     return min(ceiling, 2 * written + 64 * functions + 128)
 
 
-_COALITION_LINE = re.compile(r"^# (SubTask \d+ \(.*\): .*|INFEASIBLE: .*)$")
+_COALITION_LINE = re.compile(rf"{COALITION_LINE.pattern}|^# INFEASIBLE: .*$", re.M)
 
 
 @dataclass(frozen=True)
 class PlannerConfig:
     """How to plan. ``free_teams`` lets the model pick any team (and refuse at will) instead of
-    only the teams the catalogue says can do each sub-task."""
+    only the teams the catalogue says can do each sub-task. ``restate``: the allocation writes the
+    decomposition's steps itself and the model picks robots and orchestration; off, the model
+    rewrites the plan freely. ``world_check``: offer only steps that succeed in the scene from the
+    state the steps so far produce (decomposition, and a restated allocation). ``chat_template``:
+    "auto" gives an instruct model each prompt as a user turn of its own chat template; "none"
+    gives raw text."""
 
     sampling: Sampling = Sampling()
     grammar: bool = True
     free_teams: bool = False
     prompts: PromptOptions = PromptOptions()
     budgets: dict[str, int] = field(default_factory=lambda: dict(DEFAULT_BUDGETS))
+    chat_template: str = "auto"
+    restate: bool = True
+    world_check: bool = True
 
 
 @dataclass
@@ -79,7 +92,11 @@ class PlanResult:
 
     @property
     def notices(self) -> list[str]:
-        return [f"{r.stage}: dropped example(s) {', '.join(r.dropped)} to fit the context" for r in self.stages if r.dropped]
+        dropped = [f"{r.stage}: dropped example(s) {', '.join(r.dropped)} to fit the context"
+                   for r in self.stages if r.dropped]
+        capped = [f"{r.stage}: the output budget ({r.output_budget} tokens) left no room for {', '.join(r.capped)}"
+                  for r in self.stages if r.capped]
+        return dropped + capped
 
 
 class Planner:
@@ -92,21 +109,23 @@ class Planner:
         self.config = config
         self.examples = list(examples) if examples is not None else load_examples()
         self.rng = np.random.default_rng(config.sampling.seed)
+        self.chat, self.chat_status = chat_format(backend, config.chat_template)
 
     # ---------------------------------------------------------------- stages
 
     def decompose(self, result: PlanResult, scene: SceneObjects) -> StageRecord:
         opts = self.config.prompts
-        record = StageRecord("decomposition")
+        record = StageRecord("decomposition", chat_template=self.chat_status)
         examples = examples_for("decomposition", self.examples, opts)
         ranked = rank_by_relevance(examples, result.instruction)
         budget = self.config.budgets["decomposition"]
         skills = self.catalogue.skills
         record.prompt, tokens, kept, dropped = fit_prompt(
             lambda ex: decomposition_prompt(result.instruction, scene, skills, ex, opts), examples, ranked,
-            self.backend, budget)
+            self.backend, budget, self.chat)
         record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
-        constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary) \
+        world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS) if self.config.world_check else None
+        constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world) \
             if self.config.grammar else None
         run_stage(record, self.backend, tokens, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.rng)
@@ -117,20 +136,24 @@ class Planner:
     def form_coalition(self, result: PlanResult, decomposed: Plan, team: Sequence[Robot],
                        scene: SceneObjects) -> StageRecord:
         opts = self.config.prompts
-        record = StageRecord("coalition")
+        record = StageRecord("coalition", chat_template=self.chat_status)
         decomposition = result.stages[0].output
         examples = examples_for("coalition", self.examples, opts)
         ranked = rank_by_relevance(examples, result.instruction, plan_object_types(decomposition, scene))
         budget = self.config.budgets["coalition"]
         record.prompt, tokens, kept, dropped = fit_prompt(
             lambda ex: coalition_prompt(decomposition, team, scene, self.catalogue.robots, ex, opts),
-            examples, ranked, self.backend, budget)
+            examples, ranked, self.backend, budget, self.chat)
         record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
         names = [f.name for f in decomposed.functions]
         pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
         needs = function_needs(decomposed, scene, pickups)
         constraint = CoalitionConstraint(names, team, needs=[needs[n] for n in names], free=self.config.free_teams) \
             if self.config.grammar else None
+        if constraint is not None:
+            # The configured budget is a floor: the reasoning may use all the context the prompt leaves
+            # (the constraint ends the output once every sub-task has its line; free text would fill it).
+            budget = max(budget, self.backend.n_ctx - len(tokens) - 1)
         run_stage(record, self.backend, tokens, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.rng)
         if constraint is None:
@@ -148,22 +171,29 @@ class Planner:
     def allocate(self, result: PlanResult, decomposed: Plan, coalition: str | None, team: Sequence[Robot],
                  scene: SceneObjects) -> StageRecord:
         opts = self.config.prompts
-        record = StageRecord("allocation")
+        record = StageRecord("allocation", chat_template=self.chat_status)
         decomposition = result.stages[0].output
         examples = examples_for("allocation", self.examples, opts)
         ranked = rank_by_relevance(examples, result.instruction, plan_object_types(decomposition, scene))
-        budget = allocation_budget(result.stages[0], len(decomposed.functions), self.config.budgets["allocation"])
         skills = self.catalogue.skills
-        record.prompt, tokens, kept, dropped = fit_prompt(
-            lambda ex: allocation_prompt(decomposition, coalition, team, skills, self.catalogue.robots, ex, opts),
-            examples, ranked, self.backend, budget)
-        record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
+        names = [f.name for f in decomposed.functions]
         constraint = None
-        if self.config.grammar:
+        if self.config.grammar and self.config.restate:
+            world = WorldCheck(scene.floor_plan, skills, len(team)) if self.config.world_check else None
+            constraint = RestatedAllocation(scene, skills, team=len(team) if self.config.free_teams else team,
+                                            function_names=names, bodies=restated_bodies(decomposition, names),
+                                            world=world)
+        elif self.config.grammar:
             team_skills = [s for s in skills.values() if any(s.name in r.skills for r in team)]
             constraint = PlanConstraint(scene, SkillSet(team_skills), team_size=len(team), comments=opts.comments,
-                                        function_names=[f.name for f in decomposed.functions],
-                                        team=None if self.config.free_teams else team)
+                                        function_names=names, team=None if self.config.free_teams else team)
+        # Restating, the output's length is known to the character; rewriting, it is estimated.
+        budget = constraint.maximum_output() if isinstance(constraint, RestatedAllocation) else \
+            allocation_budget(result.stages[0], len(names), self.config.budgets["allocation"])
+        record.prompt, tokens, kept, dropped = fit_prompt(
+            lambda ex: allocation_prompt(decomposition, coalition, team, skills, self.catalogue.robots, ex, opts),
+            examples, ranked, self.backend, budget, self.chat)
+        record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
         run_stage(record, self.backend, tokens, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.rng)
         self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))

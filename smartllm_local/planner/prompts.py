@@ -24,6 +24,7 @@ from ..errors import UserError
 from ..resources import data_dir
 from ..robots import Robot
 from ..skills import SkillSet
+from .coalition import LINE as COALITION_LINE
 from .scene_context import SceneObjects, scene_objects
 
 STAGES = ("decomposition", "coalition", "allocation")
@@ -170,9 +171,11 @@ DECOMPOSITION_INTRO = """\
 COALITION_INTRO = """\
 # For each sub-task of a plan, choose the robot, or the team of robots, that will do it.
 # A robot can only use its own skills and lift up to its mass capacity; a team pools
-# its members' skills and lifts the sum of their capacities. Prefer a single robot when
-# one can do the whole sub-task. If no robot or team can do a sub-task, answer with one
-# line: # INFEASIBLE: <why>.
+# its members' skills and lifts the sum of their capacities. Reason before choosing: say
+# what the sub-task needs (its skills, and the mass of what it lifts), which robots have
+# those skills and that strength, and what is missing; only then, after "so", name the
+# robot or team. Prefer a single robot when one can do the whole sub-task. If no robot or
+# team can do a sub-task, answer with one line: # INFEASIBLE: <why>.
 """
 
 ALLOCATION_INTRO = """\
@@ -210,18 +213,26 @@ def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects
     return "".join(parts)
 
 
+def coalition_decisions(coalition: str) -> str:
+    """Each coalition line cut to its decision, ``# SubTask k (<function>): <team>``; lines of
+    another shape (a refusal, text written without the grammar) stay as they are."""
+    return COALITION_LINE.sub(r"\1\4", coalition)
+
+
 def allocation_prompt(decomposed: str, coalition: str | None, team: Sequence[Robot], skills: SkillSet,
                       catalogue: dict[int, Robot], examples: Sequence[Example], options: PromptOptions) -> str:
-    """Decompositions appear here without their line comments: the allocated code restates every
-    line with its comment, and the saving keeps more examples within a 4,096-token context."""
+    """Decompositions appear here without their line comments, and coalitions without their
+    reasoning: the allocated code restates every line with its comment, the allocation needs only
+    whom each sub-task is started with, and the saving keeps more examples within a 4,096-token
+    context."""
     bare = PromptOptions(comments=False, summary=options.summary)
     parts = [skills_header(skills), "\n", ALLOCATION_INTRO]
     for k, ex in enumerate(examples, start=1):
         ex_team = [catalogue[i] for i in ex.robots]
-        coalition_part = f"# Coalition:\n{ex.coalition}" if options.coalition else ""
+        coalition_part = f"# Coalition:\n{coalition_decisions(ex.coalition or '')}" if options.coalition else ""
         allocated = shape(ex.allocation or "", PromptOptions(comments=options.comments, summary=True))
         parts.append(f"\n# Example {k}\n{shape(ex.decomposition, bare)}{robots_list(ex_team)}"
                      f"{coalition_part}# Allocated plan:\n{allocated}")
-    coalition_part = f"# Coalition:\n{coalition}" if options.coalition and coalition else ""
+    coalition_part = f"# Coalition:\n{coalition_decisions(coalition)}" if options.coalition and coalition else ""
     parts.append(f"\n# Your plan\n{shape(decomposed, bare)}{robots_list(team)}{coalition_part}# Allocated plan:\n")
     return "".join(parts)

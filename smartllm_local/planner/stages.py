@@ -14,11 +14,11 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..errors import PlanError, UserError
+from ..errors import GrammarMismatchError, PlanError, UserError
 from .backends.base import Backend, Sampling
+from .chat import ChatFormat, prompt_tokens
 from .constraints import Choose, Constraint
-from .grammar import Grammar
-from .generation import BudgetError, run_constraint
+from .generation import BudgetError, GuaranteeError, run_constraint
 from .prompts import Example
 
 STOP_STRINGS = {
@@ -45,20 +45,26 @@ class StageRecord:
     output_budget: int = 0
     examples: list[str] = field(default_factory=list)
     dropped: list[str] = field(default_factory=list)
+    capped: list[str] = field(default_factory=list)  # what the output budget kept the grammar from offering
+    world_tries: int = 0  # calls the world check tried
+    dead_ends: int = 0  # lines for which it found nothing that succeeds
     error: str = ""
     plan: object = None  # the parsed plan of a plan stage
+    chat_template: str = ""  # "applied", "none (base model)" or "off" (--chat-template none)
 
     @property
     def tokens_per_second(self) -> float:
         return self.generated_tokens / self.seconds if self.seconds else 0.0
 
-    def timings(self) -> dict[str, float | int | list[str]]:
+    def timings(self) -> dict[str, float | int | str | list[str]]:
         return {
+            "chat_template": self.chat_template,
             "prompt_tokens": self.prompt_tokens, "generated_tokens": self.generated_tokens,
             "forced_tokens": self.forced_tokens, "output_budget": self.output_budget,
             "seconds": round(self.seconds, 3),
             "tokens_per_second": round(self.tokens_per_second, 2),
-            "examples": self.examples, "dropped_examples": self.dropped,
+            "examples": self.examples, "dropped_examples": self.dropped, "capped_by_budget": self.capped,
+            "world_check": {"tries": self.world_tries, "dead_ends": self.dead_ends},
         }
 
 
@@ -68,16 +74,17 @@ def fit_prompt(
     ranked: Sequence[Example],
     backend: Backend,
     output_budget: int,
+    chat: ChatFormat | None = None,
 ) -> tuple[str, list[int], list[Example], list[Example]]:
     """The prompt with as many examples as fit, dropping the least relevant (last of ``ranked``) first.
 
-    Examples keep their file order in the prompt. Returns prompt, its tokens, the kept and the dropped.
+    Examples keep their file order in the prompt. What must fit is the prompt as the model gets it
+    (in its chat template, with ``chat``). Returns that text, its tokens, the kept and the dropped.
     """
     dropped: list[Example] = []
     while True:
         kept = [e for e in examples if e not in dropped]
-        prompt = build(kept)
-        tokens = backend.tokenize(prompt, bos=True)
+        prompt, tokens = prompt_tokens(backend, build(kept), chat)
         if len(tokens) + output_budget < backend.n_ctx:
             return prompt, tokens, kept, dropped
         if not kept:
@@ -112,22 +119,20 @@ def run_stage(
         return
 
     def write(choose: Choose, remaining: int) -> tuple[str, int]:
-        result = backend.generate(context, grammar=choose.grammar, max_tokens=choose.grammar.max_length() + 1,
-                                  sampling=sampling, rng=rng)  # type: ignore[call-arg]
+        try:
+            result = backend.generate(context, grammar=choose.grammar, max_tokens=choose.grammar.max_length() + 1,
+                                      sampling=sampling, rng=rng)  # type: ignore[call-arg]
+        except GrammarMismatchError as exc:
+            raise exc.in_stage(record.stage) from exc
+        if not choose.grammar.matches(result.text):
+            raise GrammarMismatchError(result.text, "the backend wrote it as a line, the stage's grammar does not "
+                                       "allow it", record.stage)
         context.extend(result.tokens)
         record.generated_tokens += len(result.tokens) + (result.stop == "eos")
         return result.text, len(result.tokens) + (result.stop == "eos")
 
     def force(text: str) -> int:
-        tokens = backend.tokenize(text)
-        if backend.detokenize(tokens) != text:
-            # The tokenizer adds something (a leading space): let the model write it under a grammar instead.
-            tokens = []
-            for line in text.splitlines(keepends=True):
-                literal = Grammar({"root": line})
-                result = backend.generate(context + tokens, grammar=literal, max_tokens=len(line) + 1,
-                                          sampling=sampling, rng=rng)  # type: ignore[call-arg]
-                tokens += result.tokens
+        tokens = backend.tokenize_continuation(text)  # one batch, whatever the tokenizer family
         context.extend(tokens)
         record.forced_tokens += len(tokens)
         return len(tokens)
@@ -136,9 +141,13 @@ def run_stage(
         record.raw = record.output = run_constraint(constraint, write, force, output_budget)
     except BudgetError as exc:
         raise UserError(f"{record.stage}: {exc}") from exc
+    except GuaranteeError as exc:
+        raise GuaranteeError(f"{record.stage} stage: {exc}") from exc
     finally:
         record.seconds = time.perf_counter() - started
         record.grammars = list(dict.fromkeys(constraint.grammars))
+        record.capped = list(constraint.capped)
+        record.world_tries, record.dead_ends = constraint.world_counts()
     record.refusal = constraint.refusal
 
 

@@ -7,12 +7,17 @@ import random
 import pytest
 
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.coalition import CoalitionConstraint
-from smartllm_local.planner.constraints import PlanConstraint
+from smartllm_local.planner.coalition import LINE, CoalitionConstraint, needs_clause
+from smartllm_local.planner.constraints import Forced
+from smartllm_local.planner.feasibility import Need
+from smartllm_local.planner.plan_constraint import PlanConstraint
 from smartllm_local.planner.generation import BudgetError, accepts, run_constraint, sample_output
+from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
 from smartllm_local.planner.prompts import load_examples
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.skills import DEFAULT_SKILL_SET
+
+from .writers import WRITERS, writer
 
 SCENES = [1, 6, 201, 212, 301, 320, 401, 410]
 
@@ -115,17 +120,47 @@ def test_allocations_that_break_a_rule_are_rejected(change):
     assert not accepts(allocator(NAMES, 3), bad)
 
 
+GOOD_COALITION = (
+    "# SubTask 1 (subtask1_apple_to_fridge): needs GoToObject, OpenObject, PickupObject, lifting 0.2 kg; "
+    "robots[0] opens but cannot lift, robots[1] lifts 0.2 kg; so robots[0] and robots[1]\n"
+    "# SubTask 2 (subtask2_light_off): needs GoToObject, SwitchOff; robots[2] has SwitchOff; so robots[2]\n")
+
+
 def test_coalition_lines_name_only_robots_of_the_team():
-    good = ("# SubTask 1 (subtask1_apple_to_fridge): robots[0] and robots[1]; robots[1] lifts 0.2 kg\n"
-            "# SubTask 2 (subtask2_light_off): robots[2]; it has SwitchOff\n")
-    assert accepts(CoalitionConstraint(NAMES, 3), good)
-    for bad in (good.replace("robots[2]; it", "robots[3]; it"),
-                good.replace("it has SwitchOff", "robot 12 has SwitchOff"),
-                good.replace("robots[0] and robots[1]", "robots[1] and robots[0]"),
-                good.replace("(subtask2_light_off)", "(subtask2_other)"),
-                good.splitlines(keepends=True)[0]):
+    assert accepts(CoalitionConstraint(NAMES, 3), GOOD_COALITION)
+    for bad in (GOOD_COALITION.replace("; so robots[2]\n", "; so robots[3]\n"),
+                GOOD_COALITION.replace("robots[2] has SwitchOff", "robot 12 has SwitchOff"),
+                GOOD_COALITION.replace("so robots[0] and robots[1]", "so robots[1] and robots[0]"),
+                GOOD_COALITION.replace("(subtask2_light_off)", "(subtask2_other)"),
+                GOOD_COALITION.splitlines(keepends=True)[0]):
         assert not accepts(CoalitionConstraint(NAMES, 3), bad), bad
     assert accepts(CoalitionConstraint(NAMES, 3), "# INFEASIBLE: no robot can switch anything\n")
+
+
+def test_coalition_lines_reason_before_they_name_the_team():
+    """The team comes last, after the needs and an analysis: no line names it first."""
+    team_first = ("# SubTask 1 (subtask1_apple_to_fridge): robots[0] and robots[1]; robots[1] lifts 0.2 kg\n"
+                  "# SubTask 2 (subtask2_light_off): robots[2]; it has SwitchOff\n")
+    first, second = GOOD_COALITION.splitlines(keepends=True)
+    for bad in (team_first,
+                first + "# SubTask 2 (subtask2_light_off): so robots[2]; needs SwitchOff; it can\n",  # team first
+                first + "# SubTask 2 (subtask2_light_off): needs robots[2]; it has SwitchOff; so robots[2]\n",
+                first + "# SubTask 2 (subtask2_light_off): needs SwitchOff; so robots[2]\n",  # no analysis
+                first + second.replace("; so robots[2]\n", "; so robots[2]; it is free\n")):  # text after it
+        assert not accepts(CoalitionConstraint(NAMES, 3), bad), bad
+
+
+def test_a_coalition_line_may_reason_at_length():
+    """Up to 40 words of analysis (before, a line's reason held at most 144 characters)."""
+    words = ("robots[0] opens the fridge but cannot lift anything, while robots[1] lifts and carries the apple " * 4).split()
+
+    def line(count: int) -> str:
+        return (f"# SubTask 1 (f): needs GoToObject, OpenObject, PickupObject, lifting 0.2 kg; "
+                f"{' '.join(words[:count])}; so robots[0] and robots[1]\n")
+
+    assert CoalitionConstraint.MAX_WORDS == 40 and len(" ".join(words[:40])) > 240
+    assert accepts(CoalitionConstraint(["f"], 2), line(40))
+    assert not accepts(CoalitionConstraint(["f"], 2), line(41))
 
 
 def test_every_prompt_example_is_in_its_stage_grammar():
@@ -153,7 +188,7 @@ def test_random_samples_of_every_stage_are_valid_plans(seed):
         names = [f.name for f in plan.functions]
         team = rng.randint(1, 4)
         coalition = sample_output(CoalitionConstraint(names, team), rng, 4000)
-        assert all(line.startswith("# ") for line in coalition.splitlines())
+        assert all(LINE.match(line) or line.startswith("# INFEASIBLE: ") for line in coalition.splitlines())
         allocated = sample_output(
             PlanConstraint(scene, DEFAULT_SKILL_SET, team_size=team, function_names=names, comments=flags["comments"]),
             rng, rng.randint(600, 4000))
@@ -185,37 +220,70 @@ def _robots(*ids):
     return load_catalogue().team(ids)
 
 
-def _line(name, team):
-    return f"# SubTask 1 ({name}): {team}; they share the work\n"
+def _line(name, team, need, k=1):
+    return f"# SubTask {k} ({name}): {needs_clause(need)} they share the work; so {team}\n"
 
 
 def test_coalitions_admit_only_teams_with_the_skills_and_the_strength():
-    from smartllm_local.planner.feasibility import Need
-
     # robot 25 picks up and puts, robot 23 opens and closes: the fridge job needs both.
     fridge = Need(frozenset({"GoToObject", "OpenObject", "PickupObject", "PutObject"}), 0.2)
     team = _robots(25, 23)
-    assert accepts(CoalitionConstraint(["f"], team, needs=[fridge]), _line("f", "robots[0] and robots[1]"))
-    assert not accepts(CoalitionConstraint(["f"], team, needs=[fridge]), _line("f", "robots[0]"))
+    assert accepts(CoalitionConstraint(["f"], team, needs=[fridge]), _line("f", "robots[0] and robots[1]", fridge))
+    assert not accepts(CoalitionConstraint(["f"], team, needs=[fridge]), _line("f", "robots[0]", fridge))
     assert not accepts(CoalitionConstraint(["f"], team, needs=[fridge]), "# INFEASIBLE: nobody can\n")
-    assert accepts(CoalitionConstraint(["f"], team, needs=[fridge], free=True), _line("f", "robots[0]"))
+    assert accepts(CoalitionConstraint(["f"], team, needs=[fridge], free=True), _line("f", "robots[0]", fridge))
     # robot 7 lifts 0.08 kg, robot 8 lifts 0.4 kg: only teams with robot 8 can carry a 0.2 kg apple.
     apple = Need(frozenset({"GoToObject", "PickupObject"}), 0.2)
     light = _robots(7, 8)
-    assert not accepts(CoalitionConstraint(["f"], light, needs=[apple]), _line("f", "robots[0]"))
-    assert accepts(CoalitionConstraint(["f"], light, needs=[apple]), _line("f", "robots[1]"))
+    assert not accepts(CoalitionConstraint(["f"], light, needs=[apple]), _line("f", "robots[0]", apple))
+    assert accepts(CoalitionConstraint(["f"], light, needs=[apple]), _line("f", "robots[1]", apple))
+
+
+def test_known_needs_are_stated_by_the_catalogue_not_the_model():
+    fridge = Need(frozenset({"GoToObject", "OpenObject", "PickupObject", "PutObject"}), 0.2)
+    assert needs_clause(fridge) == "needs GoToObject, OpenObject, PickupObject, PutObject, lifting 0.2 kg;"
+    assert needs_clause(Need(frozenset({"GoToObject", "SwitchOn"}), 0.0)) == "needs GoToObject, SwitchOn;"
+    team = _robots(25, 23)
+    constraint = CoalitionConstraint(["f"], team, needs=[fridge])
+    assert constraint.next(1000) == Forced(f"# SubTask 1 (f): {needs_clause(fridge)}")
+    understated = "# SubTask 1 (f): needs GoToObject; they share the work; so robots[0] and robots[1]\n"
+    assert not accepts(CoalitionConstraint(["f"], team, needs=[fridge]), understated)
+    assert accepts(CoalitionConstraint(["f"], team, needs=[fridge], free=True), understated)
+
+
+@pytest.mark.parametrize("kind", WRITERS)
+def test_coalitions_are_complete_within_their_budget_for_any_writer(kind):
+    """From the smallest budget the constraint accepts up: every sub-task gets its line (or the
+    output is a refusal) and the output never exceeds the budget, with the needs known or not."""
+    names = ["subtask1_make_coffee", "subtask2_apple_to_fridge", "subtask3_light_off"]
+    needs = [Need(frozenset({"GoToObject", "PickupObject", "PutObject", "SwitchOn"}), 0.4),
+             Need(frozenset({"GoToObject", "OpenObject", "CloseObject", "PickupObject", "PutObject"}), 0.2),
+             Need(frozenset({"GoToObject", "SwitchOff"}), 0.0)]
+    team = _robots(13, 18, 24)
+    makers = (lambda: CoalitionConstraint(names, team, needs=needs), lambda: CoalitionConstraint(names, 3),
+              lambda: CoalitionConstraint(names, team, needs=needs, free=True))
+    rng = random.Random(kind)
+    for make in makers:
+        smallest = make().minimum_budget()
+        with pytest.raises(BudgetError):
+            run_constraint(make(), writer(kind, rng), len, smallest - 1)
+        for budget in (smallest, smallest + 1, smallest + 100, DEFAULT_BUDGETS["coalition"], 3000):
+            constraint = make()
+            out = run_constraint(constraint, writer(kind, rng), len, budget)
+            lines = out.splitlines()
+            assert len(out) <= budget
+            assert constraint.refusal is not None or [LINE.match(line).group(1) for line in lines] == \
+                [f"# SubTask {k} ({n}): " for k, n in enumerate(names, start=1)], out
 
 
 def test_a_sub_task_no_team_can_do_admits_only_a_refusal():
-    from smartllm_local.planner.feasibility import Need
-
     switch = Need(frozenset({"GoToObject", "SwitchOn"}), 0.0)
     team = _robots(25, 23)
     constraint = CoalitionConstraint(["f", "g"], team, needs=[switch, switch])
     assert constraint.minimum_budget() < 200
     assert accepts(CoalitionConstraint(["f", "g"], team, needs=[switch, switch]), "# INFEASIBLE: no one can switch on\n")
     assert not accepts(CoalitionConstraint(["f", "g"], team, needs=[switch, switch]),
-                       _line("f", "robots[0]") + "# SubTask 2 (g): robots[1]; x\n")
+                       _line("f", "robots[0]", switch) + _line("g", "robots[1]", switch, k=2))
 
 
 def test_allocated_robot_lists_give_every_step_a_capable_robot():

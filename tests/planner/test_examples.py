@@ -8,8 +8,12 @@ import pytest
 
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.constraints import PlanConstraint
+from smartllm_local.planner.plan_constraint import PlanConstraint
+from smartllm_local.planner.coalition import LINE as COALITION_LINE
+from smartllm_local.planner.coalition import CoalitionConstraint
+from smartllm_local.planner.feasibility import function_needs
 from smartllm_local.planner.generation import accepts
+from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
 from smartllm_local.planner.prompts import PromptOptions, load_examples, shape
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.robots import load_catalogue
@@ -43,6 +47,23 @@ def test_every_step_has_its_comment_in_decompositions_and_allocations(ex):
         bare = shape(code, PromptOptions(comments=False))
         assert not any(line.strip().startswith("#") for body in _body_lines(bare) for line in body)
         assert ast.dump(ast.parse(bare)) == ast.dump(ast.parse(code)), "the ablation removes comments only"
+
+
+@pytest.mark.parametrize("ex", [e for e in EXAMPLES if e.coalition], ids=lambda e: e.name)
+def test_every_coalition_example_is_in_the_grammar_the_planner_uses(ex):
+    """With the catalogue's needs, as the planner runs stage 2: the constraint writes each needs
+    clause itself, so an example must state them exactly so, reason, and only then name its team."""
+    catalogue = load_catalogue()
+    scene = scene_objects(ex.floor_plan)
+    plan = parse_plan(ex.decomposition, form="decomposed")
+    names = [f.name for f in plan.functions]
+    pickups = [s.name for s in catalogue.skills.values() if s.action == "PickupObject"]
+    needs = function_needs(plan, scene, pickups)
+    known = CoalitionConstraint(names, catalogue.team(ex.robots), needs=[needs[n] for n in names])
+    assert accepts(known, ex.coalition)
+    assert known.minimum_budget() <= DEFAULT_BUDGETS["coalition"]
+    assert ex.feasible == (known.refusal is None)
+    assert ex.feasible == all(COALITION_LINE.match(line) for line in ex.coalition.splitlines())
 
 
 def test_the_grammar_admits_a_comment_before_each_step_but_not_two_in_a_row():

@@ -8,7 +8,13 @@ import pytest
 
 from smartllm_local.errors import UserError
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, write_artifacts
-from smartllm_local.planner.prompts import PromptOptions, load_examples, strip_comments, strip_summary
+from smartllm_local.planner.prompts import (
+    PromptOptions,
+    coalition_decisions,
+    load_examples,
+    strip_comments,
+    strip_summary,
+)
 from smartllm_local.robots import load_catalogue
 
 from .fakes import FakeBackend
@@ -39,7 +45,9 @@ def test_the_three_prompts_have_their_parts(catalogue):
     assert len(re.findall(r"^# Example \d$", allocation, re.M)) == 4
     assert "# Allocated plan:\ndef subtask1_" in allocation
     assert allocation.endswith("# Allocated plan:\n")
-    assert result.stages[0].output in coalition and result.stages[1].output in allocation
+    assert result.stages[0].output in coalition and coalition_decisions(result.stages[1].output) in allocation
+    assert "# Coalition:\n# SubTask 1 (subtask1_slice_bread): robots[0]\n# SubTask 2 (subtask2_toast_slice): " \
+        "robots[1] and robots[2]\n# Allocated plan:" in allocation, "the examples' coalitions without their reasoning"
 
 
 def test_ablations_change_the_prompts(catalogue):
@@ -70,16 +78,22 @@ def test_examples_are_dropped_least_relevant_first_when_the_context_is_short(cat
         plan_with(FakeBackend(n_ctx=1500), catalogue)
 
 
-def test_the_allocation_budget_follows_the_decomposition(catalogue):
+def test_output_budgets_follow_the_task(catalogue):
+    """A restated allocation's budget is its longest output, to the character; a freely rewritten
+    one's is estimated from the decomposition."""
     budgets = {"decomposition": 1024, "coalition": 512, "allocation": 9000}
-    planner = Planner(FakeBackend(n_ctx=16384), catalogue, PlannerConfig(budgets=budgets))
-    decomposition, _, allocation = planner.plan(INSTRUCTION, 6, [29, 24, 25]).stages
+    free = Planner(FakeBackend(n_ctx=16384), catalogue, PlannerConfig(budgets=budgets, restate=False))
+    decomposition, _, allocation = free.plan(INSTRUCTION, 6, [29, 24, 25]).stages
     written = decomposition.generated_tokens + decomposition.forced_tokens
     functions = len(decomposition.plan.functions)
     assert written and functions
     assert allocation.output_budget == 2 * written + 64 * functions + 128 < 9000
     assert decomposition.output_budget == 1024
     assert allocation.generated_tokens + allocation.forced_tokens <= allocation.output_budget
+
+    restated = Planner(FakeBackend(n_ctx=16384), catalogue, PlannerConfig(budgets=budgets))
+    decomposition, _, allocation = restated.plan(INSTRUCTION, 6, [29, 24, 25]).stages
+    assert len(allocation.output) <= allocation.output_budget < len(allocation.output) + 64 * functions + 400
 
 
 def test_relevance_keeps_the_closest_example():

@@ -8,8 +8,9 @@ an optional grammar for the text it may write next.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol, Sequence
+from typing import Callable, Protocol, Sequence
 
+from ...errors import ModelError
 from ..grammar import Grammar
 
 
@@ -32,12 +33,22 @@ class Backend(Protocol):
     name: str
     model: str  # what was loaded (a path), for the record
     n_ctx: int
+    chat_template: str | None  # the model's own chat template (instruct models); None for a base model
+    bos_token: str  # the text of the model's control tokens, as chat templates write them ("" if none)
+    eos_token: str
 
-    def tokenize(self, text: str, *, bos: bool = False) -> list[int]:
-        """Token ids of ``text``; ``bos`` adds the model's beginning-of-sequence token if it uses one."""
+    def tokenize(self, text: str, *, bos: bool = False, special: bool = False) -> list[int]:
+        """Token ids of ``text``; ``bos`` adds the model's beginning-of-sequence token if it uses one.
+
+        ``special`` reads control-token strings in ``text`` (``<|im_start|>``) as those tokens: for a
+        chat template's text, never for a prompt's (there they stay text).
+        """
 
     def detokenize(self, tokens: Sequence[int]) -> str:
-        """The text of token ids."""
+        """The text of token ids as a continuation: each token's own bytes, nothing added or dropped."""
+
+    def tokenize_continuation(self, text: str) -> list[int]:
+        """Tokens that spell exactly ``text`` written after a context (see :func:`continuation_tokens`)."""
 
     def generate(
         self,
@@ -68,3 +79,34 @@ def shared_prefix(cached: Sequence[int], context: Sequence[int]) -> int:
             break
         common += 1
     return common
+
+
+#: What :func:`continuation_tokens` puts before a text, in order: nothing (most tokenizers add nothing of
+#: their own), then a newline or a letter, after which a SentencePiece tokenizer adds no space.
+_ANCHORS = ("", "\n", "a")
+
+
+def continuation_tokens(text: str, tokenize: Callable[[str], list[int]], spell: Callable[[int], bytes]) -> list[int]:
+    """Tokens that spell exactly ``text`` written after a context, for every tokenizer family.
+
+    So that forced text goes into the context in one batch. A text tokenized on its own is not
+    always that: SentencePiece tokenizers (Llama-2's) put a space in front of it. So ``text`` is
+    tokenized behind an anchor, and the tokens kept are those after a token boundary where the rest
+    spells ``text`` byte for byte (``spell`` gives a token's bytes). Where every anchor merges into
+    the text, its two halves are tokenized in turn (a single character parts from some anchor).
+    """
+    if not text:
+        return []
+    want = text.encode("utf-8")
+    for anchor in _ANCHORS:
+        tokens = tokenize(anchor + text)
+        start, size = len(tokens), 0
+        while start > 0 and size < len(want):
+            start -= 1
+            size += len(spell(tokens[start]))
+        if size == len(want) and b"".join(spell(t) for t in tokens[start:]) == want:
+            return tokens[start:]
+    if len(text) == 1:
+        raise ModelError(f"the model's tokenizer cannot write {text!r}")
+    half = len(text) // 2
+    return continuation_tokens(text[:half], tokenize, spell) + continuation_tokens(text[half:], tokenize, spell)

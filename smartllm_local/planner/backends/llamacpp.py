@@ -15,10 +15,17 @@ grammar would crash the process at the first token).
 
 The key/value cache holds the last context; a new context that shares a
 prefix with it only evaluates the rest.
+
+The text of generated tokens is their bytes, decoded as they come (a
+character split across tokens is held back until complete), and it is
+followed through the planner's own grammar: where that grammar does not
+allow what llama.cpp's let through, or llama.cpp's refuses text the planner's
+grammar forces, the two disagree and generation stops with an error.
 """
 
 from __future__ import annotations
 
+import codecs
 import ctypes
 import os
 from pathlib import Path
@@ -26,9 +33,9 @@ from typing import Sequence
 
 import numpy as np
 
-from ...errors import BackendUnavailableError, ModelError
+from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..grammar import Grammar, GrammarError, Matcher
-from .base import Generated, Sampling, shared_prefix
+from .base import Generated, Sampling, continuation_tokens, shared_prefix
 
 _TOP = 64
 
@@ -47,7 +54,9 @@ class LlamaCppBackend:
         n_gpu_layers: int = 0,
         seed: int = 0,
         n_batch: int = 512,
+        vocab_only: bool = False,
     ):
+        """``vocab_only`` loads the tokenizer alone (llama.cpp's vocabulary files): it tokenizes but cannot generate."""
         try:
             import llama_cpp
         except ImportError as exc:
@@ -65,6 +74,7 @@ class LlamaCppBackend:
                 seed=seed,
                 n_batch=n_batch,
                 logits_all=False,
+                vocab_only=vocab_only,
                 verbose=False,
             )
         except (ValueError, RuntimeError) as exc:
@@ -76,17 +86,38 @@ class LlamaCppBackend:
         self._tokens: list[int] = []  # what the key/value cache holds
         self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
+        self._pieces: dict[int, bytes] = {}
         self._full = np.zeros(self.n_vocab, dtype=[("id", np.intc), ("logit", np.single), ("p", np.single)])
         self._few = np.zeros(_TOP, dtype=self._full.dtype)
         self.n_gpu_layers = n_gpu_layers
+        self.chat_template = self.llm.metadata.get("tokenizer.chat_template")
+        self.bos_token, self.eos_token = (self.llm._model.token_get_text(t) if t != -1 else ""
+                                          for t in (self.llm.token_bos(), self.llm.token_eos()))
 
     # ---------------------------------------------------------------- tokens
 
-    def tokenize(self, text: str, *, bos: bool = False) -> list[int]:
-        return list(self.llm.tokenize(text.encode("utf-8"), add_bos=bos, special=False))
+    def tokenize(self, text: str, *, bos: bool = False, special: bool = False) -> list[int]:
+        return list(self.llm.tokenize(text.encode("utf-8"), add_bos=bos, special=special))
 
     def detokenize(self, tokens: Sequence[int]) -> str:
-        return self.llm.detokenize(list(tokens)).decode("utf-8", errors="replace")
+        return b"".join(self._piece(t) for t in tokens).decode("utf-8", errors="replace")
+
+    def tokenize_continuation(self, text: str) -> list[int]:
+        return continuation_tokens(text, self.tokenize, self._piece)
+
+    def _piece(self, token: int) -> bytes:
+        """A token's bytes (llama-cpp-python's detokenize garbles pieces over 32 bytes, drops a space after BOS)."""
+        piece = self._pieces.get(token)
+        if piece is None:
+            size = 64
+            while True:
+                buffer = ctypes.create_string_buffer(size)
+                n = self._lib.llama_token_to_piece(self._vocab, token, buffer, size, 0, False)
+                if n >= 0:
+                    break
+                size = -n
+            piece = self._pieces[token] = buffer.raw[:n]
+        return piece
 
     def _sync(self, context: Sequence[int]) -> None:
         """Make the cache hold ``context`` and the logits be those of its last token."""
@@ -190,44 +221,48 @@ class LlamaCppBackend:
         matcher = Matcher(grammar) if grammar is not None else None
         out: list[int] = []
         text = ""
+        decoder = codecs.getincrementaldecoder("utf-8")("replace")
         try:
             while len(out) < max_tokens:
-                forced = self._forced_tokens(matcher) if matcher is not None else []
-                if forced:
-                    # What the grammar forces is written in one batch rather than sampled token by token.
-                    for token in forced:
-                        self._lib.llama_sampler_accept(sampler, token)
-                    out.extend(forced)
-                    self._eval(forced)
-                else:
+                new = self._forced_tokens(matcher, sampler) if matcher is not None else []
+                if not new:
                     token = self._pick(self._logits(), sampler, sampling, rng)
                     if self._lib.llama_vocab_is_eog(self._vocab, token):
-                        return Generated(out, text, "eos")
+                        return Generated(out, text + decoder.decode(b"", final=True), "eos")
                     if sampler is not None:
                         self._lib.llama_sampler_accept(sampler, token)
-                    out.append(token)
-                    self._eval([token])
-                new_text = self.detokenize(out)
-                if matcher is not None:
-                    matcher.advance(new_text[len(text):])
-                text = new_text
+                    new = [token]
+                out.extend(new)
+                self._eval(new)
+                piece = decoder.decode(b"".join(self._piece(t) for t in new))
+                if matcher is not None and not matcher.advance(piece):
+                    raise GrammarMismatchError(text + piece, "llama.cpp's grammar let the model write it, "
+                                               "the planner's grammar does not allow it")
+                text += piece
                 if sampler is not None and text.endswith("\n"):
                     return Generated(out, text, "line")
                 for s in stop:
                     if s in text:
                         return Generated(out, text[: text.index(s)], "stop")
-            return Generated(out, self.detokenize(out), "length")
+            return Generated(out, text + decoder.decode(b"", final=True), "length")
         finally:
             if sampler is not None:
                 self._lib.llama_sampler_free(sampler)
 
-    def _forced_tokens(self, matcher: Matcher) -> list[int]:
-        """Tokens for the text the grammar forces next, if they spell it exactly (some tokenizers add a space)."""
+    def _forced_tokens(self, matcher: Matcher, sampler) -> list[int]:
+        """The tokens of the text the grammar forces next, all in one batch, accepted by llama.cpp's grammar.
+
+        Each is checked before llama.cpp accepts it: accepting a token its grammar refuses aborts the process.
+        """
         forced = matcher.forced()
         if len(forced) < 2:
             return []
-        tokens = self.tokenize(forced)
-        return tokens if tokens and self.detokenize(tokens) == forced else []
+        tokens = self.tokenize_continuation(forced)
+        for token in tokens:
+            if not self._allowed(sampler, token):
+                raise GrammarMismatchError(forced, "the planner's grammar forces it, llama.cpp's grammar refuses it")
+            self._lib.llama_sampler_accept(sampler, token)
+        return tokens
 
     def close(self) -> None:
         llm, self.llm = getattr(self, "llm", None), None

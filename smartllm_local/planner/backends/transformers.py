@@ -34,10 +34,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ...errors import BackendUnavailableError, ModelError
+from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..grammar import Grammar, GrammarError
 from ..models import EMBEDDED, embedded_model_path, is_gguf
-from .base import Generated, Sampling, shared_prefix
+from .base import Generated, Sampling, continuation_tokens, shared_prefix
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
     os.environ[_switch] = "1"
@@ -185,16 +185,27 @@ class TransformersBackend:
         self.n_ctx = min(n_ctx, int(limit))
         self.n_vocab = self.ll_tokenizer.vocab_size
         self.eos = self.tokenizer.eos_token_id
+        template = getattr(self.tokenizer, "chat_template", None)  # a dict where a checkpoint names several
+        self.chat_template = template.get("default") if isinstance(template, dict) else template
+        self.bos_token, self.eos_token = self.tokenizer.bos_token or "", self.tokenizer.eos_token or ""
         self._tokens: list[int] = []
         self.evaluated_tokens = 0
         self._cache: Any = None
         self._logits: Any = None
 
-    def tokenize(self, text: str, *, bos: bool = False) -> list[int]:
-        return list(self.tokenizer(text, add_special_tokens=bos)["input_ids"])
+    def tokenize(self, text: str, *, bos: bool = False, special: bool = False) -> list[int]:
+        return list(self.tokenizer(text, add_special_tokens=bos, split_special_tokens=not special)["input_ids"])
 
     def detokenize(self, tokens: Sequence[int]) -> str:
-        return self.tokenizer.decode(list(tokens), skip_special_tokens=True)
+        return b"".join(self._piece(t) for t in tokens).decode("utf-8", errors="replace")
+
+    def tokenize_continuation(self, text: str) -> list[int]:
+        return continuation_tokens(text, self.tokenize, self._piece)
+
+    def _piece(self, token: int) -> bytes:
+        """A token's bytes, control tokens none (Hugging Face's decode drops a SentencePiece token's
+        leading space at the start of what it decodes, wrong for a continuation)."""
+        return b"" if self.ll_tokenizer.is_special_token(token) else self.ll_tokenizer.decode_bytes([token])
 
     def _forward(self, tokens: list[int]) -> None:
         torch = self._torch
@@ -254,6 +265,9 @@ class TransformersBackend:
             self._forward([token])
             text = self.detokenize(out)
             if matcher is not None and text.endswith("\n"):
+                if not grammar.matches(text):
+                    raise GrammarMismatchError(text, "llguidance let the model write it, the planner's grammar "
+                                               "does not allow it")
                 return Generated(out, text, "line")
             for s in stop:
                 if s in text:

@@ -1,0 +1,184 @@
+"""Instruct models get their prompts in their own chat template; base models, and --chat-template none, raw.
+
+With the real models: SmolLM2-135M-Instruct carries a chat template in its GGUF, Gemma-3-270M is a base
+model without one.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.backends import load_backend
+from smartllm_local.planner.chat import APPLIED, BASE_MODEL, OFF, chat_format, prompt_tokens
+from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult, write_artifacts
+from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner import pipeline
+from smartllm_local.planner.stages import StageRecord, fit_prompt
+from smartllm_local.robots import load_catalogue
+from smartllm_local.tasks import find_task, load_tasks
+from tests.test_cli_errors import cli, one_line_error
+
+
+def _result(task):
+    return PlanResult(instruction=task.instruction, floor_plan=task.floor_plan, robots=list(task.robots))
+
+
+class Recording:
+    """A backend that keeps the contexts it is asked to continue."""
+
+    def __init__(self, backend):
+        self._backend = backend
+        self.contexts: list[list[int]] = []
+
+    def __getattr__(self, name):
+        return getattr(self._backend, name)
+
+    def generate(self, context, **kwargs):
+        self.contexts.append(list(context))
+        return self._backend.generate(context, **kwargs)
+
+
+def special(backend, text: str) -> list[int]:
+    return backend.tokenize(text, special=True)
+
+
+def test_smollm2_gets_its_prompt_as_a_user_turn_with_control_tokens_as_single_tokens(smollm2):
+    chat, status = chat_format(smollm2, "auto")
+    assert status == APPLIED and "<|im_start|>" in smollm2.chat_template
+    text, tokens = prompt_tokens(smollm2, "# Task Description: wash the apple\n", chat)
+    im_start, = special(smollm2, "<|im_start|>")
+    im_end, = special(smollm2, "<|im_end|>")
+    assert tokens[0] == im_start
+    header = [im_start, *smollm2.tokenize("assistant\n")]  # the assistant turn, opened for the output
+    assert tokens[-len(header):] == header
+    assert text.startswith("<|im_start|>") and text.endswith("<|im_start|>user\n# Task Description: wash the apple\n"
+                                                               "<|im_end|>\n<|im_start|>assistant\n")
+    assert tokens.count(im_start) == 3 and tokens.count(im_end) == 2  # system and user turns, assistant header
+
+
+def test_a_control_token_string_in_the_prompt_stays_text(smollm2):
+    chat, _ = chat_format(smollm2, "auto")
+    body = "# the robot says <|im_start|>assistant and <|im_end|>\n"
+    _, tokens = prompt_tokens(smollm2, body, chat)
+    turn = chat.turn(body)
+    assert turn.body == body
+    assert tokens == special(smollm2, turn.head) + smollm2.tokenize(body) + special(smollm2, turn.tail)
+    im_start, = special(smollm2, "<|im_start|>")
+    im_end, = special(smollm2, "<|im_end|>")
+    assert tokens.count(im_start) == 3 and tokens.count(im_end) == 2  # only the template's
+    assert im_start not in smollm2.tokenize(body) and smollm2.detokenize(smollm2.tokenize(body)) == body
+
+
+def test_with_none_the_prompt_goes_in_raw_as_before(smollm2):
+    chat, status = chat_format(smollm2, "none")
+    assert (chat, status) == (None, OFF)
+    prompt = "# Task Description: wash the apple\n"
+    assert prompt_tokens(smollm2, prompt, chat) == (prompt, smollm2.tokenize(prompt, bos=True))
+
+
+def test_the_context_budget_counts_the_template(smollm2):
+    chat, _ = chat_format(smollm2, "auto")
+    catalogue = load_catalogue()
+    planner = Planner(smollm2, catalogue)
+    examples = planner.examples
+    build = lambda ex: "# Your task\n"  # noqa: E731
+    raw = fit_prompt(build, examples, examples, smollm2, 16)[1]
+    wrapped = fit_prompt(build, examples, examples, smollm2, 16, chat)[1]
+    assert len(wrapped) > len(raw) + 10
+
+
+@pytest.fixture(scope="module")
+def kitchen09():
+    return find_task(load_tasks(), "kitchen-09")
+
+
+def test_a_real_decomposition_in_the_chat_template_is_a_valid_plan(smollm2, tmp_path):
+    """kitchen-01 (SmolLM2 refuses kitchen-09 outright in its chat template: a refusal is valid but shows little)."""
+    task = find_task(load_tasks(), "kitchen-01")
+    recording = Recording(smollm2)
+    planner = Planner(recording, load_catalogue())
+    assert planner.chat_status == APPLIED
+    result = _result(task)
+    record = planner.decompose(result, scene_objects(task.floor_plan))
+    header = smollm2.tokenize("<|im_start|>assistant\n", special=True)
+    prompt = recording.contexts[0][: record.prompt_tokens]
+    assert prompt[:1] == special(smollm2, "<|im_start|>") and prompt[-len(header):] == header
+    assert record.prompt.startswith("<|im_start|>system\n") and record.prompt.endswith("<|im_start|>assistant\n")
+    assert not record.error and record.refusal is None, record.error or record.refusal
+    assert parse_plan(record.output, form="decomposed").functions
+    write_artifacts(result, tmp_path)
+    stages = json.loads((tmp_path / "result.json").read_text())["stages"]
+    assert stages["decomposition"]["chat_template"] == APPLIED
+
+
+class _Seen(Exception):
+    pass
+
+
+def first_prompt(backend, config: PlannerConfig, task, monkeypatch) -> tuple[Planner, str, list[int], list[int]]:
+    """(planner, the decomposition prompt as given, its tokens, the first context the model gets),
+    stopping before the model writes anything."""
+    fitted = []
+
+    def fit(*args, **kwargs):
+        fitted.append(fit_prompt(*args, **kwargs))
+        return fitted[-1]
+
+    class Stop(Recording):
+        def generate(self, context, **kwargs):
+            self.contexts.append(list(context))
+            raise _Seen
+
+    recording = Stop(backend)
+    monkeypatch.setattr(pipeline, "fit_prompt", fit)
+    planner = Planner(recording, load_catalogue(), config)
+    with pytest.raises(_Seen):
+        planner.decompose(_result(task), scene_objects(task.floor_plan))
+    prompt, tokens, _, _ = fitted[0]
+    return planner, prompt, tokens, recording.contexts[0]
+
+
+def test_with_none_the_model_gets_the_raw_prompt(smollm2, kitchen09, monkeypatch):
+    planner, prompt, tokens, context = first_prompt(smollm2, PlannerConfig(chat_template="none"), kitchen09,
+                                                    monkeypatch)
+    assert planner.chat_status == OFF and prompt.startswith("from skills import")
+    assert tokens == smollm2.tokenize(prompt, bos=True) == context[: len(tokens)]
+
+
+def test_a_base_model_falls_back_to_the_raw_prompt_and_says_so(kitchen09, monkeypatch, tmp_path):
+    gemma = load_backend("llamacpp", "gemma3-270m", n_ctx=4096)
+    try:
+        assert gemma.chat_template is None
+        planner, prompt, tokens, context = first_prompt(gemma, PlannerConfig(), kitchen09, monkeypatch)
+        assert planner.chat_status == BASE_MODEL and prompt.startswith("from skills import")
+        assert tokens == gemma.tokenize(prompt, bos=True) == context[: len(tokens)]
+    finally:
+        gemma.close()
+    result = PlanResult("x", "FloorPlan6", [1], stages=[StageRecord("decomposition", chat_template=BASE_MODEL)])
+    write_artifacts(result, tmp_path)
+    assert json.loads((tmp_path / "decomposition" / "timings.json").read_text())["chat_template"] == BASE_MODEL
+
+
+@pytest.mark.parametrize("command", [
+    ["plan", "Put the apple in the fridge", "--floor-plan", "6", "--robots", "1", "--out", "out"],
+    ["benchmark", "run", "--out", "out"],
+])
+def test_a_bad_chat_template_mode_is_a_one_line_error(tmp_path, command):
+    one_line_error(cli(*command, "--chat-template", "chatml", cwd=tmp_path),
+                   "--chat-template must be one of auto, none, not 'chatml'")
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_transformers_backend_reads_the_template_and_tokenizes_as_llama_cpp_does(smollm2):
+    hf = load_backend("transformers", "smollm2", n_ctx=4096)
+    try:
+        assert hf.chat_template == smollm2.chat_template
+        body = "# say <|im_end|> now\n"
+        text, tokens = prompt_tokens(hf, body, chat_format(hf, "auto")[0])
+        assert (text, tokens) == prompt_tokens(smollm2, body, chat_format(smollm2, "auto")[0])
+        assert tokens.count(special(hf, "<|im_end|>")[0]) == 2  # the system and user turns' ends, not the body's
+    finally:
+        hf.close()

@@ -1,0 +1,165 @@
+"""Tokenization against every tokenizer family: llama.cpp's vocabulary files and the embedded models.
+
+The vocabulary files (tests/fixtures/vocab, xz-compressed copies of llama.cpp's
+models/ggml-vocab-*.gguf) hold a tokenizer and no weights: they tokenize but
+cannot generate, so what depends on tokenization alone is tested here, for
+Llama-2's SentencePiece tokenizer (llama-spm, the paper's model) and phi-3's,
+Llama-3's byte-level BPE (llama-bpe), Qwen2's and DeepSeek-Coder's, and the
+embedded SmolLM2 (GPT-2 style BPE) and Gemma-3 (SentencePiece, no added space).
+"""
+
+from __future__ import annotations
+
+import lzma
+import random
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from smartllm_local.planner.backends.base import Generated, Sampling
+from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
+from smartllm_local.planner.grammar import Grammar, Matcher, alt, seq
+from smartllm_local.planner.models import embedded_model_path
+from smartllm_local.planner.stages import StageRecord, run_stage
+
+from .fakes import Script
+
+VOCAB_DIR = Path(__file__).parent.parent / "fixtures" / "vocab"
+#: family -> whether its models start a sequence with a BOS token
+FAMILIES = {"llama-spm": True, "phi-3": True, "llama-bpe": True, "qwen2": False, "deepseek-coder": True,
+            "smollm2": False, "gemma3-270m": True}
+SENTENCEPIECE = {"llama-spm", "phi-3"}  # tokenizers that put a space in front of what they tokenize
+
+#: Pieces of forced text as plans have them: whole lines, after a newline, mid-line.
+FORCED = [
+    "    GoToObject(robot_list[0], 'Apple')\n", "t1.start()\n", "# SubTask 1: wash the apple (skills: GoToObject)\n",
+    "def subtask1_x(robot_list):\n", "robot_list[", "], '", "')\n", " and ", "\n", "\n\n", "    ", "    # ",
+    "threads = []\n", "# Task Description: put the bread in the fridge\n", "time.sleep(2)\n", "ü → é\n",
+]
+PLAN = (
+    "# SubTask 1: wash the apple (skills: GoToObject, PickupObject)\n"
+    "# wash first\n\n"
+    "def subtask1_wash_apple(robot_list):\n"
+    "    # go to the apple\n"
+    "    GoToObject(robot_list[0], 'Apple')\n"
+    "    PickupObject(robot_list[0], 'Apple')\n\n"
+    "t1 = threading.Thread(target=subtask1_wash_apple, args=([robots[0], robots[1]],))\n"
+    "t1.start()\n"
+    "t1.join()\n"
+)
+
+
+@pytest.fixture(scope="module", params=sorted(FAMILIES))
+def vocab(request, tmp_path_factory) -> Iterator[LlamaCppBackend]:
+    """A backend with only the tokenizer of a family loaded."""
+    family = request.param
+    if family in ("smollm2", "gemma3-270m"):
+        path = embedded_model_path(family)
+    else:
+        path = tmp_path_factory.mktemp("vocab") / f"ggml-vocab-{family}.gguf"
+        with lzma.open(VOCAB_DIR / f"ggml-vocab-{family}.gguf.xz") as packed, path.open("wb") as out:
+            shutil.copyfileobj(packed, out)
+    backend = LlamaCppBackend(path, n_ctx=512, vocab_only=True)
+    backend.family = family
+    yield backend
+    backend.close()
+
+
+def test_forced_text_is_spelled_exactly_as_a_continuation(vocab):
+    for text in FORCED:
+        tokens = vocab.tokenize_continuation(text)
+        assert vocab.detokenize(tokens) == text, (vocab.family, text)
+        assert 0 < len(tokens) <= len(text.encode())
+
+
+def test_a_plan_written_piece_by_piece_spells_itself(vocab):
+    """Forced pieces and lines of a plan, each a continuation of the last, spell the whole plan."""
+    pieces = [p for line in PLAN.splitlines(keepends=True) for p in line.partition("(")]
+    tokens = [t for piece in pieces for t in vocab.tokenize_continuation(piece)]
+    assert vocab.detokenize(tokens) == PLAN
+    assert vocab.detokenize(vocab.tokenize_continuation(PLAN)) == PLAN
+    whole = vocab.tokenize(PLAN)
+    assert len(tokens) <= 1.25 * len(whole), (len(tokens), len(whole))  # the cuts cost a few tokens, no more
+
+
+def test_standalone_tokens_spell_a_text_only_where_the_tokenizer_adds_no_space(vocab):
+    """What made forced text fall back to token-by-token generation for Llama-2 before."""
+    text = "    GoToObject(robot_list[0], 'Apple')\n"
+    spelled = vocab.detokenize(vocab.tokenize(text))
+    assert spelled == (" " + text if vocab.family in SENTENCEPIECE else text)
+
+
+def test_a_prompt_starts_with_bos_only_where_the_model_uses_one(vocab):
+    prompt = "# Task Description: put the bread in the fridge\n"
+    tokens = vocab.tokenize(prompt, bos=True)
+    bos = [vocab.llm.token_bos()] if FAMILIES[vocab.family] else []
+    assert tokens == bos + vocab.tokenize(prompt)
+    assert tokens[-1] != vocab.llm.token_eos()
+    assert vocab.detokenize(tokens) == (" " + prompt if vocab.family in SENTENCEPIECE else prompt)
+
+
+def test_the_grammars_forced_text_goes_in_one_batch(vocab):
+    """The decision generate takes, without generating: the forced text's tokens, all at once, accepted
+    by llama.cpp's grammar; then the choice is the model's (nothing forced)."""
+    forced = "    GoToObject(robot_list[0], '"
+    grammar = Grammar({"root": seq(forced, alt("Apple", "Bread"), "')\n")})
+    matcher = Matcher(grammar)
+    sampler = vocab._grammar_sampler(grammar)
+    try:
+        tokens = vocab._forced_tokens(matcher, sampler)
+        assert vocab.detokenize(tokens) == forced
+        assert matcher.advance(forced)
+        assert vocab._forced_tokens(matcher, sampler) == []
+    finally:
+        vocab._lib.llama_sampler_free(sampler)
+
+
+class GrammarWriter:
+    """A backend that writes each offered line from the grammar (a vocabulary cannot generate), tokenized by
+    ``vocab``, and keeps the contexts it is asked to continue."""
+
+    def __init__(self, vocab: LlamaCppBackend):
+        self.vocab, self.n_ctx, self.contexts = vocab, vocab.n_ctx, []
+
+    def __getattr__(self, name):
+        return getattr(self.vocab, name)
+
+    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None) -> Generated:
+        self.contexts.append(list(context))
+        text = grammar.sample(random.Random(0))
+        return Generated(self.vocab.tokenize_continuation(text), text, "line")
+
+
+def test_a_stage_writes_forced_text_in_one_batch_without_generating(vocab):
+    head, tail = "def subtask1_wash_apple(robot_list):\n", "\nt1.start()\n"
+    line = Grammar({"root": "    GoToObject(robot_list[0], 'Apple')\n"})
+    backend = GrammarWriter(vocab)
+    prompt = vocab.tokenize("# Your plan:\n", bos=True)
+    record = StageRecord("allocation")
+    run_stage(record, backend, prompt, Script(head, line, tail), output_budget=200, sampling=Sampling(),
+              rng=np.random.default_rng(0))
+    assert record.output == head + "    GoToObject(robot_list[0], 'Apple')\n" + tail
+    assert len(backend.contexts) == 1  # generation for the offered line only, none for forced text
+    assert vocab.detokenize(backend.contexts[0][len(prompt):]) == head
+    assert record.forced_tokens == len(vocab.tokenize_continuation(head)) + len(vocab.tokenize_continuation(tail))
+
+
+def test_the_transformers_backend_spells_llama2_continuations_exactly(tmp_path):
+    """Hugging Face's decode drops a SentencePiece token's leading space at the start of what it decodes
+    ("   GoToObject" for four spaces); the backend spells tokens by their bytes instead."""
+    transformers = pytest.importorskip("transformers")
+    llguidance_hf = pytest.importorskip("llguidance.hf")
+    from smartllm_local.planner.backends.transformers import TransformersBackend
+
+    with lzma.open(VOCAB_DIR / "ggml-vocab-llama-spm.gguf.xz") as packed, (tmp_path / "spm.gguf").open("wb") as out:
+        shutil.copyfileobj(packed, out)
+    tokenizer = transformers.AutoTokenizer.from_pretrained(str(tmp_path), gguf_file="spm.gguf", local_files_only=True)
+    backend = TransformersBackend.__new__(TransformersBackend)  # its tokenizer alone: no weights to load
+    backend.tokenizer, backend.ll_tokenizer = tokenizer, llguidance_hf.from_tokenizer(tokenizer)
+    for text in FORCED:
+        tokens = backend.tokenize_continuation(text)
+        assert backend.detokenize(tokens) == text, text
+    assert backend.tokenize("# Task\n", bos=True)[0] == tokenizer.bos_token_id
