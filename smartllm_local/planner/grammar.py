@@ -176,41 +176,23 @@ class Grammar:
 
     def max_length(self) -> int:
         """The length of the longest string the grammar admits."""
-        return self._max(self.rules["root"], {})
+        return self._length(self.rules["root"], {}, True)
 
-    def _max(self, node: Node, memo: dict[str, int]) -> int:
+    def _length(self, node: Node, memo: dict[str, int], longest: bool) -> int:
+        """The length of the longest (or shortest) string ``node`` admits."""
         if isinstance(node, Lit):
             return len(node.text)
         if isinstance(node, Chars):
             return 1
         if isinstance(node, Ref):
             if node.name not in memo:
-                memo[node.name] = self._max(self.rules[node.name], memo)
+                memo[node.name] = self._length(self.rules[node.name], memo, longest)
             return memo[node.name]
         if isinstance(node, Seq):
-            return sum(self._max(i, memo) for i in node.items)
+            return sum(self._length(i, memo, longest) for i in node.items)
         if isinstance(node, Alt):
-            return max(self._max(o, memo) for o in node.options)
-        return node.max * self._max(node.item, memo)
-
-    def min_length(self) -> int:
-        """The length of the shortest string the grammar admits."""
-        return self._min(self.rules["root"], {})
-
-    def _min(self, node: Node, memo: dict[str, int]) -> int:
-        if isinstance(node, Lit):
-            return len(node.text)
-        if isinstance(node, Chars):
-            return 1
-        if isinstance(node, Ref):
-            if node.name not in memo:
-                memo[node.name] = self._min(self.rules[node.name], memo)
-            return memo[node.name]
-        if isinstance(node, Seq):
-            return sum(self._min(i, memo) for i in node.items)
-        if isinstance(node, Alt):
-            return min(self._min(o, memo) for o in node.options)
-        return node.min * self._min(node.item, memo)
+            return (max if longest else min)(self._length(o, memo, longest) for o in node.options)
+        return (node.max if longest else node.min) * self._length(node.item, memo, longest)
 
     def sample(self, rng: random.Random, extreme: str = "") -> str:
         """A random string of the grammar: uniform choices and repetition counts, or, with
@@ -235,8 +217,7 @@ class Grammar:
         elif isinstance(node, Alt):
             options = node.options
             if extreme:
-                measure = self._max if extreme == "longest" else self._min
-                lengths = [measure(o, memo) for o in options]
+                lengths = [self._length(o, memo, extreme == "longest") for o in options]
                 best = max(lengths) if extreme == "longest" else min(lengths)
                 options = tuple(o for o, n in zip(options, lengths) if n == best)
             self._sample(rng.choice(options), rng, out, extreme, memo)

@@ -188,8 +188,11 @@ class Planner:
             constraint = PlanConstraint(scene, SkillSet(team_skills), team_size=len(team), comments=opts.comments,
                                         function_names=names, team=None if self.config.free_teams else team)
         # Restating, the output's length is known to the character; rewriting, it is estimated.
-        budget = constraint.maximum_output() if isinstance(constraint, RestatedAllocation) else \
-            allocation_budget(result.stages[0], len(names), self.config.budgets["allocation"])
+        if isinstance(constraint, RestatedAllocation):
+            budget = constraint.maximum_output()
+        else:  # never below what the shortest complete allocation needs
+            budget = max(allocation_budget(result.stages[0], len(names), self.config.budgets["allocation"]),
+                         constraint.minimum_budget() if constraint is not None else 0)
         record.prompt, tokens, kept, dropped = fit_prompt(
             lambda ex: allocation_prompt(decomposition, coalition, team, skills, self.catalogue.robots, ex, opts),
             examples, ranked, self.backend, budget, self.chat)

@@ -16,6 +16,14 @@ generation can always go on and ends by completing the plan. Costs are counted
 in characters, an upper bound on tokens (every token spells at least one).
 Whatever the budget kept from being offered is recorded in ``capped``.
 
+With a world check (:mod:`.world_check`), a body offers only the calls that
+succeed from the state the steps so far produce: a function acts after it has
+gone somewhere, goes only where one of its next calls succeeds, and puts down what
+it picked up before it ends; functions are launched in the order they were
+checked in. The budget is kept on the unchecked choices, so the check never costs
+a plan its ending: where no checked line fits, the unchecked ones that do are
+offered (a dead end, counted).
+
 A restated allocation (:mod:`.restated`) is a plan constraint whose bodies are
 the decomposition's.
 """
@@ -29,7 +37,7 @@ from typing import Iterator, Sequence
 from ..robots import Robot
 from ..skills import Skill, SkillSet
 from .constraints import (
-    COMMENT_LEN, INDENT, MAX_STEPS, MAX_SUBTASKS, NAME_FIRST, NAME_LEN, NAME_REST, ORDER_CHARS, ORDER_LEN,
+    COMMENT_LEN, INDENT, MAX_STEPS, STEP_COMMENT_LEN, MAX_SUBTASKS, NAME_FIRST, NAME_LEN, NAME_REST, ORDER_CHARS, ORDER_LEN,
     SUMMARY_CHARS, SUMMARY_LEN, Choose, Constraint, Forced, comment_text, longest, ordered_subset, refusal_line,
     refusal_text_len, robot_list, text_run,
 )
@@ -51,6 +59,8 @@ Candidate = tuple[Skill, tuple[str, ...]]
 
 @dataclass
 class WrittenFunction:
+    """What the constraint knows of a function written so far."""
+
     name: str
     steps: int = 0
     max_index: int = -1  # the highest robot_list[i] used; -1: none (robot_list alone counts as 0)
@@ -433,7 +443,8 @@ class PlanConstraint(Constraint):
             options["action"] = self._node([c for c in unchecked if self._line_len(c) <= remaining - closing])
         # Line-by-line comments: at most one before each step.
         if self.comments and fn.last != "comment" and fn.steps < self.max_steps and fn.comments <= fn.steps:
-            cap = min(COMMENT_LEN, remaining - to_action - closing - len(INDENT) - len("# \n"))
+            comment_max = COMMENT_LEN if self.allocated else STEP_COMMENT_LEN
+            cap = min(comment_max, remaining - to_action - closing - len(INDENT) - len("# \n"))
             if cap >= 1:
                 options["comment"] = seq(INDENT, "# ", comment_text(cap), "\n")
         return self._choose(self.rules, options)

@@ -53,7 +53,8 @@ class RestatedAllocation(PlanConstraint):
             raise ValueError("a restated allocation needs one body per function name")
         self.bodies = [list(body) for body in bodies]
         known = {"team": team} if not isinstance(team, int) else {"team_size": team}
-        super().__init__(scene, skills, function_names=function_names, world=world, **known)
+        # Refusing is the coalition stage's answer; once teams are formed, the plan is written.
+        super().__init__(scene, skills, function_names=function_names, world=world, allow_refusal=False, **known)
         # Robot lists are checked with the team's own robots, in launch order.
         self.team_world = WorldCheck(world.floor_plan, world.skills, robots=self.team) \
             if world is not None and self.team is not None else None

@@ -189,9 +189,9 @@ def test_random_samples_of_every_stage_are_valid_plans(seed):
         team = rng.randint(1, 4)
         coalition = sample_output(CoalitionConstraint(names, team), rng, 4000)
         assert all(LINE.match(line) or line.startswith("# INFEASIBLE: ") for line in coalition.splitlines())
-        allocated = sample_output(
-            PlanConstraint(scene, DEFAULT_SKILL_SET, team_size=team, function_names=names, comments=flags["comments"]),
-            rng, rng.randint(600, 4000))
+        allocator = PlanConstraint(scene, DEFAULT_SKILL_SET, team_size=team, function_names=names,
+                                   comments=flags["comments"])
+        allocated = sample_output(allocator, rng, max(rng.randint(600, 4000), allocator.minimum_budget()))
         parse_plan(allocated, form="allocated", team_size=team, scene_types=scene.types)
 
 
