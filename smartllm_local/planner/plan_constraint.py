@@ -65,6 +65,7 @@ class WrittenFunction:
     steps: int = 0
     max_index: int = -1  # the highest robot_list[i] used; -1: none (robot_list alone counts as 0)
     last: str = ""  # the kind of the last line: "action", "goto", "sleep" or "comment"
+    last_step: str = ""  # the same, comments aside
     comments: int = 0
     held: set[str] = field(default_factory=set)  # object types picked up and not yet put down
     states: dict[str, str] = field(default_factory=dict)  # type -> the last state action on it
@@ -149,8 +150,10 @@ class PlanConstraint(Constraint):
             [c for c in self._filtered(None) if c[0].action in _RELEASE]
         self.release_max = max((self._line_len(c) for c in releases), default=self.action_max)
         self.goto_max = max(self._line_len(c) for c in self._goto_candidates())
-        # A new function's cheapest body: one action (the budget is kept on the unchecked choices).
-        self.fresh_action = min(self._line_len(c) for c in self._candidates(WrittenFunction("")))
+        # A new function's cheapest body: one action; with a world check, a GoToObject before it, so
+        # that the sub-tasks promised leave room to act where they can (the budget is kept all the same).
+        self.fresh_action = min(self._line_len(c) for c in self._candidates(WrittenFunction(""))) + \
+            (min(self._line_len(c) for c in self._goto_candidates()) if world is not None else 0)
         self.skills_len = longest(Ref("skills"), self.rules)
         self.phase = "start"
         self.summary_lines = 0
@@ -419,7 +422,7 @@ class PlanConstraint(Constraint):
         cheapest = min(self._line_len(c) for c in unchecked)
         to_action = min((self._line_len(c) for c in actions),
                         default=self.goto_max + self.action_max if self.world is not None else cheapest)
-        if room and fn.last != "goto":  # going somewhere twice in a row is never useful
+        if room and fn.last_step != "goto":  # going somewhere twice in a row is never useful, comment or not
             after = (self.action_max if self.world is not None else cheapest) + closing
             goto = self._goto_node(fn, remaining - after)
             if goto is not None:
@@ -595,6 +598,7 @@ class PlanConstraint(Constraint):
         fn = self.functions[-1]
         fn.written += 1
         fn.last = kind
+        fn.last_step = kind if kind != "comment" else fn.last_step
         if kind == "comment":
             fn.comments += 1
             return
