@@ -173,7 +173,8 @@ class PlanConstraint(Constraint):
     def _candidates(self, fn: WrittenFunction) -> list[Candidate]:
         """The action calls whose preconditions the function's own steps do not rule out.
 
-        Put, drop and throw only what the function holds; pick up what it does not hold;
+        Put, drop and throw only what the function holds; pick up what it does not hold, and act
+        otherwise only on what it does not hold (in a team, the holder would need that skill too);
         slice only with a knife in hand; do not switch on what it switched on (or open
         what it opened), and do not undo the step just taken. If nothing is left, any action.
         """
@@ -200,6 +201,9 @@ class PlanConstraint(Constraint):
                 elif skill.action in _STATE_ACTIONS:
                     types[0] = [t for t in types[0] if fn.states.get(t) != skill.action
                                 and fn.last_call != (_STATE_ACTIONS[skill.action], t)]
+                if skill.action not in _RELEASE and skill.action != "PickupObject":
+                    # Not on what it holds: in a team, the holder would need this skill too.
+                    types[0] = [t for t in types[0] if t not in fn.held]
             for first in types[0]:
                 if len(types) == 1:
                     yield skill, (first,)

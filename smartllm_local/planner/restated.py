@@ -7,8 +7,9 @@ the robot of each step and the orchestration: a plan cannot drift between stages
 and its longest output is known to the character (its budget).
 
 With a world check, a robot argument is offered only if the call succeeds for
-that ``robot_list`` slot where the slots stand (notional robots, one per slot,
-with one step of look-ahead after a GoToObject), and a robot list only if every
+that ``robot_list`` slot where the slots stand (notional robots, one per slot)
+and leaves every later step of the body a robot under which it succeeds (a search
+over the rest of the body), so that a robot chosen early cannot strand a later step, and a robot list only if every
 step of the function succeeds with the team's own robots from the state the
 functions launched before it leave, as the executor decides it (skills, mass,
 reach, team lifting).
@@ -28,6 +29,9 @@ from .grammar import alt, seq
 from .plan_constraint import STEP_LINE, PlanConstraint, WrittenFunction
 from .scene_context import SceneObjects
 from .world_check import WorldCheck
+
+#: Robot arguments a search for the rest of a body may try before it gives up (and offers the step).
+COMPLETION_TRIES = 400
 
 
 def restated_bodies(decomposition: str, names: Sequence[str]) -> list[list[str]]:
@@ -58,6 +62,11 @@ class RestatedAllocation(PlanConstraint):
         # Robot lists are checked with the team's own robots, in launch order.
         self.team_world = WorldCheck(world.floor_plan, world.skills, robots=self.team) \
             if world is not None and self.team is not None else None
+        # While bodies are written, the team's own robots run each finished body (with the first robot
+        # list under which it succeeds), so a body is checked from the state its predecessors leave.
+        self.body_world = WorldCheck(world.floor_plan, world.skills, robots=self.team) \
+            if self.team_world is not None else None
+        self._bodies_run: set[str] = set()
 
     def _body_cost(self, index: int) -> int:
         return sum(self._line_cost(line) for line in self.bodies[index])
@@ -73,7 +82,7 @@ class RestatedAllocation(PlanConstraint):
         return bodies + threads + self._starts_joins(len(names))
 
     def world_counts(self) -> tuple[int, int]:
-        worlds = [w for w in (self.world, self.team_world) if w is not None]
+        worlds = [w for w in (self.world, self.team_world, self.body_world) if w is not None]
         return sum(w.tries for w in worlds), sum(w.dead_ends for w in worlds)
 
     def _body(self, remaining: int) -> Forced | Choose:
@@ -82,6 +91,7 @@ class RestatedAllocation(PlanConstraint):
         fn = self.functions[-1]
         body = self.bodies[len(self.functions) - 1]
         if fn.written == len(body):
+            self._run_body(fn)
             return Forced("\n")
         line = body[fn.written]
         match = STEP_LINE.match(line)
@@ -90,11 +100,10 @@ class RestatedAllocation(PlanConstraint):
         skill = self.by_name[match.group(1)]
         objects = re.findall(r"'([^']+)'", match.group(2))
         able, working = self._robot_args(fn, skill, objects)
-        if self.world is not None and skill.action == "" and len(working) > 1:
-            # Look one step ahead: send robots where one of them can then do the next action.
-            following = self._next_action(fn)
-            if following is not None:
-                working = [a for a in working if self._leads_on(fn, a, skill, objects, *following)] or working
+        if self.world is not None and working:
+            # Only robots after whose step the rest of the body can still be done by some robots.
+            found = [(a, self._completes(fn, a, skill, objects)) for a in working]
+            working = [a for a, ok in found if ok] or [a for a, ok in found if ok is None]
         if self.world is not None and not working:
             self.world.dead_ends += 1
         # No robot can: the coalition stage refuses such plans, and free teams leave it to the model.
@@ -102,34 +111,90 @@ class RestatedAllocation(PlanConstraint):
         text = seq(f"{INDENT}{skill.name}(", alt(*robots), f", {match.group(2)})\n")
         return self._choose(self.rules, {"goto" if skill.action == "" else "action": text})
 
-    def _next_action(self, fn: WrittenFunction) -> tuple[Skill, list[str]] | None:
-        """The restated body's next step after the current one, if it is an action (not a GoToObject)."""
+    def _rest(self, fn: WrittenFunction) -> list[tuple[Skill, list[str]]]:
+        """The restated body's skill calls after the current line."""
+        rest = []
         for line in self.bodies[len(self.functions) - 1][fn.written + 1:]:
             match = STEP_LINE.match(line)
-            if match is None or match.group(1) == "time.sleep":
-                continue
-            skill = self.by_name[match.group(1)]
-            return (skill, re.findall(r"'([^']+)'", match.group(2))) if skill.action else None
-        return None
+            if match is not None and match.group(1) != "time.sleep":
+                rest.append((self.by_name[match.group(1)], re.findall(r"'([^']+)'", match.group(2))))
+        return rest
 
-    def _leads_on(self, fn: WrittenFunction, arg: str, goto: Skill, objects: Sequence[str],
-                  skill: Skill, following: Sequence[str]) -> bool:
-        """Whether, after this GoToObject by ``arg``, some robot argument can do the next action."""
-        assert self.world is not None
+    def _completes(self, fn: WrittenFunction, arg: str, skill: Skill, objects: Sequence[str]) -> bool | None:
+        """Whether, after this step by ``arg``, every later step of the body can be given a robot
+        argument under which it succeeds (a depth-first search, the last step's robot tried first);
+        None if the search ran out of tries before it knew."""
+        budget = [COMPLETION_TRIES]
         saved = self.world.run.snapshot()
-        trial = replace(fn, slots_went=set(fn.slots_went), calls=list(fn.calls))
         try:
-            self._went(trial, arg, goto, objects)
-            return bool(self._robot_args(trial, skill, following)[1])
+            trial = self._after(fn, arg, skill, objects)
+            return self._search(trial, self._rest(fn), arg, budget)
         finally:
             self.world.run.restore(saved)
 
-    def _went(self, fn: WrittenFunction, arg: str, goto: Skill, objects: Sequence[str]) -> None:
+    def _search(self, fn: WrittenFunction, rest: Sequence[tuple[Skill, list[str]]], last: str,
+                budget: list[int]) -> bool | None:
+        if not rest:
+            return bool(self._team_lists(fn, budget))
+        skill, objects = rest[0]
+        unknown = False
+        args = self._robot_args(fn, skill, objects)[1]
+        # The robot of the last step first, then the whole list for a GoToObject (it brings every slot).
+        args.sort(key=lambda a: (a != last, not (skill.action == "" and a == "robot_list")))
+        for arg in args:
+            if budget[0] <= 0:
+                return None
+            budget[0] -= 1
+            saved = self.world.run.snapshot()
+            try:
+                found = self._search(self._after(fn, arg, skill, objects), rest[1:], arg, budget)
+            finally:
+                self.world.run.restore(saved)
+            if found:
+                return True
+            unknown = unknown or found is None
+        return None if unknown else False
+
+    def _team_lists(self, fn: WrittenFunction, budget: list[int] | None = None) -> list[tuple[int, ...]]:
+        """The robot lists under which the team's own robots do every step of the whole body from the
+        state the bodies before it leave (one is enough with a budget); every list without a team."""
+        need = self._need(fn)
+        lists = feasible_lists(self.team, self._steps(fn), need) if self.team is not None else None
+        if self.body_world is None or lists is None:
+            return lists or [tuple(range(need))]
+        working = []
+        for order in lists:
+            if budget is not None:
+                if budget[0] <= 0:
+                    break
+                budget[0] -= 1
+            if self.body_world.runs(fn.calls, order):
+                working.append(order)
+                if budget is not None:
+                    break
+        return working
+
+    def _need(self, fn: WrittenFunction) -> int:
+        return self.team_size if fn.whole else max(1, fn.max_index + 1)
+
+    def _run_body(self, fn: WrittenFunction) -> None:
+        """Once a body is written, let the team run it (with its first working list) for the next body."""
+        if self.body_world is not None and fn.name not in self._bodies_run:
+            self._bodies_run.add(fn.name)
+            lists = self._team_lists(fn) or feasible_lists(self.team, self._steps(fn), self._need(fn)) or []
+            if lists:
+                self.body_world.perform(fn.calls, lists[0])
+
+    def _after(self, fn: WrittenFunction, arg: str, skill: Skill, objects: Sequence[str]) -> WrittenFunction:
+        """A copy of the function with one more step by ``arg``, applied to the world check's dry run."""
         slot = self._slot(arg)
-        self.world.apply(self._members(fn, slot), goto.name, objects)
-        fn.calls.append((slot, goto.name, tuple(objects)))
-        fn.max_index = max(fn.max_index, -1 if slot is None else slot)
-        self._mark_went(fn, slot)
+        trial = replace(fn, slots_went=set(fn.slots_went), calls=list(fn.calls))
+        self.world.apply(self._members(trial, slot), skill.name, objects)
+        trial.calls.append((slot, skill.name, tuple(objects)))
+        trial.max_index = max(trial.max_index, -1 if slot is None else slot)
+        if skill.action == "":
+            self._mark_went(trial, slot)
+        return trial
 
     @staticmethod
     def _slot(arg: str) -> int | None:

@@ -57,15 +57,16 @@ class WorldCheck:
         """Whether a function's calls all succeed with ``robots`` (team indices) as its robot_list."""
         saved = self.run.snapshot()
         try:
-            return self.perform(calls, robots)
+            return all(self._call(call, robots) for call in calls)
         finally:
             self.run.restore(saved)
 
     def perform(self, calls: Sequence[Call], robots: Sequence[int]) -> bool:
-        """Apply a function's calls with ``robots`` as its robot_list; whether they all succeeded."""
-        ok = True
-        for slot, skill, objects in calls:
-            self.tries += 1
-            members = list(robots) if slot is None else [robots[slot]]
-            ok = self.run.apply(members, skill, objects).success and ok
-        return ok
+        """Apply a function's calls with ``robots`` as its robot_list (all of them, as the executor goes
+        on after a failure); whether they all succeeded."""
+        return all([self._call(call, robots) for call in calls])
+
+    def _call(self, call: Call, robots: Sequence[int]) -> bool:
+        slot, skill, objects = call
+        self.tries += 1
+        return self.run.apply(list(robots) if slot is None else [robots[slot]], skill, objects).success
