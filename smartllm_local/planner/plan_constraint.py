@@ -236,7 +236,7 @@ class PlanConstraint(Constraint):
             then = self._candidates(replace(fn, last_call=("", ""), went=True))
             gotos = [(skill, (target,)) for skill, (target,) in gotos if self.world.leads_somewhere(
                 members, skill.name, target,
-                [(c.name, objs) for c, objs in then if objs[0] == target or c.action in _RELEASE])]
+                [(c.name, objs) for c, objs in then if self._acts_on((c, objs)) in (target, None)])]
         return self._node(gotos)
 
     def _members(self, fn: WrittenFunction, slot: int | None) -> list[int]:
@@ -257,8 +257,26 @@ class PlanConstraint(Constraint):
             candidates = [c for c in candidates if c[0].action != "PickupObject"]
             if fn.held:
                 candidates = [c for c in candidates if c[0].action in _RELEASE]
+        place = self._place(fn)
+        candidates = [c for c in candidates if self._acts_on(c) in (place, None)]
         members = self._members(fn, None)
         return [c for c in candidates if self.world.succeeds(members, c[0].name, c[1])]
+
+    def _place(self, fn: WrittenFunction, slot: int | None = None) -> str | None:
+        """What the function (or its robot_list slot) last went to."""
+        gotos = {s.name for s in self.gotos}
+        return next((objects[0] for went, skill, objects in reversed(fn.calls)
+                     if skill in gotos and went in (slot, None)), None)
+
+    @staticmethod
+    def _acts_on(candidate: Candidate) -> str | None:
+        """Where a call acts: its object, a put's receptacle; None for dropping or throwing what is held.
+        With a world check a call acts only on what the function last went to: where exactly a robot
+        stands depends on where the others stand, and only the object gone to is surely within reach."""
+        skill, objects = candidate
+        if skill.action == "PutObject":
+            return objects[1]
+        return None if skill.action in ("DropHandObject", "ThrowObject") else objects[0]
 
     def _hold_after(self, fn: WrittenFunction, candidate: Candidate) -> int:
         """With a world check a function ends with empty hands (its robot may do the next function):

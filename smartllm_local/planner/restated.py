@@ -207,8 +207,10 @@ class RestatedAllocation(PlanConstraint):
         able, working = [], []
         for arg in self.robot_args:
             slot = self._slot(arg)
-            if self.world is not None and skill.action and not (fn.together if slot is None else slot in fn.slots_went):
-                continue  # with a world check, robots act where they went in this function, not before it
+            if self.world is not None and skill.action and (
+                    not (fn.together if slot is None else slot in fn.slots_went)
+                    or self._acts_on((skill, tuple(objects))) not in (self._place(fn, slot), None)):
+                continue  # with a world check, robots act on what they went to in this function
             if self.team is not None:
                 steps = self._steps(fn) + [Step(slot, skill.name, mass)]
                 lists = feasible_lists(self.team, steps, max(1, fn.max_index + 1, (slot or 0) + 1))
