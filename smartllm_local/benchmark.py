@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 from statistics import mean
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Sequence
 
 from .errors import UserError
 from .executor import Execution, run_plan
@@ -90,6 +90,19 @@ def check_reference_plans(
         if controller is not None:
             controller.stop()
     return results
+
+
+def reference_ticks(task: Task, catalogue: Catalogue, controller: Any, plans_dir: Path | None = None) -> int | None:
+    """How many ticks the task's reference plan takes to meet every goal condition (None: it has no
+    plan that does), run on ``controller`` (the Speed measure's yardstick)."""
+    path = (plans_dir or default_plans_dir()) / f"{task.id}.py"
+    plan, _ = _load_plan(task, path, catalogue) if task.feasible and task.goals else (None, "")
+    if plan is None:
+        return None
+    execution = run_plan(plan, task.floor_plan, catalogue.team(task.robots), controller=controller,
+                         skills=catalogue.skills)
+    scores = score_execution(execution, task.goals)
+    return execution.ticks if scores.TCR == 1.0 else None
 
 
 def _load_plan(task: Task, path: Path, catalogue: Catalogue) -> tuple[Plan | None, str]:
@@ -167,4 +180,4 @@ def _mean(group: Sequence[ReferenceResult], metric: str) -> str:
     return f"{mean(known):.2f}" if known else "n/a"
 
 
-__all__ = ["ReferenceResult", "category_table", "check_reference_plans", "default_plans_dir"]
+__all__ = ["ReferenceResult", "category_table", "check_reference_plans", "default_plans_dir", "reference_ticks"]

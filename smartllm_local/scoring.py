@@ -32,7 +32,7 @@ counts only object interactions as actions for Exe.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any, Iterable, Mapping, Sequence
 
 from .errors import TaskFileError
@@ -196,6 +196,17 @@ class Scores:
     Exe: float
     transitions: int
     conditions: tuple[tuple[str, bool], ...] = ()
+    ticks: int = 0  # the run's length (its makespan)
+    Speed: float | None = None  # the reference plan's ticks over the run's (see with_speed)
+
+    def with_speed(self, reference_ticks: int | None) -> "Scores":
+        """RU counts parallel starts, so one robot doing everything in one sub-task scores RU 1; Speed
+        shows efficiency: the reference plan's ticks over the run's, capped at 1, for a run that met
+        every goal condition (0 for one that did not; None without a reference or goal conditions)."""
+        if reference_ticks is None or self.TCR is None:
+            return replace(self, Speed=None)
+        fast = min(1.0, reference_ticks / self.ticks) if self.ticks else 1.0
+        return replace(self, Speed=fast if self.TCR == 1.0 else 0.0)
 
     def metrics(self) -> dict[str, Any]:
         """The five metrics and the transition count, as the CLI's --json prints them."""
@@ -229,8 +240,9 @@ def score(
 def score_execution(execution: Any, goals: Sequence[Goal], *, trans: int | None = None,
                     max_trans: int | None = None) -> Scores:
     """Score an :class:`~smartllm_local.executor.Execution`."""
-    return score(execution.final_objects, goals, attempted=execution.attempted, succeeded=execution.succeeded,
-                 transitions=execution.transitions, trans=trans, max_trans=max_trans)
+    return replace(score(execution.final_objects, goals, attempted=execution.attempted,
+                         succeeded=execution.succeeded, transitions=execution.transitions, trans=trans,
+                         max_trans=max_trans), ticks=execution.ticks)
 
 
 __all__ = [

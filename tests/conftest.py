@@ -18,3 +18,13 @@ def fp6_controller():
     controller = open_controller(6, agent_count=3)
     yield controller
     controller.stop()
+
+
+@pytest.fixture(scope="session")
+def smollm2():
+    """The embedded SmolLM2 GGUF on llama.cpp, loaded once per session."""
+    from smartllm_local.planner.backends import load_backend
+
+    backend = load_backend("llamacpp", "smollm2", n_ctx=4096)
+    yield backend
+    backend.close()

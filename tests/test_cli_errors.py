@@ -81,6 +81,18 @@ def test_seed_and_temperature_are_checked_before_any_work(tmp_path, command, arg
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("args, parts", [
+    (["--method", "oracle"], ["--method must be one of smartllm, decomp-random, decomp-rule, reference, not 'oracle'"]),
+    (["--seeds", "three"], ["--seeds must be a count (e.g. 5) or a list of seeds (e.g. 0,1,2), not 'three'"]),
+    (["--seeds", "1,1", "--temperature", "0.7"], ["--seeds must name distinct seeds"]),
+    (["--seeds", "0"], ["--seeds must name distinct seeds between 0 and 4294967295, at least one"]),
+    (["--seeds", "3"], ["--seeds needs --temperature above 0"]),
+])
+def test_methods_and_seeds_are_checked_before_any_work(tmp_path, args, parts):
+    one_line_error(cli("benchmark", "run", "--out", "out", *args, cwd=tmp_path), *parts)
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("command", [
     ["plan", "Put the apple in the fridge", "--floor-plan", "6", "--robots", "1"],
     ["benchmark", "run"],

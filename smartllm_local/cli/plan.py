@@ -5,20 +5,25 @@ from __future__ import annotations
 import json
 import math
 import sys
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Optional
 
 import typer
 
 from ..errors import UserError
-from ..evaluation import execute_and_score, run_benchmark, summary_table
-from ..files import check_output_folder
-from ..planner.backends import BACKENDS, Sampling, load_backend
+from ..evaluation import execute_and_score, run_benchmark, summary_table, variability_table
+from ..files import check_output_folder, write_atomic
+from ..methods import METHODS, make_method
+from ..planner.backends import BACKENDS, Sampling, load_backend, model_location
 from ..planner.chat import CHAT_TEMPLATE_MODES, check_mode
 from ..planner.models import DEFAULT_MODEL, EMBEDDED
 from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
 from ..planner.prompts import PromptOptions
-from ..robots import load_catalogue, parse_robot_ids
+from ..provenance import run_manifest
+from ..resources import data_dir
+from ..robots import default_catalogue_path, load_catalogue, parse_robot_ids
+from ..run_store import RunStore
 from ..tasks import CATEGORIES, default_task_files, find_task, load_tasks
 from ..world.scenes import floor_plan_name
 
@@ -56,6 +61,10 @@ class ModelOptions:
             world_check=not no_world_check,
         )
         self.seed = seed
+
+    def config_for(self, seed: int) -> PlannerConfig:
+        """The planner's settings with another sampling seed."""
+        return replace(self.config, sampling=replace(self.config.sampling, seed=seed))
 
     def planner(self, catalogue) -> Planner:
         backend = load_backend(self.backend, self.model, n_ctx=self.n_ctx, threads=self.threads,
@@ -173,7 +182,18 @@ def plan_command(
 
 
 def benchmark_run(
-    out: Path = typer.Option(..., "--out", help="Folder for per-task artifacts, results.jsonl and summary.txt."),
+    ctx: typer.Context,
+    out: Path = typer.Option(..., "--out", help=(
+        "Folder for run.json, per-task artifacts, results.jsonl and summary.txt. A run stopped at any "
+        "point (Ctrl-C, a crash, kill -9) and started again with the same arguments resumes here.")),
+    restart: bool = typer.Option(False, "--restart", help="Discard the run --out holds and start over."),
+    seeds: Optional[str] = typer.Option(None, "--seeds", help=(
+        "N (seeds --seed … --seed+N-1) or a list (0,3,7): every task once per seed (with --temperature "
+        "above 0), each run in DIR/seed-<s>/; summary.txt gives each category's mean ± standard deviation "
+        "over the seeds (the paper's Table II).")),
+    method: str = typer.Option("smartllm", help=(
+        f"{', '.join(METHODS)}: SMART-LLM's stages; the model's decomposition with robots at random (seeded) "
+        "or by a rule (a capable robot, else the smallest capable team); the reference plans (no model).")),
     tasks: Optional[Path] = _TASKS,
     category: Optional[str] = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
     task: Optional[list[str]] = typer.Option(None, help="Only these task ids (repeatable)."),
@@ -201,18 +221,66 @@ def benchmark_run(
                            no_world_check)
     check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
-    chosen = load_tasks(tasks or default_task_files(), catalogue=cat)
+    tasks_files = [tasks] if tasks else default_task_files()
+    chosen = load_tasks(tasks_files, catalogue=cat)
     if category is not None:
         chosen = [t for t in chosen if t.category == category]
     if task:
         chosen = [find_task(chosen, t) for t in task]
     if not chosen:
         raise UserError("no task matches the filters")
-    planner = options.planner(cat)
+    if method not in METHODS:
+        raise UserError(f"--method must be one of {', '.join(METHODS)}, not {method!r}")
+    chosen_seeds = parse_seeds(seeds, seed)
+    if len(chosen_seeds) > 1 and temperature == 0 and method != "decomp-random":
+        raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
+    arguments = {k: v for k, v in ctx.params.items() if k not in ("out", "restart", "seeds")}
+    model_path = None if method == "reference" else model_location(backend, model)
+    runs = []
+    for s in chosen_seeds:  # every run folder is checked before the model loads
+        folder = out if seeds is None else out / f"seed-{s}"
+        manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
+                                catalogue or default_catalogue_path(), data_dir("prompts"))
+        runs.append((s, RunStore(folder, manifest, restart=restart)))
+    planner = None if method == "reference" else options.planner(cat)
     try:
-        outcomes = run_benchmark(chosen, planner, cat, out=out, build=str(thor_build) if thor_build else None,
-                                 progress=lambda message: print(message, file=sys.stderr))
+        for s, store in runs:
+            done = store.results()
+            if done:
+                print(f"resuming the run in {store.out}: {sum(t.id in done for t in chosen)} of {len(chosen)} "
+                      "tasks done", file=sys.stderr)
+            seeded = None if planner is None else Planner(planner.backend, cat, options.config_for(s))
+            run_benchmark(chosen, make_method(method, cat, seeded), cat, out=store.out, store=store,
+                          build=str(thor_build) if thor_build else None,
+                          progress=lambda message: print(message, file=sys.stderr))
+    except KeyboardInterrupt:
+        scored = sum(t.id in store.results() for _, store in runs for t in chosen)
+        print(f"interrupted: {scored} of {len(chosen) * len(runs)} tasks scored; the same command resumes the run",
+              file=sys.stderr)
+        raise typer.Exit(130)
     finally:
-        planner.backend.close()
-    typer.echo(summary_table(outcomes))
-    typer.echo(f"results: {out / 'results.jsonl'}")
+        if planner is not None:
+            planner.backend.close()
+    results = [store.results() for _, store in runs]
+    per_run = [[lines[t.id] for t in chosen if t.id in lines] for lines in results]
+    if seeds is None:
+        typer.echo(summary_table(per_run[0]))
+        typer.echo(f"results: {out / 'results.jsonl'}")
+        return
+    table = variability_table(per_run)
+    write_atomic(out / "summary.txt", table + "\n")
+    typer.echo(table)
+    typer.echo(f"results: {', '.join(str(store.out / 'results.jsonl') for _, store in runs)}")
+
+
+def parse_seeds(seeds: str | None, seed: int) -> list[int]:
+    """``--seeds``: N (seeds ``seed`` .. ``seed + N - 1``) or a comma-separated list; none: ``[seed]``."""
+    if seeds is None:
+        return [seed]
+    try:
+        values = [int(v) for v in seeds.split(",")] if "," in seeds else list(range(seed, seed + int(seeds)))
+    except ValueError:
+        raise UserError(f"--seeds must be a count (e.g. 5) or a list of seeds (e.g. 0,1,2), not {seeds!r}") from None
+    if not values or len(set(values)) != len(values) or not all(0 <= v <= MAX_SEED for v in values):
+        raise UserError(f"--seeds must name distinct seeds between 0 and {MAX_SEED}, at least one, not {seeds!r}")
+    return values

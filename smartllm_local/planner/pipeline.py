@@ -7,6 +7,7 @@ stay in the model's cache from one task to the next).
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 from dataclasses import dataclass, field
@@ -15,7 +16,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import UserError
+from ..errors import PlanError, UserError
 from ..files import json_text, write_atomic
 from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
@@ -91,6 +92,14 @@ class PlanResult:
     error: str = ""
 
     @property
+    def refused_by(self) -> str | None:
+        """Who refused: "grammar" (no team can do a sub-task the model wrote: it admitted nothing else),
+        "rule" (a rule-based allocation found no team), "model", or None."""
+        if self.refusal is None:
+            return None
+        return next((r.refused_by for r in self.stages if r.refusal is not None and r.refused_by), "model")
+
+    @property
     def notices(self) -> list[str]:
         dropped = [f"{r.stage}: dropped example(s) {', '.join(r.dropped)} to fit the context"
                    for r in self.stages if r.dropped]
@@ -108,8 +117,14 @@ class Planner:
         self.catalogue = catalogue
         self.config = config
         self.examples = list(examples) if examples is not None else load_examples()
-        self.rng = np.random.default_rng(config.sampling.seed)
         self.chat, self.chat_status = chat_format(backend, config.chat_template)
+
+    def stage_rng(self, result: PlanResult, stage: str) -> np.random.Generator:
+        """A stage's sampling randomness, from (seed, task, stage) alone: a task planned by itself
+        samples what it samples in a full run, whatever ran before it."""
+        task = json.dumps([result.instruction, result.floor_plan, list(result.robots), stage]).encode()
+        words = np.frombuffer(hashlib.sha256(task).digest()[:16], dtype=np.uint32)
+        return np.random.default_rng([self.config.sampling.seed, *(int(w) for w in words)])
 
     # ---------------------------------------------------------------- stages
 
@@ -128,7 +143,7 @@ class Planner:
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world) \
             if self.config.grammar else None
         run_stage(record, self.backend, tokens, constraint, output_budget=budget,
-                  sampling=self.config.sampling, rng=self.rng)
+                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
         self._finish_plan_stage(record, result, form="decomposed", scene=scene)
         result.stages.append(record)
         return record
@@ -155,7 +170,7 @@ class Planner:
             # (the constraint ends the output once every sub-task has its line; free text would fill it).
             budget = max(budget, self.backend.n_ctx - len(tokens) - 1)
         run_stage(record, self.backend, tokens, constraint, output_budget=budget,
-                  sampling=self.config.sampling, rng=self.rng)
+                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
         if constraint is None:
             lines = [line for line in record.output.splitlines() if line.strip()]
             bad = [line for line in lines if not _COALITION_LINE.match(line)]
@@ -165,6 +180,7 @@ class Planner:
                 record.refusal = lines[0][len(REFUSAL_PREFIX):].strip()
         if record.refusal is not None:
             result.refusal = record.refusal
+            record.refused_by = "grammar" if constraint is not None and constraint.must_refuse else "model"
         result.stages.append(record)
         return record
 
@@ -198,7 +214,7 @@ class Planner:
             examples, ranked, self.backend, budget, self.chat)
         record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
         run_stage(record, self.backend, tokens, constraint, output_budget=budget,
-                  sampling=self.config.sampling, rng=self.rng)
+                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
         self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))
         result.stages.append(record)
         return record
@@ -310,3 +326,24 @@ def _remove_stale_artifacts(out: Path, written: set[Path]) -> None:
 
 def result_json(result: PlanResult) -> str:
     return json.dumps({"allocated": result.allocated, "refusal": result.refusal, "error": result.error or None})
+
+
+def restore_stage(result: PlanResult, record: StageRecord, skills: SkillSet, scene: SceneObjects,
+                  team_size: int) -> None:
+    """Put back a stage that an interrupted run finished, its plan parsed again from its output.
+
+    Raises:
+        PlanError: the saved output is not the plan it claims to be (the record is not to be trusted).
+    """
+    if record.stage != "coalition" and not record.error:
+        form = "decomposed" if record.stage == "decomposition" else "allocated"
+        record.plan = parse_plan(record.output, form=form, skills=skills,  # type: ignore[arg-type]
+                                 team_size=team_size if form == "allocated" else None,
+                                 scene_types=scene.types, name=f"<saved {record.stage} output>")
+        if (record.refusal is None) != (not record.plan.is_refusal):  # type: ignore[union-attr]
+            raise PlanError(f"the saved {record.stage} output and its record disagree on refusing")
+    if record.refusal is not None:
+        result.refusal = record.refusal
+    if record.error and record.stage != "coalition":
+        result.error = record.error
+    result.stages.append(record)

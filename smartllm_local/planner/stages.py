@@ -9,8 +9,8 @@ being truncated or the run failing.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from dataclasses import dataclass, field, fields
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -38,6 +38,7 @@ class StageRecord:
     raw: str = ""
     output: str = ""
     refusal: str | None = None
+    refused_by: str = ""  # who refused: "model", or "grammar" when it admitted nothing else, or "rule"
     prompt_tokens: int = 0
     generated_tokens: int = 0
     forced_tokens: int = 0
@@ -51,6 +52,17 @@ class StageRecord:
     error: str = ""
     plan: object = None  # the parsed plan of a plan stage
     chat_template: str = ""  # "applied", "none (base model)" or "off" (--chat-template none)
+
+    def saved(self) -> dict[str, Any]:
+        """Everything but the parsed plan (it is parsed again from the output when a run resumes)."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "plan"}
+
+    @classmethod
+    def restored(cls, data: Mapping[str, Any]) -> "StageRecord":
+        known = {f.name for f in fields(cls)} - {"plan"}
+        if not isinstance(data, Mapping) or set(data) != known:
+            raise ValueError("not a saved stage record")
+        return cls(**data)
 
     @property
     def tokens_per_second(self) -> float:

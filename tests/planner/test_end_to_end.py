@@ -46,7 +46,7 @@ def test_every_benchmark_task_goes_through_all_stages_and_executes(smollm2, tmp_
     lines = (tmp_path / "results.jsonl").read_text().splitlines()
     assert [json.loads(line)["id"] for line in lines] == [t.id for t in tasks]
     assert (tmp_path / tasks[0].id / "allocated.py").is_file()
-    table = summary_table(outcomes)
+    table = summary_table([o.as_json() for o in outcomes])
     assert "all feasible" in table and "infeasible" in table
 
 
@@ -65,3 +65,24 @@ def test_the_plan_command_writes_its_artifacts_and_executes(tmp_path):
     summary = json.loads((out / "result.json").read_text())
     assert set(summary["metrics"]) == {"SR", "TCR", "GCR", "RU", "Exe", "transitions"}
     assert summary["stages"]["decomposition"]["prompt_tokens"] > 1000
+
+
+def test_a_refusal_the_grammar_forces_is_told_from_one_the_model_chose(smollm2):
+    """kitchen-inf-02's team cannot slice: once the model writes a SliceObject step, the coalition
+    grammar admits only a refusal, and the result says the grammar refused, not the model."""
+    from smartllm_local.planner.pipeline import PlanResult
+    from smartllm_local.planner.scene_context import scene_objects
+    from smartllm_local.planner.stages import StageRecord
+
+    catalogue = load_catalogue()
+    task = next(t for t in load_tasks() if t.id == "kitchen-inf-02")
+    decomposed = ("# SubTask 1: slice the potato (skills: GoToObject, PickupObject, SliceObject, PutObject)\n"
+                  "# Alone.\n\ndef subtask1_slice():\n    GoToObject('Knife')\n    PickupObject('Knife')\n"
+                  "    GoToObject('Potato')\n    SliceObject('Potato')\n    GoToObject('CounterTop')\n"
+                  "    PutObject('Knife', 'CounterTop')\n\nsubtask1_slice()\n")
+    plan = parse_plan(decomposed, form="decomposed")
+    result = PlanResult(task.instruction, task.floor_plan, list(task.robots),
+                        stages=[StageRecord("decomposition", output=decomposed, plan=plan)])
+    Planner(smollm2, catalogue).form_coalition(result, plan, catalogue.team(task.robots),
+                                               scene_objects(task.floor_plan))
+    assert result.refusal is not None and result.refused_by == "grammar"

@@ -106,6 +106,7 @@ def test_relevance_keeps_the_closest_example():
 def test_a_refusal_stops_the_pipeline_and_becomes_the_plan(catalogue, tmp_path):
     result = plan_with(FakeBackend(refuse=True), catalogue)
     assert result.refusal and [r.stage for r in result.stages] == ["decomposition"]
+    assert result.refused_by == "model"
     assert result.allocated.startswith("# INFEASIBLE: ") and result.plan.is_refusal
     write_artifacts(result, tmp_path)
     assert (tmp_path / "allocated.py").read_text().startswith("# INFEASIBLE")

@@ -237,16 +237,17 @@ def test_exe_is_zero_without_actions_and_gcr_is_none_without_goals():
 def test_metrics_are_the_cli_json():
     s = score([obj("Apple|1", isPickedUp=True)], parse_goals([{"name": "Apple", "state": "PICKED"}]),
               attempted=2, succeeded=1, transitions=0, trans=0, max_trans=0)
-    assert s.metrics() == {"SR": 1.0, "TCR": 1.0, "GCR": 1.0, "RU": 1.0, "Exe": 0.5, "transitions": 0}
+    assert s.metrics() == {"SR": 1.0, "TCR": 1.0, "GCR": 1.0, "RU": 1.0, "Exe": 0.5, "transitions": 0,
+                           "ticks": 0, "Speed": None}
 
 
 def test_score_execution_reads_a_run():
     class Run:  # the fields score_execution reads
         final_objects = [obj("Apple|1", isPickedUp=True)]
-        attempted, succeeded, transitions = 5, 4, 2
+        attempted, succeeded, transitions, ticks = 5, 4, 2, 7
 
     s = score_execution(Run(), parse_goals([{"name": "Apple", "state": "PICKED"}]), trans=1, max_trans=3)
-    assert (s.Exe, s.GCR, s.RU, s.SR, s.transitions) == (0.8, 1.0, 0.5, 0.0, 2)
+    assert (s.Exe, s.GCR, s.RU, s.SR, s.transitions, s.ticks) == (0.8, 1.0, 0.5, 0.0, 2, 7)
 
 
 # ----------------------------------------------------------------------------- parse_goals

@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 from ...errors import UserError
+from ..models import EMBEDDED
 from .base import Backend, Generated, Sampling
 
 BACKENDS = ("llamacpp", "transformers")
 
-__all__ = ["BACKENDS", "Backend", "Generated", "Sampling", "load_backend"]
+__all__ = ["BACKENDS", "Backend", "Generated", "Sampling", "load_backend", "model_location"]
 
 
 def load_backend(
@@ -39,3 +41,12 @@ def load_backend(
 
         return TransformersBackend(model, n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers, seed=seed)
     raise UserError(f"unknown backend {name!r}; choose one of {', '.join(BACKENDS)}")
+
+
+def model_location(name: str, model: str | None) -> Path:
+    """The file (or checkpoint folder) a backend would load for ``--model``, found without loading it."""
+    from ..models import resolve_gguf
+
+    if name == "transformers" and model is not None and model not in EMBEDDED and Path(model).expanduser().is_dir():
+        return Path(model).expanduser()
+    return resolve_gguf(model)
