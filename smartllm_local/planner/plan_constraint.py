@@ -460,14 +460,16 @@ class PlanConstraint(Constraint):
                 options["action"] = action
         # With a world check a function puts down what it holds before it ends, if there is room to.
         must_release = self.world is not None and not self.allocated and fn.held and "action" in options
+        step_follows = self.world is None or bool({"goto", "action"} & set(options))
         if fn.last == "action" and not must_release:
             options["end"] = "\n"
-        elif not {"goto", "action"} & set(options) and self.world is not None:
+        elif not step_follows:
             # Nothing checked fits or succeeds (a dead end, counted): the unchecked actions that fit.
-            self.world.dead_ends += 1
+            self.world.dead_ends += 1  # type: ignore[union-attr]
             options["action"] = self._node([c for c in unchecked if self._line_len(c) <= remaining - closing])
-        # Line-by-line comments: at most one before each step.
-        if self.comments and fn.last != "comment" and fn.steps < self.max_steps and fn.comments <= fn.steps:
+        # Line-by-line comments: at most one before each step, and only where a step can follow it.
+        if self.comments and step_follows and fn.last != "comment" and fn.steps < self.max_steps \
+                and fn.comments <= fn.steps:
             comment_max = COMMENT_LEN if self.allocated else STEP_COMMENT_LEN
             cap = min(comment_max, remaining - to_action - closing - len(INDENT) - len("# \n"))
             if cap >= 1:

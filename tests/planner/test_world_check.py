@@ -32,7 +32,7 @@ def _decomposer(floor_plan: int) -> PlanConstraint:
                           world=WorldCheck(floor_plan, CATALOGUE.skills, MAX_SUBTASKS))
 
 
-def _plan(task, rng, sequential: bool):
+def _plan(task, rng, sequential: bool, budget: int = 1400):
     """Decompose, check the coalition, allocate (restating), all with a random writer; None if refused."""
     scene = scene_objects(task.floor_plan)
     team = CATALOGUE.team(task.robots)
@@ -45,7 +45,7 @@ def _plan(task, rng, sequential: bool):
         return random_line(choose, remaining)
 
     decomposer = _decomposer(task.floor_plan)
-    text = run_constraint(decomposer, write, len, 1400)
+    text = run_constraint(decomposer, write, len, budget)
     plan = parse_plan(text, form="decomposed", skills=CATALOGUE.skills, scene_types=scene.types)
     names = [f.name for f in plan.functions]
     needs = function_needs(plan, scene, PICKUPS)
@@ -84,17 +84,20 @@ def test_a_restated_allocation_never_strands_a_later_step():
     """Robots chosen at random for every step of every benchmark task's decomposition (checked): a
     robot is offered only if the rest of the body can still be done, so the allocation never reaches
     a step no robot can do (a greedy choice, as a one-step look-ahead makes, did: a robot sent ahead
-    while another still had to act where it stood)."""
+    while another still had to act where it stood). Nor does the decomposition (a comment was once
+    offered where no step could follow it)."""
     allocated = 0
-    for seed in range(3):
+    for seed in range(2):
         rng = random.Random(seed)
         for task in load_tasks():
-            planned = _plan(task, rng, sequential=seed % 2 == 0)
-            if planned is None or planned[1][0]:
+            # A budget that binds nowhere: a budget so tight that a promised sub-task has room for only
+            # the cheapest lines can still leave it nothing that succeeds (a dead end, counted).
+            planned = _plan(task, rng, sequential=seed % 2 == 0, budget=4000)
+            if planned is None:
                 continue
             allocated += 1
-            assert planned[1][1] == 0, (task.id, seed, planned[0].source)
-    assert allocated >= 60, allocated
+            assert planned[1] == (0, 0), (task.id, seed, planned[0].source)
+    assert allocated >= 40, allocated
 
 
 def test_a_function_acts_only_after_going_somewhere_and_only_where_it_succeeds():
