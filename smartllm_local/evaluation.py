@@ -60,7 +60,7 @@ class TaskOutcome:
         if self.refused:
             data["refused_by"] = self.result.refused_by  # type: ignore[union-attr]
         if self.scores is not None:
-            data.update(self.scores.metrics())
+            data.update(self.scores.metrics(), ticks=self.scores.ticks, Speed=self.scores.Speed)
         if self.result is not None:
             data["tokens"] = {r.stage: {"prompt": r.prompt_tokens, "generated": r.generated_tokens,
                                         "seconds": round(r.seconds, 2)} for r in self.result.stages}

@@ -211,7 +211,8 @@ class Scores:
     def metrics(self) -> dict[str, Any]:
         """The five metrics and the transition count, as the CLI's --json prints them."""
         data = asdict(self)
-        data.pop("conditions")
+        for extra in ("conditions", "ticks", "Speed"):
+            data.pop(extra)
         return data
 
 

@@ -93,7 +93,10 @@ def test_a_run_killed_mid_stage_resumes_to_the_uninterrupted_result(tmp_path):
 
 def test_ctrl_c_stops_cleanly_and_leaves_no_process(tmp_path):
     out = tmp_path / "run"
-    proc = subprocess.Popen([*COMMAND, "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # A shell's background job inherits SIGINT ignored, and Python then installs no Ctrl-C handler:
+    # give the run the default disposition a terminal's foreground process has.
+    proc = subprocess.Popen([*COMMAND, "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     marker = out / TASKS[0] / "decomposition" / "record.json"
     deadline = time.monotonic() + 600
     while not marker.is_file() and proc.poll() is None and time.monotonic() < deadline:
