@@ -9,8 +9,8 @@ and its longest output is known to the character (its budget).
 With a world check, a robot argument is offered only if the call succeeds for
 that ``robot_list`` slot where the slots stand (notional robots, one per slot)
 and leaves every later step of the body a robot under which it succeeds (a search
-over the rest of the body), so that a robot chosen early cannot strand a later step, and a robot list only if every
-step of the function succeeds with the team's own robots from the state the
+over the rest of the body, so that a robot chosen early cannot strand a later
+step); and a robot list only if every step of the function succeeds with the team's own robots from the state the
 functions launched before it leave, as the executor decides it (skills, mass,
 reach, team lifting).
 """
@@ -94,11 +94,10 @@ class RestatedAllocation(PlanConstraint):
             self._run_body(fn)
             return Forced("\n")
         line = body[fn.written]
-        match = STEP_LINE.match(line)
-        if match is None or match.group(1) == "time.sleep":
+        call = self._skill_call(line)
+        if call is None:
             return Forced(line)
-        skill = self.by_name[match.group(1)]
-        objects = re.findall(r"'([^']+)'", match.group(2))
+        skill, objects, args = call
         able, working = self._robot_args(fn, skill, objects)
         if self.world is not None and working:
             # Only robots after whose step the rest of the body can still be done by some robots.
@@ -108,17 +107,20 @@ class RestatedAllocation(PlanConstraint):
             self.world.dead_ends += 1
         # No robot can: the coalition stage refuses such plans, and free teams leave it to the model.
         robots = working or able or self.robot_args
-        text = seq(f"{INDENT}{skill.name}(", alt(*robots), f", {match.group(2)})\n")
+        text = seq(f"{INDENT}{skill.name}(", alt(*robots), f", {args})\n")
         return self._choose(self.rules, {"goto" if skill.action == "" else "action": text})
+
+    def _skill_call(self, line: str) -> tuple[Skill, list[str], str] | None:
+        """A body line's skill, objects and argument text; None for a comment or a sleep."""
+        match = STEP_LINE.match(line)
+        if match is None or match.group(1) == "time.sleep":
+            return None
+        return self.by_name[match.group(1)], re.findall(r"'([^']+)'", match.group(2)), match.group(2)
 
     def _rest(self, fn: WrittenFunction) -> list[tuple[Skill, list[str]]]:
         """The restated body's skill calls after the current line."""
-        rest = []
-        for line in self.bodies[len(self.functions) - 1][fn.written + 1:]:
-            match = STEP_LINE.match(line)
-            if match is not None and match.group(1) != "time.sleep":
-                rest.append((self.by_name[match.group(1)], re.findall(r"'([^']+)'", match.group(2))))
-        return rest
+        calls = (self._skill_call(line) for line in self.bodies[len(self.functions) - 1][fn.written + 1:])
+        return [(skill, objects) for skill, objects, _ in filter(None, calls)]
 
     def _completes(self, fn: WrittenFunction, arg: str, skill: Skill, objects: Sequence[str]) -> bool | None:
         """Whether, after this step by ``arg``, every later step of the body can be given a robot
