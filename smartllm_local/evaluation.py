@@ -11,12 +11,10 @@ refusing a feasible task is a failure.
 from __future__ import annotations
 
 import json
-import statistics
 import time
-from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Sequence
 
 from .benchmark import reference_ticks
 from .errors import SmartLLMError
@@ -25,14 +23,12 @@ from .files import write_atomic
 from .methods import Method, SmartLLM
 from .planner.pipeline import Planner, PlanResult, restore_stage, write_artifacts
 from .planner.scene_context import scene_objects
+from .results import summary_table
 from .robots import Catalogue
 from .run_store import RunStore
 from .scoring import Goal, Scores, score_execution
-from .tasks import CATEGORIES, Task
+from .tasks import Task
 from .world.controller import open_controller
-
-METRICS = ("SR", "TCR", "GCR", "RU", "Exe", "Speed")
-
 
 @dataclass
 class TaskOutcome:
@@ -72,6 +68,36 @@ class TaskOutcome:
         return data
 
 
+@dataclass(frozen=True)
+class Progress:
+    """Where a benchmark run is: ``phase`` (a stage, "execution" or "done") of ``task``, with ``done``
+    of ``total`` units (a unit per stage and per execution of each task) behind it."""
+
+    phase: str
+    task: str
+    done: int
+    total: int
+    scored: Sequence[TaskOutcome]  # this run's tasks scored so far
+
+    @property
+    def feasible_scored(self) -> int:
+        return sum(o.task.feasible for o in self.scored)
+
+    @property
+    def running_sr(self) -> float | None:
+        """Mean SR of the feasible tasks scored so far (an error or a refusal counts 0); None before any."""
+        feasible = [o for o in self.scored if o.task.feasible]
+        if not feasible:
+            return None
+        return sum(o.scores.SR or 0.0 for o in feasible if o.scores is not None) / len(feasible)
+
+    def line(self) -> str:
+        """One plain line for a log (stderr that is not a terminal)."""
+        sr = self.running_sr
+        tail = "" if sr is None else f"; SR so far {sr:.2f} over {self.feasible_scored} feasible task(s)"
+        return f"[{self.done}/{self.total}] {self.phase} {self.task}".rstrip() + tail
+
+
 def execute_and_score(result: PlanResult, goals: Sequence[Goal], catalogue: Catalogue, *,
                       trans: int | None = None, max_trans: int | None = None, controller: Any = None,
                       build: str | None = None) -> Scores:
@@ -92,7 +118,7 @@ def run_benchmark(
     out: Path | None = None,
     store: RunStore | None = None,
     build: str | None = None,
-    progress: Callable[[str], None] = lambda message: None,
+    progress: Callable[["Progress"], None] = lambda step: None,
 ) -> list[TaskOutcome]:
     """Plan (with ``method``; a Planner is SMART-LLM's), execute and score every task; write per-task
     artifacts and results.jsonl under ``out``.
@@ -115,10 +141,14 @@ def run_benchmark(
         if _goes_on(outcome):
             live.append(outcome)
 
-    for stage in method.stages():
+    stages = method.stages()
+    total = (len(stages) + 1) * len(outcomes)  # a unit per stage and per execution of each task
+    scored: list[TaskOutcome] = []
+    for number, stage in enumerate(stages):
         batch = [o for o in live if not any(r.stage == stage.name for r in o.result.stages)]  # type: ignore[union-attr]
-        for k, outcome in enumerate(batch, start=1):
-            progress(f"{stage.name} {k}/{len(batch)}: {outcome.task.id}")
+        skipped = len(outcomes) - len(batch)  # done before, or out of the run (an error, a refusal)
+        for k, outcome in enumerate(batch):
+            progress(Progress(stage.name, outcome.task.id, number * len(outcomes) + skipped + k, total, scored))
             result = outcome.result
             assert result is not None
             try:
@@ -134,15 +164,15 @@ def run_benchmark(
 
     controller = None
     try:
-        for outcome in outcomes:
+        for k, outcome in enumerate(outcomes):
             result = outcome.result
             assert result is not None
+            progress(Progress("execution", outcome.task.id, len(stages) * len(outcomes) + k, total, scored))
             Planner.conclude(result)
             if not outcome.error and result.error:
                 outcome.error = result.error
             started = time.perf_counter()
             if outcome.task.feasible and result.plan is not None and not outcome.error:
-                progress(f"execution: {outcome.task.id}")
                 try:
                     if controller is None:
                         controller = open_controller(outcome.task.floor_plan, len(outcome.task.robots), build=build)
@@ -162,6 +192,9 @@ def run_benchmark(
                 write_artifacts(result, out / outcome.task.id, {"outcome": outcome.as_json()})
             if store is not None:
                 store.append_result(outcome.as_json())
+            scored.append(outcome)
+        if outcomes:
+            progress(Progress("done", "", total, total, scored))
     finally:
         if controller is not None:
             controller.stop()
@@ -190,65 +223,3 @@ def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome) -> Non
         except SmartLLMError:
             store.forget_stages(task.id, record.stage)
             return
-
-
-def _groups(lines: Sequence[Mapping[str, Any]]) -> list[tuple[str, list[Mapping[str, Any]]]]:
-    feasible = [line for line in lines if line["feasible"]]
-    groups = [(c, [line for line in feasible if line["category"] == c]) for c in (*CATEGORIES, "uncategorized")]
-    return [(name, group) for name, group in [*groups, ("all feasible", feasible)] if group]
-
-
-def _mean(group: Sequence[Mapping[str, Any]], metric: str) -> float | None:
-    """A metric's mean over a group's lines: a line without it (an error, a refusal) counts 0, one
-    whose run cannot be judged on it (None) is left out."""
-    known = [v for v in (line.get(metric, 0.0) for line in group) if v is not None]
-    return sum(known) / len(known) if known else None
-
-
-def summary_table(lines: Sequence[Mapping[str, Any]]) -> str:
-    """Mean metrics per category (feasible tasks) and the refusal rate on infeasible ones, from
-    results lines (``TaskOutcome.as_json``).
-
-    A task that produced no run (an error, a refusal) scores 0; a metric a run cannot be judged
-    on (no goal conditions, no ground-truth transitions: some imported tasks) is left out of
-    that metric's mean rather than counted as 0, and a mean with nothing to average is n/a."""
-    rows = [f"{'category':<14}{'tasks':>6}{'errors':>7}" + "".join(f"{m:>7}" for m in METRICS) + f"{'refused':>9}"]
-    for name, group in _groups(lines):
-        errors = sum(1 for line in group if line.get("error"))
-        means = [_mean(group, metric) for metric in METRICS]
-        refused = sum(1 for line in group if line["refused"])
-        rows.append(f"{name:<14}{len(group):>6}{errors:>7}" + "".join(
-            f"{'n/a' if m is None else f'{m:.2f}':>7}" for m in means) + f"{refused:>9}")
-    infeasible = [line for line in lines if not line["feasible"]]
-    if infeasible:
-        refused = [line for line in infeasible if line["refused"]]
-        by = Counter(line.get("refused_by") or "model" for line in refused)
-        who = ", ".join(f"{by[k]} by {k}" for k in ("model", "grammar", "rule") if by[k] or k != "rule")
-        rows.append(f"{'infeasible':<14}{len(infeasible):>6}{sum(1 for line in infeasible if line.get('error')):>7}"
-                    f"   correctly refused {len(refused)}/{len(infeasible)} ({who})")
-    return "\n".join(rows)
-
-
-def variability_table(runs: Sequence[Sequence[Mapping[str, Any]]]) -> str:
-    """The paper's Table II: per category and metric, the mean and standard deviation over runs
-    (seeds) of each run's category mean; and the refusal rate of infeasible tasks likewise."""
-    header = f"{'category':<14}{'tasks':>6}{'runs':>5}" + "".join(f"{m:>12}" for m in METRICS)
-    rows = [header]
-    per_run = [dict(_groups(lines)) for lines in runs]
-    for name, group in _groups(runs[0]):
-        cells = []
-        for metric in METRICS:
-            values = [v for v in (_mean(groups.get(name, []), metric) for groups in per_run) if v is not None]
-            cells.append(_spread(values))
-        rows.append(f"{name:<14}{len(group):>6}{len(runs):>5}" + "".join(f"{c:>12}" for c in cells))
-    infeasible = [[line for line in lines if not line["feasible"]] for lines in runs]
-    if infeasible[0]:
-        rates = [sum(line["refused"] for line in group) / len(group) for group in infeasible if group]
-        rows.append(f"{'infeasible':<14}{len(infeasible[0]):>6}{len(runs):>5}   refused {_spread(rates)}")
-    return "\n".join(rows)
-
-
-def _spread(values: Sequence[float]) -> str:
-    if not values:
-        return "n/a"
-    return f"{statistics.fmean(values):.2f}±{statistics.stdev(values) if len(values) > 1 else 0.0:.2f}"

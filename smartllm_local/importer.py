@@ -1,4 +1,6 @@
-"""Import SMART-LLM's task files (``data/final_test/FloorPlan<N>.json``) as a task file.
+"""Import SMART-LLM's task files (``data/final_test/FloorPlan<N>.json``), and LaMMA-P's MAT-THOR
+files of the same format in that folder (``FloorPlan<N>pddl.json``, ``FloorPlan<N>pddlvague.json``,
+``FloorPlan<N>vague.json``), as a task file.
 
 The original files hold one task per line, mostly as Python literals rather
 than JSON, and are messy: missing brackets, stray spaces and commas in object
@@ -9,8 +11,16 @@ file that is skipped, so nothing is changed or dropped silently.
 
 The text is never executed: a line is read with ``json.loads``, then
 ``ast.literal_eval`` (literals only), then with missing brackets added.
-Imported ids are ``FloorPlan<N>-<line>`` so that results stay comparable
+Imported ids are the file's name without ``.json`` and the line number
+(``FloorPlan15-3``, ``FloorPlan6pddl-2``) so that results stay comparable
 across imports of the same files.
+
+MAT-THOR's files differ in three ways, each handled with a note: a vague
+command file's tasks get MAT-THOR's category "vague" (its other files do not
+say which tasks are compound and which complex: those stay uncategorized); they
+give ``min_trans`` rather than the ``max_trans`` RU is measured against, so RU
+and SR are unknown for them; and a state written on a receptacle ("Fridge"
+containing lettuce and tomato, "Sliced") is the state of what it contains.
 """
 
 from __future__ import annotations
@@ -36,7 +46,8 @@ from .world.scenes import floor_plan_name, load_scene
 MAX_LINE_CHARS = 100_000
 # Trying one missing bracket at every place costs a parse per place: real task lines are a few hundred characters.
 _MAX_SEARCH_CHARS = 4_000
-_FILE_RE = re.compile(r"FloorPlan([1-9][0-9]*)\.json")
+# SMART-LLM's FloorPlan<N>.json, or MAT-THOR's with a suffix (pddl, vague, _task<K>).
+_FILE_RE = re.compile(r"FloorPlan([1-9][0-9]*)((?:pddl)?(?:vague)?(?:_task[0-9]+)?)\.json")
 _CLOSERS = {"[": "]", "{": "}"}
 _STATE_ALIASES = {"OPEN": "OPENED", "CLOSE": "CLOSED"}
 
@@ -157,9 +168,10 @@ def _import_file(path: Path, catalogue: Catalogue, report: ImportReport) -> None
     name = path.name
     match = _FILE_RE.fullmatch(name)
     if not match:
-        report.notes.append(Note(name, None, None, "skipped", "not named FloorPlan<N>.json (the floor plan comes "
-                                                               "from the file name)"))
+        report.notes.append(Note(name, None, None, "skipped", "not named FloorPlan<N>.json or FloorPlan<N>pddl.json "
+                                                               "(the floor plan comes from the file name)"))
         return
+    source = _Source(suffix=match.group(2))
     try:
         scene = floor_plan_name(match.group(1))
         text = path.read_text(encoding="utf-8-sig")
@@ -172,9 +184,9 @@ def _import_file(path: Path, catalogue: Catalogue, report: ImportReport) -> None
     for number, line in enumerate(text.split("\n"), start=1):  # line numbers as editors count them
         if not line.strip():
             continue
-        task_id, fixes = f"{scene}-{number}", _Fixes()
+        task_id, fixes = f"{name.removesuffix('.json')}-{number}", _Fixes()
         try:
-            task = _convert(line, task_id, scene, catalogue, fixes)
+            task = _convert(line, task_id, scene, catalogue, fixes, source)
             where = f"{name}:{number}"
             _, problems = check_task(task, catalogue, where)
             if problems:
@@ -188,7 +200,23 @@ def _import_file(path: Path, catalogue: Catalogue, report: ImportReport) -> None
             report.notes.append(Note(name, number, task_id, kind, "; ".join(fixes.guessed + fixes.repaired)))
 
 
-def _convert(line: str, task_id: str, scene: str, catalogue: Catalogue, fixes: _Fixes) -> dict[str, Any]:
+@dataclass(frozen=True)
+class _Source:
+    """Which dataset a file belongs to, from its name."""
+
+    suffix: str  # "" for SMART-LLM's files
+
+    @property
+    def mat_thor(self) -> bool:
+        return bool(self.suffix)
+
+    @property
+    def category(self) -> str:
+        return "vague" if "vague" in self.suffix else "uncategorized"
+
+
+def _convert(line: str, task_id: str, scene: str, catalogue: Catalogue, fixes: _Fixes,
+             source: _Source) -> dict[str, Any]:
     """One original line -> one task dict in this project's format."""
     data = _parse(line, fixes)
     instruction = data.get("task")
@@ -202,10 +230,13 @@ def _convert(line: str, task_id: str, scene: str, catalogue: Catalogue, fixes: _
         raise _Skip(f"robot id(s) {unknown} are not in the robot catalogue")
     goals = _goals(data.get("object_states"), scene, fixes)
     missing = [key for key in ("trans", "max_trans") if data.get(key) is None]
-    if missing:
+    if source.mat_thor and "max_trans" in missing and data.get("min_trans") is not None:
+        fixes.add("repaired", "MAT-THOR gives min_trans, not the max_trans RU is measured against: RU and SR "
+                              "are unknown (TCR, GCR and Exe are scored)")
+    elif missing:
         fixes.add("repaired", f"no {' or '.join(missing)}: null, so RU and SR are unknown")
     return {
-        "id": task_id, "category": "uncategorized", "floor_plan": int(scene[len("FloorPlan"):]),
+        "id": task_id, "category": source.category, "floor_plan": int(scene[len("FloorPlan"):]),
         "instruction": instruction.strip(), "robots": robots, "goals": goals,
         "trans": data.get("trans"), "max_trans": data.get("max_trans"), "feasible": True,
     }
@@ -233,8 +264,13 @@ def _goals(entries: Any, scene: str, fixes: _Fixes) -> list[dict[str, Any]]:
             fixes.add("repaired", f"{at} ({reprlib.repr(entry.get('name'))}) has no state and contains nothing: "
                                   "dropped")
             continue
-        goals.append({"name": _map_name(entry.get("name"), scene, fixes),
-                      "contains": [_map_name(item, scene, fixes) for item in contains], "state": state})
+        name = _map_name(entry.get("name"), scene, fixes)
+        if state == "SLICED" and contains and name not in SLICE_RESULTS:
+            # MAT-THOR writes "Fridge contains Lettuce, Tomato; Sliced": it is what the fridge holds that is sliced.
+            fixes.add("repaired", f"{at}: {name} cannot be sliced: SLICED moved to what it contains")
+            goals += [{"name": _map_name(item, scene, fixes), "contains": [], "state": "SLICED"} for item in contains]
+            state = None
+        goals.append({"name": name, "contains": [_map_name(item, scene, fixes) for item in contains], "state": state})
     if not goals:
         what = "no goal conditions left" if entries else "no object_states"
         fixes.add("repaired", f"{what}: imported without goals, so GCR, TCR and SR are unknown")

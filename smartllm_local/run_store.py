@@ -21,6 +21,7 @@ from typing import Any, Iterator, Mapping
 from .errors import UserError
 from .files import json_text, write_atomic
 from .planner.stages import StageRecord
+from .results import parse_results
 
 RUN_FILE = "run.json"
 RESULTS = "results.jsonl"
@@ -104,17 +105,7 @@ class RunStore:
         if not path.is_file():
             return {}
         text = path.read_text(encoding="utf-8")
-        lines, found = text.splitlines(keepends=True), {}
-        good = 0
-        for line in lines:
-            try:
-                data = json.loads(line) if line.endswith("\n") else None
-            except ValueError:
-                data = None
-            if not isinstance(data, dict) or "id" not in data:
-                break
-            found[data["id"]] = data
-            good += len(line)
+        found, good = parse_results(text)
         if good < len(text):
             write_atomic(path, text[:good])
         return found

@@ -25,7 +25,7 @@ Where this differs from the scoring code of the original SMART-LLM release:
 that code matches a type as a substring of object names (so "Pan" matches
 "PaperTowelRoll"), adds one to the satisfied count for every matching object
 and receptacle (GCR can exceed 1), never matches names with stray spaces or
-other case, has no BROKEN, CLEAN, DIRTY, COLD or FILLED state, counts
+other case, has no BROKEN, CLEAN, DIRTY, COLD, FILLED or EMPTY state, counts
 transitions from blank-line-separated code blocks rather than the run, and
 counts only object interactions as actions for Exe.
 """
@@ -40,7 +40,7 @@ from .world.object_types import SLICE_RESULTS, base_type
 
 STATES = (
     "SLICED", "ON", "OFF", "OPENED", "CLOSED", "HOT", "COLD", "COOKED",
-    "BROKEN", "PICKED", "CLEAN", "DIRTY", "FILLED",
+    "BROKEN", "PICKED", "CLEAN", "DIRTY", "FILLED", "EMPTY",
 )
 
 
@@ -62,6 +62,7 @@ _STATE_TESTS = {
     "CLEAN": lambda o: o.get("dirtyable") and not o.get("isDirty"),
     "DIRTY": lambda o: o.get("isDirty"),
     "FILLED": lambda o: o.get("isFilledWithLiquid"),
+    "EMPTY": lambda o: o.get("receptacle") and not o.get("receptacleObjectIds"),  # "clear the desk"
 }
 
 

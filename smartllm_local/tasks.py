@@ -25,7 +25,10 @@ from .scoring import Goal, parse_goals
 from .world.object_types import SLICE_RESULTS
 from .world.scenes import floor_plan_name, load_scene
 
-CATEGORIES = ("elemental", "simple", "compound", "complex")
+# SMART-LLM's four categories (this project's benchmark has tasks in each), and LaMMA-P's MAT-THOR
+# "vague" commands (imported tasks only).
+SMARTLLM_CATEGORIES = ("elemental", "simple", "compound", "complex")
+CATEGORIES = (*SMARTLLM_CATEGORIES, "vague")
 
 
 @dataclass(frozen=True)

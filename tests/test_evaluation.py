@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from smartllm_local.evaluation import TaskOutcome, summary_table, variability_table
+from smartllm_local.evaluation import TaskOutcome
+from smartllm_local.results import summary_table, variability_table
 from smartllm_local.scoring import Scores
 from smartllm_local.tasks import Task
 

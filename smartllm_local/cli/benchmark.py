@@ -1,4 +1,4 @@
-"""``smartllm-local benchmark``: list the tasks, check the benchmark, import SMART-LLM's task files."""
+"""``smartllm-local benchmark``: list the tasks, check the benchmark, report on runs, import task files."""
 
 from __future__ import annotations
 
@@ -55,6 +55,22 @@ def check(
         typer.echo(f"FAILED {result.task.id}: {result.problem}")
     if failed:
         raise typer.Exit(1)
+
+
+@app.command("report")
+def report(
+    runs: list[Path] = typer.Argument(..., help="Run folders (the --out of `benchmark run`; a --seeds folder is one "
+                                                "row with its spread)."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Where to write report.md, the CSVs and the figures "
+                                                           "(default: FIRST_RUN/report)."),
+) -> None:
+    """The paper's Tables I-III, refusals, efficiency, time and tokens per stage (Markdown and CSV) and
+    figures (PNG), from the runs' results.jsonl and run.json alone."""
+    from ..report import write_report
+
+    written = write_report(runs, out if out is not None else runs[0] / "report")
+    typer.echo((written[0].read_text(encoding="utf-8")))
+    typer.echo(f"wrote {', '.join(str(p) for p in written)}")
 
 
 @app.command("import-smartllm")

@@ -12,7 +12,8 @@ from typing import Optional
 import typer
 
 from ..errors import UserError
-from ..evaluation import execute_and_score, run_benchmark, summary_table, variability_table
+from ..evaluation import execute_and_score, run_benchmark
+from ..results import summary_table, variability_table
 from ..files import check_output_folder, write_atomic
 from ..methods import METHODS, make_method
 from ..planner.backends import BACKENDS, Sampling, load_backend, model_location
@@ -26,6 +27,7 @@ from ..robots import default_catalogue_path, load_catalogue, parse_robot_ids
 from ..run_store import RunStore
 from ..tasks import CATEGORIES, default_task_files, find_task, load_tasks
 from ..world.scenes import floor_plan_name
+from .progress import RunProgress
 
 MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
               f"demonstration model: {', '.join(EMBEDDED)} (default: {DEFAULT_MODEL}).")
@@ -222,6 +224,8 @@ def benchmark_run(
     check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
     tasks_files = [tasks] if tasks else default_task_files()
+    if category is not None and category not in (*CATEGORIES, "uncategorized"):
+        raise UserError(f"--category must be one of {', '.join(CATEGORIES)}, not {category!r}")
     chosen = load_tasks(tasks_files, catalogue=cat)
     if category is not None:
         chosen = [t for t in chosen if t.category == category]
@@ -250,9 +254,9 @@ def benchmark_run(
                 print(f"resuming the run in {store.out}: {sum(t.id in done for t in chosen)} of {len(chosen)} "
                       "tasks done", file=sys.stderr)
             seeded = None if planner is None else Planner(planner.backend, cat, options.config_for(s))
-            run_benchmark(chosen, make_method(method, cat, seeded), cat, out=store.out, store=store,
-                          build=str(thor_build) if thor_build else None,
-                          progress=lambda message: print(message, file=sys.stderr))
+            with RunProgress(f"seed {s}" if seeds is not None else "") as progress:
+                run_benchmark(chosen, make_method(method, cat, seeded), cat, out=store.out, store=store,
+                              build=str(thor_build) if thor_build else None, progress=progress)
     except KeyboardInterrupt:
         scored = sum(t.id in store.results() for _, store in runs for t in chosen)
         print(f"interrupted: {scored} of {len(chosen) * len(runs)} tasks scored; the same command resumes the run",

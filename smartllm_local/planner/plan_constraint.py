@@ -24,8 +24,9 @@ checked in. The budget is kept on the unchecked choices, so the check never cost
 a plan its ending: where no checked line fits, the unchecked ones that do are
 offered (a dead end, counted).
 
-A restated allocation (:mod:`.restated`) is a plan constraint whose bodies are
-the decomposition's.
+The orchestration's lines and costs are in :mod:`.orchestration`. A restated
+allocation (:mod:`.restated`) is a plan constraint whose bodies are the
+decomposition's.
 """
 
 from __future__ import annotations
@@ -39,10 +40,11 @@ from ..skills import Skill, SkillSet
 from .constraints import (
     COMMENT_LEN, INDENT, MAX_STEPS, STEP_COMMENT_LEN, MAX_SUBTASKS, NAME_FIRST, NAME_LEN, NAME_REST, ORDER_CHARS, ORDER_LEN,
     SUMMARY_CHARS, SUMMARY_LEN, Choose, Constraint, Forced, comment_text, longest, ordered_subset, refusal_line,
-    refusal_text_len, robot_list, text_run,
+    refusal_text_len, text_run,
 )
-from .feasibility import Step, feasible_lists
+from .feasibility import Step
 from .grammar import Node, Ref, alt, chars, rep, seq
+from .orchestration import Orchestration
 from .scene_context import SceneObjects
 from .world_check import Call, WorldCheck
 
@@ -99,7 +101,7 @@ def _args_text(objects: Sequence[str]) -> str:
     return ", ".join(f"'{t}'" for t in objects)
 
 
-class PlanConstraint(Constraint):
+class PlanConstraint(Orchestration, Constraint):
     """A decomposed plan (no team) or an allocated one (``team_size`` or ``team`` given)."""
 
     def __init__(
@@ -150,10 +152,14 @@ class PlanConstraint(Constraint):
             [c for c in self._filtered(None) if c[0].action in _RELEASE]
         self.release_max = max((self._line_len(c) for c in releases), default=self.action_max)
         self.goto_max = max(self._line_len(c) for c in self._goto_candidates())
-        # A new function's cheapest body: one action; with a world check, a GoToObject before it, so
-        # that the sub-tasks promised leave room to act where they can (the budget is kept all the same).
-        self.fresh_action = min(self._line_len(c) for c in self._candidates(WrittenFunction(""))) + \
-            (min(self._line_len(c) for c in self._goto_candidates()) if world is not None else 0)
+        # A new function's cheapest body: one action; with a world check, the cheapest GoToObject and
+        # an action where it went (what is picked up put down again), so that each sub-task promised
+        # keeps room for a go-to and an action there (the budget is kept all the same).
+        fresh = WrittenFunction("")
+        self.fresh_action = min(self._line_len(c) for c in self._candidates(fresh)) if world is None else min(
+            self._line_len(goto) + min((self._line_len(c) + self._hold_after(fresh, c) for c in self._candidates(fresh)
+                                        if self._acts_on(c) in (goto[1][0], None)), default=self.action_max * 2)
+            for goto in self._goto_candidates())
         self.skills_len = longest(Ref("skills"), self.rules)
         self.phase = "start"
         self.summary_lines = 0
@@ -228,15 +234,23 @@ class PlanConstraint(Constraint):
         return [(s, (t,)) for s in self.gotos for t in self.scene.types_for(s.arguments[0])]
 
     def _goto_node(self, fn: WrittenFunction, room: int) -> Node | None:
-        """The GoToObject lines no longer than ``room`` characters; with a world check, only those
-        to a place where one of the function's next calls succeeds."""
-        gotos = [c for c in self._goto_candidates() if self._line_len(c) <= room]
-        if self.world is not None and gotos:
-            members = self._members(fn, None)
-            then = self._candidates(replace(fn, last_call=("", ""), went=True))
-            gotos = [(skill, (target,)) for skill, (target,) in gotos if self.world.leads_somewhere(
-                members, skill.name, target,
-                [(c.name, objs) for c, objs in then if self._acts_on((c, objs)) in (target, None)])]
+        """The GoToObject lines that leave room for an action after them within ``room`` characters;
+        with a world check, only those to a place where one of the function's next calls that fits
+        succeeds."""
+        if self.world is None:
+            cheapest = min(self._line_len(c) for c in self._candidates(fn))
+            return self._node([c for c in self._goto_candidates() if self._line_len(c) + cheapest <= room])
+        members = self._members(fn, None)
+        then = self._candidates(replace(fn, last_call=("", ""), went=True))
+        if fn.steps + 1 >= self.max_steps - 1:  # the step after the go-to is the last: as _succeeding
+            then = [c for c in then if c[0].action != "PickupObject" and (not fn.held or c[0].action in _RELEASE)]
+        gotos = []
+        for skill, (target,) in self._goto_candidates():
+            left = room - self._line_len((skill, (target,)))
+            fitting = [(c.name, objs) for c, objs in then if self._acts_on((c, objs)) in (target, None)
+                       and self._line_len((c, objs)) + self._hold_after(fn, (c, objs)) <= left]
+            if fitting and self.world.leads_somewhere(members, skill.name, target, fitting):
+                gotos.append((skill, (target,)))
         return self._node(gotos)
 
     def _members(self, fn: WrittenFunction, slot: int | None) -> list[int]:
@@ -289,22 +303,6 @@ class PlanConstraint(Constraint):
 
     # ---------------------------------------------------------------- costs
 
-    def _call_len(self, name: str) -> int:
-        """A direct call of a function: ``name()`` or ``name([robots...])`` with the longest list."""
-        return len(name) + 3 + (self._robot_list_len(self.team_size) if self.allocated else 0)
-
-    def _thread_len(self, name: str, n: int) -> int:
-        robots = len(", args=(,)") + self._robot_list_len(self.team_size) if self.allocated else 0
-        return len(f"t{n} = threading.Thread(target=") + len(name) + robots + 2
-
-    @staticmethod
-    def _robot_list_len(n: int) -> int:
-        return 2 + sum(len(f"robots[{i}]") for i in range(n)) + max(0, n - 1) * 2
-
-    @staticmethod
-    def _starts_joins(n: int) -> int:
-        return sum(len(f"t{i}.start()\n") + len(f"t{i}.join()\n") for i in range(1, n + 1))
-
     def _def_cost(self, k: int) -> int:
         """The cheapest k-th function (1-based), its direct call included."""
         if self.fixed_names:
@@ -319,12 +317,6 @@ class PlanConstraint(Constraint):
 
     def _owed_cost(self) -> int:
         return sum(self._def_cost(k) for k in range(len(self.functions) + 1, (self.owed or 0) + 1))
-
-    def _unlaunched(self) -> list[str]:
-        return [f.name for f in self.functions if f.name not in self.launched and f.name not in self.threads]
-
-    def _calls_cost(self, names: Sequence[str]) -> int:
-        return sum(self._call_len(n) for n in names)
 
     def _closing_cost(self) -> int:
         """The cheapest completion once the current function's body is finished: its end,
@@ -445,8 +437,7 @@ class PlanConstraint(Constraint):
         to_action = min((self._line_len(c) for c in actions),
                         default=self.goto_max + self.action_max if self.world is not None else cheapest)
         if room and fn.last_step != "goto":  # going somewhere twice in a row is never useful, comment or not
-            after = (self.action_max if self.world is not None else cheapest) + closing
-            goto = self._goto_node(fn, remaining - after)
+            goto = self._goto_node(fn, remaining - closing)
             if goto is not None:
                 options["goto"] = goto
             else:
@@ -486,78 +477,6 @@ class PlanConstraint(Constraint):
         pickups = {s.name for s in self.skills if s.action == "PickupObject"}
         return [Step(slot, skill, self.scene.masses.get(objects[0], 0.0) if skill in pickups else 0.0)
                 for slot, skill, objects in fn.calls]
-
-    # ---------------------------------------------------------- orchestration
-
-    def _orch_rules(self, remaining: int) -> dict[str, Node]:
-        unlaunched = self._unlaunched()
-        # With a world check, functions run in the order they were checked in (a block of threads runs
-        # consecutive ones together); otherwise in any order.
-        names = unlaunched[:1] if self.world is not None else unlaunched
-        index = {f.name: k for k, f in enumerate(self.functions)}
-        rules: dict[str, Node] = {}
-        if not names:
-            return rules
-        if self.allocated:
-            for name in names:
-                rules[f"team-{index[name]}"] = seq("[", self._robot_lists(self.functions[index[name]]), "]")
-            rules["direct"] = alt(*(seq(n, "(", Ref(f"team-{index[n]}"), ")\n") for n in names))
-        else:
-            rules["direct"] = alt(*(f"{n}()\n" for n in names))
-        n = len(self.threads) + 1
-        cost = self._calls_cost(unlaunched)
-        targets = [t for t in names
-                   if self._thread_len(t, n) + self._starts_joins(n) + cost - self._call_len(t) <= remaining]
-        if targets:
-            if self.allocated:
-                rules["target"] = alt(*(seq(f"{t}, args=(", Ref(f"team-{index[t]}"), ",)") for t in targets))
-            else:
-                rules["target"] = alt(*targets)
-        return rules
-
-    def _robot_lists(self, fn: WrittenFunction) -> Node:
-        """The robot lists a function may be run with: long enough for its robot_list[i], and, when
-        the team is known, such that every step has an actor with the skill and the strength."""
-        need = self.team_size if self.world is not None and fn.whole else max(1, fn.max_index + 1)
-        if self.team is not None:
-            lists = self._checked_lists(fn, need)
-            if lists:
-                return alt(*(", ".join(f"robots[{i}]" for i in order) for order in lists))
-        return robot_list(self.team_size, need, ", ", ordered=True)
-
-    def _checked_lists(self, fn: WrittenFunction, need: int) -> list[tuple[int, ...]] | None:
-        """Capable robot lists (and of those, the ones the world allows), kept for this point of the plan."""
-        key = (fn.name, len(self.launched) + len(self.threads))
-        if key not in self._lists:
-            lists = feasible_lists(self.team, self._steps(fn), need)
-            self._lists[key] = self._working_lists(fn, lists) if lists else lists
-        return self._lists[key]
-
-    def _working_lists(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
-        """Of the capable robot lists, those the world allows (all, without a team world check)."""
-        return lists
-
-    def _orch_options(self, remaining: int) -> dict[str, Node]:
-        rules = self._orch_rules(remaining)
-        options: dict[str, Node] = {}
-        if "target" in rules:
-            options["thread"] = seq(f"t{len(self.threads) + 1} = threading.Thread(target=", Ref("target"), ")\n")
-        elif self._unlaunched():
-            self._cap("a thread")
-        if "direct" in rules:
-            options["direct"] = Ref("direct")
-        return options
-
-    def _orch(self, remaining: int) -> Choose | None:
-        options = self._orch_options(remaining)
-        if not options:
-            return None
-        return self._choose({**self.rules, **self._orch_rules(remaining)}, options)
-
-    def _threads(self, remaining: int) -> Choose:
-        options = {k: v for k, v in self._orch_options(remaining).items() if k == "thread"}
-        options["start"] = "t1.start()\n"
-        return self._choose({**self.rules, **self._orch_rules(remaining)}, options)
 
     # --------------------------------------------------------------- feeding
 
@@ -600,9 +519,6 @@ class PlanConstraint(Constraint):
             self._launch(piece.split("(", 1)[0], piece)
             self.launched.append(piece.split("(", 1)[0])
             self.phase = "orch" if self._unlaunched() else "done"
-
-    def _launch(self, name: str, piece: str) -> None:
-        """A function was launched with the robot list of ``piece`` (nothing to do without a team world)."""
 
     def _forced_kind(self, piece: str) -> str:
         """What a piece of forced text was, from where the plan stands."""

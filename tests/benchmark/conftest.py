@@ -1,6 +1,9 @@
-"""Fixtures for the benchmark tests: the project's task files, loaded once."""
+"""Fixtures for the benchmark tests: the project's task files, loaded once; real benchmark runs."""
 
 from __future__ import annotations
+
+import subprocess
+import sys
 
 import pytest
 
@@ -26,3 +29,28 @@ def feasible(all_tasks):
 @pytest.fixture(scope="session")
 def infeasible(all_tasks):
     return [t for t in all_tasks if not t.feasible]
+
+
+def benchmark_run(out, *args: str, timeout: int = 900) -> subprocess.CompletedProcess:
+    """``smartllm-local benchmark run --out OUT ARGS`` in a child process (the real CLI, model and Controller)."""
+    proc = subprocess.run([sys.executable, "-m", "smartllm_local", "benchmark", "run", "--out", str(out), *args],
+                          capture_output=True, text=True, timeout=timeout)
+    assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+@pytest.fixture(scope="session")
+def runs(tmp_path_factory):
+    """Real runs shared by the method and report tests: the reference plans on every task; Gemma-3 over the
+    complex category (full, and without the coalition stage on two of its tasks: an ablation); and
+    decomp-random with SmolLM2 over two seeds."""
+    root = tmp_path_factory.mktemp("runs")
+    found = {}
+    found["reference"] = (root / "ref", benchmark_run(root / "ref", "--method", "reference"))
+    found["gemma"] = (root / "gemma", benchmark_run(root / "gemma", "--model", "gemma3-270m", "--category", "complex"))
+    found["ablation"] = (root / "ablation", benchmark_run(root / "ablation", "--model", "gemma3-270m", "--no-coalition",
+                                                          "--task", "living-07", "--task", "bedroom-08"))
+    seeds = ("--method", "decomp-random", "--seeds", "2", "--task", "kitchen-03", "--task", "kitchen-inf-02")
+    found["seeds"] = (root / "random", benchmark_run(root / "random", *seeds))
+    found["seeds-again"] = (root / "random", benchmark_run(root / "random", *seeds))
+    return found

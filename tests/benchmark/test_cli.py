@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from smartllm_local.tasks import CATEGORIES
+from smartllm_local.tasks import SMARTLLM_CATEGORIES
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
@@ -38,14 +38,14 @@ def test_list_rejects_an_unknown_category():
     done = cli("benchmark", "list", "--category", "cooking")
     assert done.returncode == 2
     assert done.stdout == ""
-    assert "--category must be one of elemental, simple, compound, complex, not 'cooking'" in done.stderr
+    assert "--category must be one of elemental, simple, compound, complex, vague, not 'cooking'" in done.stderr
 
 
 def test_check_prints_the_table_and_passes(feasible, infeasible):
     done = cli("benchmark", "check")
     assert done.returncode == 0, done.stdout + done.stderr
     rows = {line.split()[0]: line.split() for line in done.stdout.splitlines()[2:]}
-    for category in CATEGORIES:
+    for category in SMARTLLM_CATEGORIES:
         n = sum(t.category == category for t in feasible)
         assert rows[category][:4] == [category, str(n), f"{n}/{n}", "1.00"]
     assert rows["infeasible"][:3] == ["infeasible", str(len(infeasible)), f"{len(infeasible)}/{len(infeasible)}"]

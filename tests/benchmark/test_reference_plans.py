@@ -11,7 +11,7 @@ import smartllm_local.benchmark as bench
 from smartllm_local.benchmark import ReferenceResult, category_table, check_reference_plans
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import read_plan
-from smartllm_local.tasks import CATEGORIES, find_task
+from smartllm_local.tasks import SMARTLLM_CATEGORIES, find_task
 from smartllm_local.world.controller import open_controller
 
 from ..executor.helpers import run_record
@@ -44,7 +44,7 @@ def test_category_table_of_the_benchmark(results, feasible, infeasible):
     table = category_table(results).splitlines()
     assert table[0].split() == ["category", "tasks", "passed", "SR", "GCR", "RU", "Exe"]
     rows = {line.split()[0]: line.split() for line in table[2:]}
-    for category in CATEGORIES:
+    for category in SMARTLLM_CATEGORIES:
         n = sum(t.category == category for t in feasible)
         assert rows[category] == [category, str(n), f"{n}/{n}", "1.00", "1.00", "1.00", "1.00"]
     assert rows["all"][:3] == ["all", str(len(feasible)), f"{len(feasible)}/{len(feasible)}"]

@@ -44,7 +44,7 @@ EXPECTED_NOTES = [
     "FloorPlan303.json:3: FloorPlan303-3: repaired: state 'None' -> null; 'garbage' -> GarbageCan",
     "FloorPlan500.json: skipped: unknown floor plan '500': valid floor plans are FloorPlan1-30 (kitchens), "
     "FloorPlan201-230 (living rooms), FloorPlan301-330 (bedrooms), FloorPlan401-430 (bathrooms)",
-    "floorplan_kitchen.json: skipped: not named FloorPlan<N>.json (the floor plan comes from the file name)",
+    "floorplan_kitchen.json: skipped: not named FloorPlan<N>.json or FloorPlan<N>pddl.json (the floor plan comes from the file name)",
 ]
 
 EXPECTED_IDS = [
@@ -196,7 +196,7 @@ def test_hostile_lines_are_skipped_without_crashing(tmp_path):
         "4: skipped: instruction: 'Go' is too short",
         "5: skipped: \"robot list\" is not a list of robot ids: [True]",
         "6: skipped: object_states[0].state 'WASHED' is not one of SLICED, ON, OFF, OPENED, CLOSED, HOT, COLD, "
-        "COOKED, BROKEN, PICKED, CLEAN, DIRTY, FILLED or None",
+        "COOKED, BROKEN, PICKED, CLEAN, DIRTY, FILLED, EMPTY or None",
         "7: skipped: trans (3) is larger than max_trans (1)",
     ]
 

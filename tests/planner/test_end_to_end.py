@@ -12,7 +12,8 @@ import subprocess
 import sys
 import time
 
-from smartllm_local.evaluation import run_benchmark, summary_table
+from smartllm_local.evaluation import run_benchmark
+from smartllm_local.results import summary_table
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.pipeline import Planner
 from smartllm_local.robots import load_catalogue

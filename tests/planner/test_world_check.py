@@ -90,14 +90,27 @@ def test_a_restated_allocation_never_strands_a_later_step():
     for seed in range(2):
         rng = random.Random(seed)
         for task in load_tasks():
-            # A budget that binds nowhere: a budget so tight that a promised sub-task has room for only
-            # the cheapest lines can still leave it nothing that succeeds (a dead end, counted).
+            # A budget that binds nowhere (a tight one has its own test).
             planned = _plan(task, rng, sequential=seed % 2 == 0, budget=4000)
             if planned is None:
                 continue
             allocated += 1
             assert planned[1] == (0, 0), (task.id, seed, planned[0].source)
     assert allocated >= 40, allocated
+
+
+def test_a_tight_budget_never_leaves_a_promised_subtask_without_a_step_that_succeeds():
+    """One character per token and a budget that binds on every task: each promised sub-task keeps room
+    for the cheapest go-to and an action that can follow it there, and a go-to is offered only where
+    such an action fits after it (reserving the cheapest go-to and the cheapest action apart left
+    dead ends in a third of these plans)."""
+    rng = random.Random(0)
+    for task in load_tasks():
+        decomposer = _decomposer(task.floor_plan)
+        text = run_constraint(decomposer, writer("random", rng, refusals=0.0), len, 800)
+        assert len(text) <= 800
+        parse_plan(text, form="decomposed", skills=CATALOGUE.skills)
+        assert decomposer.world_counts()[1] == 0, (task.id, text)
 
 
 def test_a_function_acts_only_after_going_somewhere_and_only_where_it_succeeds():

@@ -55,6 +55,7 @@ STATE_CASES = [
     ("DIRTY", dict(dirtyable=True, isDirty=True), dict(dirtyable=True, isDirty=False)),
     ("FILLED", dict(isFilledWithLiquid=True), dict(isFilledWithLiquid=False)),
     ("SLICED", dict(isSliced=True), dict(isSliced=False)),
+    ("EMPTY", dict(receptacle=True, receptacleObjectIds=[]), dict(receptacle=True, receptacleObjectIds=["Spoon|1"])),
 ]
 
 

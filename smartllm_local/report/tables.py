@@ -1,0 +1,201 @@
+"""The report's tables, laid out as SMART-LLM's: Table I (category × SR/TCR/GCR/RU/Exe), Table II
+(mean ± standard deviation over seeds), Table III (ablations); then refusals, efficiency, and time
+and tokens per stage. Each is rendered as Markdown and as CSV with the same rows and columns."""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+from ..results import (PAPER_METRICS, REFUSERS, STAGE_NAMES, category_groups, mean_sd, metric_mean, refusals,
+                       stage_costs)
+from ..tasks import CATEGORIES
+from .runs import Run
+
+Cell = Any  # str, int, float, None (n/a) or (mean, sd)
+
+
+@dataclass
+class Table:
+    name: str  # the CSV file's stem
+    title: str
+    columns: list[str]
+    rows: list[list[Cell]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    def markdown(self) -> str:
+        lines = [f"## {self.title}", "", "| " + " | ".join(self.columns) + " |",
+                 "|" + "|".join("---" if k < self._labels() else "---:" for k in range(len(self.columns))) + "|"]
+        lines += ["| " + " | ".join(_text(cell) for cell in row) + " |" for row in self.rows]
+        return "\n".join(lines + [""] + [f"{note}  " for note in self.notes]).rstrip() + "\n"
+
+    def csv(self) -> str:
+        """The same table with numbers unrounded; a mean ± sd column becomes two ("X mean", "X sd")."""
+        spread = [any(isinstance(row[k], tuple) for row in self.rows) for k in range(len(self.columns))]
+        header = [part for k, c in enumerate(self.columns) for part in ([f"{c} mean", f"{c} sd"] if spread[k] else [c])]
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        writer.writerow(header)
+        for row in self.rows:
+            cells: list[Any] = []
+            for k, cell in enumerate(row):
+                if spread[k]:
+                    cells += list(cell) if isinstance(cell, tuple) else ["", ""]
+                else:
+                    cells.append("" if cell is None else cell)
+            writer.writerow(cells)
+        return buffer.getvalue()
+
+    def _labels(self) -> int:
+        """How many leading columns are labels (left-aligned) rather than numbers."""
+        for k in range(len(self.columns)):
+            if any(isinstance(row[k], (int, float, tuple)) or row[k] is None for row in self.rows):
+                return k
+        return len(self.columns)
+
+
+def _text(cell: Cell) -> str:
+    if cell is None:
+        return "n/a"
+    if isinstance(cell, tuple):
+        return f"{cell[0]:.2f} ± {cell[1]:.2f}"
+    if isinstance(cell, float):
+        return f"{cell:.2f}"
+    return str(cell)
+
+
+def categories(runs: Sequence[Run]) -> list[str]:
+    """The categories (with feasible tasks) any run has, in the paper's order."""
+    present = {name for run in runs for name, _ in category_groups(run.lines)}
+    return [c for c in (*CATEGORIES, "uncategorized") if c in present]
+
+
+def per_seed(run: Run, category: str, metric: str) -> list[float]:
+    """The category's mean of ``metric`` in each of the run's seeds that can be judged on it."""
+    values = []
+    for lines in run.seeds:
+        groups = dict(category_groups(lines))
+        value = metric_mean(groups.get(category, []), metric)
+        if value is not None:
+            values.append(value)
+    return values
+
+
+def _mean_over_seeds(run: Run, category: str, metric: str) -> float | None:
+    found = mean_sd(per_seed(run, category, metric))
+    return None if found is None else found[0]
+
+
+def _who(run: Run) -> list[Cell]:
+    return [run.method, run.model, run.variant or "-"]
+
+
+def table_one(runs: Sequence[Run]) -> Table:
+    cats = categories(runs)
+    table = Table("table1", "Table I: success by task category",
+                  ["Method", "Model", "Variant", "Seeds"] + [f"{c} {m}" for c in cats for m in PAPER_METRICS])
+    for run in runs:
+        table.rows.append(_who(run) + [len(run.seeds)] + [
+            _mean_over_seeds(run, c, m) for c in cats for m in PAPER_METRICS])
+    table.notes.append("Means over each category's feasible tasks (a task that errored or was refused scores 0); "
+                       "with several seeds, the mean of the seeds' means.")
+    return table
+
+
+def table_two(runs: Sequence[Run]) -> Table | None:
+    seeded = [run for run in runs if len(run.seeds) > 1]
+    if not seeded:
+        return None
+    cats = categories(seeded)
+    table = Table("table2", "Table II: variability over seeds (mean ± standard deviation)",
+                  ["Method", "Model", "Variant", "Seeds"] + [f"{c} {m}" for c in cats for m in PAPER_METRICS])
+    for run in seeded:
+        table.rows.append(_who(run) + [len(run.seeds)] + [
+            mean_sd(per_seed(run, c, m)) for c in cats for m in PAPER_METRICS])
+    table.notes.append("Each cell: the mean and the sample standard deviation, over the seeds, of the category's "
+                       "mean.")
+    return table
+
+
+def table_three(runs: Sequence[Run]) -> Table | None:
+    """One row per ablation run, beside the full runs of the same model and method."""
+    if not any(run.ablation != "full" for run in runs):
+        return None
+    studied = {(run.model, run.method) for run in runs if run.ablation != "full"}
+    rows = [run for run in runs if (run.model, run.method) in studied]
+    common = frozenset.intersection(*(run.task_ids for run in rows))
+    if any(run.task_ids != common for run in rows):  # compare like with like: the tasks all rows ran
+        rows = [run.restricted(common) for run in rows]
+    table = Table("table3", "Table III: ablations (feasible tasks of every category)",
+                  ["Ablation", "Model", "Method", "Seeds", *PAPER_METRICS, "s/task"])
+    for run in rows:
+        costs = stage_costs(run.lines)
+        table.rows.append([run.ablation, run.model, run.method, len(run.seeds)]
+                          + [_mean_over_seeds(run, "all feasible", m) for m in PAPER_METRICS]
+                          + [costs.get("task", {}).get("seconds")])
+    table.notes.append("Left out of the prompts: comments (the examples' comments), summary (the decomposition's "
+                       "closing summary), coalition (the coalition-formation stage).")
+    if any(len(run.task_ids) != len(common) for run in runs if (run.model, run.method) in studied):
+        table.notes.append(f"Over the {len(common)} tasks every row's run has (some runs have more).")
+    return table
+
+
+def refusal_table(runs: Sequence[Run]) -> Table:
+    table = Table("refusals", "Refusals: infeasible tasks refused (and feasible ones), and who refused",
+                  ["Method", "Model", "Variant", "Infeasible", "Refused", *(f"by {k}" for k in REFUSERS),
+                   "Feasible", "Feasible refused", "Errors"])
+    for run in runs:
+        bad, good = refusals(run.lines, feasible=False), refusals(run.lines, feasible=True)
+        table.rows.append(_who(run) + [bad["tasks"], bad["refused"], *(bad[f"by {k}"] for k in REFUSERS),
+                                       good["tasks"], good["refused"], bad["errors"] + good["errors"]])
+    table.notes += [
+        "by model: the model chose to refuse; by grammar: the grammar left it no other output (no team of the "
+        "robots can do a sub-task it wrote); by rule: a method without a model (decomp-rule, reference).",
+        "Counts are summed over seeds."]
+    return table
+
+
+def efficiency_table(runs: Sequence[Run]) -> Table:
+    cats = categories(runs) + ["all feasible"]
+    table = Table("efficiency", "Efficiency: the paper's RU beside Speed (the reference plan's time over the run's)",
+                  ["Method", "Model", "Variant"] + [f"{c} {m}" for c in cats for m in ("RU", "Speed")])
+    for run in runs:
+        table.rows.append(_who(run) + [_mean_over_seeds(run, c, m) for c in cats for m in ("RU", "Speed")])
+    table.notes.append("Speed = min(1, the reference plan's ticks / the run's ticks) for a run that meets every "
+                       "goal condition, else 0: a plan that does everything with one robot, one sub-task after "
+                       "another, can score RU 1 but not Speed 1.")
+    return table
+
+
+def stage_table(runs: Sequence[Run]) -> Table:
+    columns = ["Method", "Model", "Variant", "Tasks"]
+    for stage in STAGE_NAMES:
+        columns += [f"{stage} s", f"{stage} prompt tok", f"{stage} gen tok"]
+    table = Table("stages", "Time and tokens per stage (means per task that reached the stage)",
+                  columns + ["execution s", "s/task", "total h"])
+    for run in runs:
+        costs = stage_costs(run.lines)
+        row = _who(run) + [len(run.lines)]
+        for stage in STAGE_NAMES:
+            cost = costs.get(stage, {})
+            row += [cost.get("seconds"), _whole(cost.get("prompt")), _whole(cost.get("generated"))]
+        task = costs.get("task", {})
+        total = task.get("total")
+        row += [costs.get("execution", {}).get("seconds"), task.get("seconds"),
+                None if total is None else total / 3600]
+        table.rows.append(row)
+    table.notes.append("Seconds are each task's own (its stages and its execution), summed over seeds for the "
+                       "total; a stage a method does not have is n/a.")
+    return table
+
+
+def _whole(value: float | None) -> int | None:
+    return None if value is None else round(value)
+
+
+def all_tables(runs: Sequence[Run]) -> list[Table]:
+    tables = [table_one(runs), table_two(runs), table_three(runs), refusal_table(runs), efficiency_table(runs),
+              stage_table(runs)]
+    return [table for table in tables if table is not None]

@@ -1,0 +1,140 @@
+"""Results lines (one JSON object per scored task, ``results.jsonl``) and what is computed from them.
+
+Every table this project prints or writes, from a run's summary.txt to the
+report's Tables I-III, is computed here from the lines alone, so a number can
+be recomputed by anyone holding the file. A task that produced no run (an
+error, a refusal) scores 0 on every metric; a metric a run cannot be judged on
+(no goal conditions, no ground-truth transitions: some imported tasks) is left
+out of that metric's mean rather than counted as 0, and a mean with nothing to
+average is None (printed n/a).
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+from collections import Counter
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from .tasks import CATEGORIES
+
+METRICS = ("SR", "TCR", "GCR", "RU", "Exe", "Speed")
+PAPER_METRICS = METRICS[:5]
+STAGE_NAMES = ("decomposition", "coalition", "allocation")
+REFUSERS = ("model", "grammar", "rule")
+
+Line = Mapping[str, Any]
+
+
+def parse_results(text: str) -> tuple[dict[str, dict[str, Any]], int]:
+    """A results file's lines by task id, and how much of ``text`` they take: reading stops at the
+    first line that is not a whole JSON object (a line cut short by a kill)."""
+    found: dict[str, dict[str, Any]] = {}
+    good = 0
+    for line in text.splitlines(keepends=True):
+        try:
+            data = json.loads(line) if line.endswith("\n") else None
+        except ValueError:
+            data = None
+        if not isinstance(data, dict) or "id" not in data:
+            break
+        found[data["id"]] = data
+        good += len(line)
+    return found, good
+
+
+def read_results(path: str | Path) -> dict[str, dict[str, Any]]:
+    """A results file's whole lines by task id (read-only)."""
+    return parse_results(Path(path).read_text(encoding="utf-8"))[0]
+
+
+def category_groups(lines: Sequence[Line]) -> list[tuple[str, list[Line]]]:
+    """The feasible lines per category (in the paper's order), then all of them as "all feasible"."""
+    feasible = [line for line in lines if line["feasible"]]
+    groups = [(c, [line for line in feasible if line["category"] == c]) for c in (*CATEGORIES, "uncategorized")]
+    return [(name, group) for name, group in [*groups, ("all feasible", feasible)] if group]
+
+
+def metric_mean(group: Sequence[Line], metric: str) -> float | None:
+    """A metric's mean over a group's lines: a line without it (an error, a refusal) counts 0, one
+    whose run cannot be judged on it (None) is left out."""
+    known = [v for v in (line.get(metric, 0.0) for line in group) if v is not None]
+    return sum(known) / len(known) if known else None
+
+
+def mean_sd(values: Sequence[float]) -> tuple[float, float] | None:
+    """Mean and sample standard deviation (0 for one value); None for no values."""
+    if not values:
+        return None
+    return statistics.fmean(values), statistics.stdev(values) if len(values) > 1 else 0.0
+
+
+def refusals(lines: Sequence[Line], feasible: bool) -> dict[str, int]:
+    """Of the feasible (or infeasible) lines: how many, how many refused, and who refused them."""
+    group = [line for line in lines if line["feasible"] == feasible]
+    refused = [line for line in group if line["refused"]]
+    by = Counter(line.get("refused_by") or "model" for line in refused)
+    return {"tasks": len(group), "refused": len(refused), **{f"by {k}": by[k] for k in REFUSERS},
+            "errors": sum(1 for line in group if line.get("error"))}
+
+
+def stage_costs(lines: Sequence[Line]) -> dict[str, dict[str, float]]:
+    """Per stage (and "execution", and "task" for the whole): mean seconds, prompt and generated
+    tokens over the lines that reached it, and "share": its seconds over all lines (the shares add
+    up to a task's mean seconds)."""
+    costs: dict[str, dict[str, float]] = {}
+    for stage in STAGE_NAMES:
+        ran = [line["tokens"][stage] for line in lines if stage in line.get("tokens", {})]
+        if ran:
+            costs[stage] = {"tasks": len(ran), "share": sum(r["seconds"] for r in ran) / len(lines),
+                            **{k: statistics.fmean(float(r[k]) for r in ran) for k in ("seconds", "prompt", "generated")}}
+    executed = [line["seconds"] - sum(t["seconds"] for t in line.get("tokens", {}).values())
+                for line in lines if line.get("Exe") is not None and "ticks" in line]
+    if executed:
+        costs["execution"] = {"tasks": len(executed), "seconds": statistics.fmean(executed),
+                              "share": sum(executed) / len(lines)}
+    if lines:
+        costs["task"] = {"tasks": len(lines), "seconds": statistics.fmean(line["seconds"] for line in lines),
+                         "total": sum(line["seconds"] for line in lines)}
+    return costs
+
+
+def summary_table(lines: Sequence[Line]) -> str:
+    """Mean metrics per category (feasible tasks) and the refusal rate on infeasible ones."""
+    rows = [f"{'category':<14}{'tasks':>6}{'errors':>7}" + "".join(f"{m:>7}" for m in METRICS) + f"{'refused':>9}"]
+    for name, group in category_groups(lines):
+        errors = sum(1 for line in group if line.get("error"))
+        means = [metric_mean(group, metric) for metric in METRICS]
+        refused = sum(1 for line in group if line["refused"])
+        rows.append(f"{name:<14}{len(group):>6}{errors:>7}" + "".join(
+            f"{'n/a' if m is None else f'{m:.2f}':>7}" for m in means) + f"{refused:>9}")
+    counts = refusals(lines, feasible=False)
+    if counts["tasks"]:
+        who = ", ".join(f"{counts[f'by {k}']} by {k}" for k in REFUSERS if counts[f"by {k}"] or k != "rule")
+        rows.append(f"{'infeasible':<14}{counts['tasks']:>6}{counts['errors']:>7}"
+                    f"   correctly refused {counts['refused']}/{counts['tasks']} ({who})")
+    return "\n".join(rows)
+
+
+def variability_table(runs: Sequence[Sequence[Line]]) -> str:
+    """The paper's Table II: per category and metric, the mean and standard deviation over runs
+    (seeds) of each run's category mean; and the refusal rate of infeasible tasks likewise."""
+    rows = [f"{'category':<14}{'tasks':>6}{'runs':>5}" + "".join(f"{m:>12}" for m in METRICS)]
+    per_run = [dict(category_groups(lines)) for lines in runs]
+    for name, group in category_groups(runs[0]):
+        cells = []
+        for metric in METRICS:
+            values = [v for v in (metric_mean(groups.get(name, []), metric) for groups in per_run) if v is not None]
+            cells.append(_spread(values))
+        rows.append(f"{name:<14}{len(group):>6}{len(runs):>5}" + "".join(f"{c:>12}" for c in cells))
+    infeasible = [[line for line in lines if not line["feasible"]] for lines in runs]
+    if infeasible[0]:
+        rates = [sum(line["refused"] for line in group) / len(group) for group in infeasible if group]
+        rows.append(f"{'infeasible':<14}{len(infeasible[0]):>6}{len(runs):>5}   refused {_spread(rates)}")
+    return "\n".join(rows)
+
+
+def _spread(values: Sequence[float]) -> str:
+    found = mean_sd(values)
+    return "n/a" if found is None else f"{found[0]:.2f}±{found[1]:.2f}"
