@@ -30,6 +30,7 @@ from .scoring import Goal, Scores, score_execution
 from .tasks import Task
 from .world.controller import open_controller
 
+
 @dataclass
 class TaskOutcome:
     task: Task
@@ -85,11 +86,11 @@ class Progress:
 
     @property
     def running_sr(self) -> float | None:
-        """Mean SR of the feasible tasks scored so far (an error or a refusal counts 0); None before any."""
-        feasible = [o for o in self.scored if o.task.feasible]
-        if not feasible:
-            return None
-        return sum(o.scores.SR or 0.0 for o in feasible if o.scores is not None) / len(feasible)
+        """Mean SR of the feasible tasks scored so far, as the tables count it (an error or a refusal is 0,
+        an SR that cannot be judged is left out); None before any."""
+        values = [o.scores.SR if o.scores is not None else 0.0 for o in self.scored if o.task.feasible]
+        known = [v for v in values if v is not None]
+        return sum(known) / len(known) if known else None
 
     def line(self) -> str:
         """One plain line for a log (stderr that is not a terminal)."""

@@ -26,8 +26,9 @@ class Table:
     notes: list[str] = field(default_factory=list)
 
     def markdown(self) -> str:
+        labels = self._labels()
         lines = [f"## {self.title}", "", "| " + " | ".join(self.columns) + " |",
-                 "|" + "|".join("---" if k < self._labels() else "---:" for k in range(len(self.columns))) + "|"]
+                 "|" + "|".join("---" if k < labels else "---:" for k in range(len(self.columns))) + "|"]
         lines += ["| " + " | ".join(_text(cell) for cell in row) + " |" for row in self.rows]
         return "\n".join(lines + [""] + [f"{note}  " for note in self.notes]).rstrip() + "\n"
 
