@@ -54,12 +54,12 @@ def test_bad_json(tmp_path):
         ({"feasible": False}, "(line): 'missing_skills' is a required property"),
         ({"feasible": False, "missing_skills": []}, "missing_skills: [] should be non-empty"),
         ({"category": "cooking"},
-         "category: 'cooking' is not one of ['elemental', 'simple', 'compound', 'complex', 'uncategorized']"),
+         "category: 'cooking' is not one of ['elemental', 'simple', 'compound', 'complex', 'vague', 'uncategorized']"),
         ({"robots": []}, "robots: [] should be non-empty"),
         ({"colour": "red"}, "(line): Additional properties are not allowed ('colour' was unexpected)"),
         ({"goals": [{"name": "Fridge", "contains": [], "state": "WARM"}]},
          "goals/0/state: 'WARM' is not one of [None, 'SLICED', 'ON', 'OFF', 'OPENED', 'CLOSED', 'HOT', 'COLD', "
-         "'COOKED', 'BROKEN', 'PICKED', 'CLEAN', 'DIRTY', 'FILLED']"),
+         "'COOKED', 'BROKEN', 'PICKED', 'CLEAN', 'DIRTY', 'FILLED', 'EMPTY']"),
     ],
 )
 def test_schema_violations(tmp_path, changes, message):
