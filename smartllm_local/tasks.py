@@ -31,6 +31,12 @@ SMARTLLM_CATEGORIES = ("elemental", "simple", "compound", "complex")
 CATEGORIES = (*SMARTLLM_CATEGORIES, "vague")
 
 
+def check_category(category: str | None) -> None:
+    """A ``--category`` filter must name a category (or "uncategorized", for imported tasks)."""
+    if category is not None and category not in (*CATEGORIES, "uncategorized"):
+        raise UserError(f"--category must be one of {', '.join(CATEGORIES)}, not {category!r}")
+
+
 @dataclass(frozen=True)
 class Task:
     id: str

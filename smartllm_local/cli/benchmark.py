@@ -8,10 +8,9 @@ from typing import Optional
 
 import typer
 
-from ..errors import UserError
 from ..files import check_output_file, write_atomic
 from ..robots import load_catalogue
-from ..tasks import CATEGORIES, default_task_files, load_tasks
+from ..tasks import CATEGORIES, check_category, default_task_files, load_tasks
 
 app = typer.Typer(help="The benchmark: list its tasks, check it, import SMART-LLM's task files.", no_args_is_help=True)
 
@@ -23,8 +22,7 @@ def list_tasks(
     as_json: bool = typer.Option(False, "--json", help="Print the tasks as JSON lines."),
 ) -> None:
     """Print the tasks: id, category, floor plan, robots and instruction."""
-    if category is not None and category not in (*CATEGORIES, "uncategorized"):
-        raise UserError(f"--category must be one of {', '.join(CATEGORIES)}, not {category!r}")
+    check_category(category)
     chosen = [t for t in load_tasks(tasks or default_task_files()) if category in (None, t.category)]
     if as_json:
         for task in chosen:

@@ -25,7 +25,7 @@ from ..provenance import run_manifest
 from ..resources import data_dir
 from ..robots import default_catalogue_path, load_catalogue, parse_robot_ids
 from ..run_store import RunStore
-from ..tasks import CATEGORIES, default_task_files, find_task, load_tasks
+from ..tasks import CATEGORIES, check_category, default_task_files, find_task, load_tasks
 from ..world.scenes import floor_plan_name
 from .progress import RunProgress
 
@@ -224,8 +224,7 @@ def benchmark_run(
     check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
     tasks_files = [tasks] if tasks else default_task_files()
-    if category is not None and category not in (*CATEGORIES, "uncategorized"):
-        raise UserError(f"--category must be one of {', '.join(CATEGORIES)}, not {category!r}")
+    check_category(category)
     chosen = load_tasks(tasks_files, catalogue=cat)
     if category is not None:
         chosen = [t for t in chosen if t.category == category]

@@ -45,8 +45,9 @@ def stage_times(runs: Sequence[Run], path: Path) -> Path:
     parts = [*STAGE_NAMES, "execution"]
     figure, axis = plt.subplots(figsize=(10, 1.5 + 0.6 * len(runs)))
     left = [0.0] * len(runs)
+    costs = [stage_costs(run.lines) for run in runs]
     for part in parts:
-        seconds = [stage_costs(run.lines).get(part, {}).get("share", 0.0) for run in runs]
+        seconds = [cost.get(part, {}).get("share", 0.0) for cost in costs]
         axis.barh(range(len(runs)), seconds, left=left, label=part)
         left = [a + b for a, b in zip(left, seconds)]
     axis.set_yticks(range(len(runs)), [run.label for run in runs])
