@@ -10,8 +10,8 @@ plan, so a free pipeline would stop after the first stage), and its prompt is
 checked to be the grammar run's. "valid" says whether the output is a valid
 plan (decomposition, allocation) or list of coalition lines, or a refusal.
 
-Each configuration gets a freshly loaded model, so both start with an empty
-cache. A stage's seconds include evaluating its prompt, less what the key/value
+Each configuration gets a freshly loaded model and no prefix store on disk, so
+both start with an empty cache (`smartllm-local bench` measures the reuse). A stage's seconds include evaluating its prompt, less what the key/value
 cache already held; forced tokens (text the grammar admits in one way only) are
 written in one batch rather than decoded one by one.
 
@@ -51,7 +51,8 @@ def raw_speed(args: argparse.Namespace, prompt: str, n: int = 64) -> tuple[float
 
 
 def load(args: argparse.Namespace):
-    return load_backend(args.backend, args.model, threads=args.threads, n_gpu_layers=args.n_gpu_layers)
+    return load_backend(args.backend, args.model, threads=args.threads, n_gpu_layers=args.n_gpu_layers,
+                        prefix_cache="off")
 
 
 def free_stages(planner: Planner, task: Task, guided: PlanResult) -> list[StageRecord]:

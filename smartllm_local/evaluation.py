@@ -23,7 +23,7 @@ from .files import write_atomic
 from .methods import Method, SmartLLM
 from .planner.pipeline import Planner, PlanResult, restore_stage, write_artifacts
 from .planner.scene_context import scene_objects
-from .results import summary_table
+from .results import metric_mean, summary_table
 from .robots import Catalogue
 from .run_store import RunStore
 from .scoring import Goal, Scores, score_execution
@@ -59,8 +59,10 @@ class TaskOutcome:
         if self.scores is not None:
             data.update(self.scores.metrics(), ticks=self.scores.ticks, Speed=self.scores.Speed)
         if self.result is not None:
-            data["tokens"] = {r.stage: {"prompt": r.prompt_tokens, "generated": r.generated_tokens,
-                                        "seconds": round(r.seconds, 2)} for r in self.result.stages}
+            data["tokens"] = {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens,
+                                        "generated": r.generated_tokens, "seconds": round(r.seconds, 2),
+                                        "prompt_seconds": round(r.prompt_seconds, 2)}
+                              for r in self.result.stages}
             if self.result.notices:
                 data["notices"] = self.result.notices
         if self.error:
@@ -88,9 +90,7 @@ class Progress:
     def running_sr(self) -> float | None:
         """Mean SR of the feasible tasks scored so far, as the tables count it (an error or a refusal is 0,
         an SR that cannot be judged is left out); None before any."""
-        values = [o.scores.SR if o.scores is not None else 0.0 for o in self.scored if o.task.feasible]
-        known = [v for v in values if v is not None]
-        return sum(known) / len(known) if known else None
+        return metric_mean([o.as_json() for o in self.scored if o.task.feasible], "SR")
 
     def line(self) -> str:
         """One plain line for a log (stderr that is not a terminal)."""

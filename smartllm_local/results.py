@@ -80,15 +80,17 @@ def refusals(lines: Sequence[Line], feasible: bool) -> dict[str, int]:
 
 
 def stage_costs(lines: Sequence[Line]) -> dict[str, dict[str, float]]:
-    """Per stage (and "execution", and "task" for the whole): mean seconds, prompt and generated
-    tokens over the lines that reached it, and "share": its seconds over all lines (the shares add
+    """Per stage (and "execution", and "task" for the whole): mean seconds, prompt tokens, prompt tokens
+    reused from a kept state (0 in lines written before reuse was recorded) and generated tokens over the
+    lines that reached it, and "share": its seconds over all lines (the shares add
     up to a task's mean seconds)."""
     costs: dict[str, dict[str, float]] = {}
     for stage in STAGE_NAMES:
         ran = [line["tokens"][stage] for line in lines if stage in line.get("tokens", {})]
         if ran:
             costs[stage] = {"tasks": len(ran), "share": sum(r["seconds"] for r in ran) / len(lines),
-                            **{k: statistics.fmean(float(r[k]) for r in ran) for k in ("seconds", "prompt", "generated")}}
+                            **{k: statistics.fmean(float(r.get(k, 0)) for r in ran)
+                               for k in ("seconds", "prompt", "reused", "generated")}}
     executed = [line["seconds"] - sum(t["seconds"] for t in line.get("tokens", {}).values())
                 for line in lines if line.get("Exe") is not None and "ticks" in line]
     if executed:

@@ -14,6 +14,7 @@ import sys
 import typer
 
 from ..errors import SmartLLMError, UserError
+from . import bench as _bench
 from . import benchmark as _benchmark
 from . import plan as _plan
 from . import plans as _plans
@@ -31,6 +32,7 @@ _benchmark.app.command("run")(_plan.benchmark_run)
 app.command("plan")(_plan.plan_command)
 app.command("validate")(_plans.validate)
 app.command("execute")(_plans.execute)
+app.command("bench")(_bench.bench_command)
 
 
 # Typer may bundle its own copy of click: take the exception classes from wherever it raises them.

@@ -20,6 +20,7 @@ from ..planner.backends import BACKENDS, Sampling, load_backend, model_location
 from ..planner.chat import CHAT_TEMPLATE_MODES, check_mode
 from ..planner.models import DEFAULT_MODEL, EMBEDDED
 from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
+from ..planner.prefix_cache import open_store
 from ..planner.prompts import PromptOptions
 from ..provenance import run_manifest
 from ..resources import data_dir
@@ -41,7 +42,7 @@ class ModelOptions:
     def __init__(self, model: Optional[str], backend: str, n_ctx: int, threads: Optional[int], n_gpu_layers: int,
                  seed: int, temperature: float, no_comments: bool, no_summary: bool, no_coalition: bool,
                  no_grammar: bool, free_teams: bool = False, chat_template: str = "auto",
-                 free_allocation: bool = False, no_world_check: bool = False):
+                 free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -53,6 +54,9 @@ class ModelOptions:
         check_mode(chat_template)
         self.model, self.backend, self.n_ctx, self.threads = model, backend, n_ctx, threads
         self.n_gpu_layers = n_gpu_layers
+        self.prefix_cache = prefix_cache
+        if backend == "llamacpp":  # a cache folder that can never be one fails before the model loads
+            open_store(prefix_cache)
         self.config = PlannerConfig(
             sampling=Sampling(temperature=temperature, seed=seed),
             grammar=not no_grammar,
@@ -70,7 +74,7 @@ class ModelOptions:
 
     def planner(self, catalogue) -> Planner:
         backend = load_backend(self.backend, self.model, n_ctx=self.n_ctx, threads=self.threads,
-                               n_gpu_layers=self.n_gpu_layers, seed=self.seed)
+                               n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=self.prefix_cache)
         return Planner(backend, catalogue, self.config)
 
 
@@ -98,6 +102,10 @@ _FREE_ALLOCATION = typer.Option(False, "--free-allocation", help=(
 _NO_WORLD_CHECK = typer.Option(False, "--no-world-check", help=(
     "Offer steps whatever the scene's state, rather than only steps that succeed from the state the "
     "steps so far produce (for measuring the check's effect)."))
+_PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
+    "Where the examples' key/value states are kept between runs, so a later run on the same model starts "
+    "from them (default: the user's cache, $XDG_CACHE_HOME/smartllm-local/prefix-states, at most 4 GiB); "
+    "off keeps them for this run only. llama.cpp only."))
 _CATALOGUE = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json).")
 _THOR_BUILD = typer.Option(None, help="A Unity AI2-THOR executable (default: the headless stand-in).")
 _TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
@@ -129,11 +137,12 @@ def plan_command(
     chat_template: str = _CHAT_TEMPLATE,
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
+    prefix_cache: Optional[str] = _PREFIX_CACHE,
 ) -> None:
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check)
+                           no_world_check, prefix_cache)
     if out is not None:
         check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
@@ -216,11 +225,12 @@ def benchmark_run(
     chat_template: str = _CHAT_TEMPLATE,
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
+    prefix_cache: Optional[str] = _PREFIX_CACHE,
 ) -> None:
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check)
+                           no_world_check, prefix_cache)
     check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
     tasks_files = [tasks] if tasks else default_task_files()
@@ -237,7 +247,7 @@ def benchmark_run(
     chosen_seeds = parse_seeds(seeds, seed)
     if len(chosen_seeds) > 1 and temperature == 0 and method != "decomp-random":
         raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
-    arguments = {k: v for k, v in ctx.params.items() if k not in ("out", "restart", "seeds")}
+    arguments = {k: v for k, v in ctx.params.items() if k not in ("out", "restart", "seeds", "prefix_cache")}
     model_path = None if method == "reference" else model_location(backend, model)
     runs = []
     for s in chosen_seeds:  # every run folder is checked before the model loads

@@ -21,6 +21,7 @@ from jinja2 import TemplateError
 
 from ..errors import ModelError, UserError
 from .backends.base import Backend
+from .prompts import Prompt
 
 CHAT_TEMPLATE_MODES = ("auto", "none")
 
@@ -107,12 +108,22 @@ def chat_format(backend: Backend, mode: str) -> tuple[ChatFormat | None, str]:
     return ChatFormat(backend.chat_template, bos_token=backend.bos_token, eos_token=backend.eos_token), APPLIED
 
 
-def prompt_tokens(backend: Backend, prompt: str, chat: ChatFormat | None) -> tuple[str, list[int]]:
-    """The text a model is given for ``prompt`` and its tokens: raw (after the model's BOS token),
-    or as a chat turn, where the template decides about BOS (as llama-cpp-python's chat does)."""
+def prompt_tokens(backend: Backend, prompt: Prompt | str, chat: ChatFormat | None) -> tuple[str, list[int], int]:
+    """The text a model is given for ``prompt``, its tokens, and how many of them begin every prompt
+    with the same shared part (0 for a plain string): raw (after the model's BOS token), or as a
+    chat turn, where the template decides about BOS (as llama-cpp-python's chat does).
+
+    The shared part is tokenized on its own and the task's part as its continuation, so the shared
+    tokens are the same whatever follows them."""
+    shared, own = (prompt.shared, prompt.own) if isinstance(prompt, Prompt) else ("", prompt)
     if chat is None:
-        return prompt, backend.tokenize(prompt, bos=True)
-    turn = chat.turn(prompt)
-    tokens = backend.tokenize(turn.head, special=True) + backend.tokenize(turn.body) \
-        + backend.tokenize(turn.tail, special=True)
-    return turn.text, tokens
+        if not shared:
+            return own, backend.tokenize(own, bos=True), 0
+        head = backend.tokenize(shared, bos=True)
+        return shared + own, head + backend.tokenize_continuation(own), len(head)
+    turn = chat.turn(shared + own)
+    start, tail = backend.tokenize(turn.head, special=True), backend.tokenize(turn.tail, special=True)
+    if shared and turn.body.startswith(shared) and len(turn.body) > len(shared):  # the template kept it as is
+        head = start + backend.tokenize(shared)
+        return turn.text, head + backend.tokenize_continuation(turn.body[len(shared):]) + tail, len(head)
+    return turn.text, start + backend.tokenize(turn.body) + tail, 0

@@ -38,8 +38,6 @@ from .prompts import (
     decomposition_prompt,
     examples_for,
     load_examples,
-    plan_object_types,
-    rank_by_relevance,
 )
 from .scene_context import SceneObjects, scene_objects
 from .stages import StageRecord, check_output, fit_prompt, run_stage
@@ -132,17 +130,14 @@ class Planner:
         opts = self.config.prompts
         record = StageRecord("decomposition", chat_template=self.chat_status)
         examples = examples_for("decomposition", self.examples, opts)
-        ranked = rank_by_relevance(examples, result.instruction)
         budget = self.config.budgets["decomposition"]
         skills = self.catalogue.skills
-        record.prompt, tokens, kept, dropped = fit_prompt(
-            lambda ex: decomposition_prompt(result.instruction, scene, skills, ex, opts), examples, ranked,
-            self.backend, budget, self.chat)
-        record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
+        prompt = fit_prompt(lambda ex: decomposition_prompt(result.instruction, scene, skills, ex, opts), examples,
+                            self.backend, budget, self.chat)
         world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS) if self.config.world_check else None
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world) \
             if self.config.grammar else None
-        run_stage(record, self.backend, tokens, constraint, output_budget=budget,
+        run_stage(record, self.backend, prompt, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
         self._finish_plan_stage(record, result, form="decomposed", scene=scene)
         result.stages.append(record)
@@ -154,12 +149,9 @@ class Planner:
         record = StageRecord("coalition", chat_template=self.chat_status)
         decomposition = result.stages[0].output
         examples = examples_for("coalition", self.examples, opts)
-        ranked = rank_by_relevance(examples, result.instruction, plan_object_types(decomposition, scene))
         budget = self.config.budgets["coalition"]
-        record.prompt, tokens, kept, dropped = fit_prompt(
-            lambda ex: coalition_prompt(decomposition, team, scene, self.catalogue.robots, ex, opts),
-            examples, ranked, self.backend, budget, self.chat)
-        record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
+        prompt = fit_prompt(lambda ex: coalition_prompt(decomposition, team, scene, self.catalogue.robots, ex, opts),
+                            examples, self.backend, budget, self.chat)
         names = [f.name for f in decomposed.functions]
         pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
         needs = function_needs(decomposed, scene, pickups)
@@ -168,8 +160,8 @@ class Planner:
         if constraint is not None:
             # The configured budget is a floor: the reasoning may use all the context the prompt leaves
             # (the constraint ends the output once every sub-task has its line; free text would fill it).
-            budget = max(budget, self.backend.n_ctx - len(tokens) - 1)
-        run_stage(record, self.backend, tokens, constraint, output_budget=budget,
+            budget = max(budget, self.backend.n_ctx - len(prompt.tokens) - 1)
+        run_stage(record, self.backend, prompt, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
         if constraint is None:
             lines = [line for line in record.output.splitlines() if line.strip()]
@@ -190,7 +182,6 @@ class Planner:
         record = StageRecord("allocation", chat_template=self.chat_status)
         decomposition = result.stages[0].output
         examples = examples_for("allocation", self.examples, opts)
-        ranked = rank_by_relevance(examples, result.instruction, plan_object_types(decomposition, scene))
         skills = self.catalogue.skills
         names = [f.name for f in decomposed.functions]
         constraint = None
@@ -209,11 +200,10 @@ class Planner:
         else:  # never below what the shortest complete allocation needs
             budget = max(allocation_budget(result.stages[0], len(names), self.config.budgets["allocation"]),
                          constraint.minimum_budget() if constraint is not None else 0)
-        record.prompt, tokens, kept, dropped = fit_prompt(
+        prompt = fit_prompt(
             lambda ex: allocation_prompt(decomposition, coalition, team, skills, self.catalogue.robots, ex, opts),
-            examples, ranked, self.backend, budget, self.chat)
-        record.examples, record.dropped = [e.name for e in kept], [e.name for e in dropped]
-        run_stage(record, self.backend, tokens, constraint, output_budget=budget,
+            examples, self.backend, budget, self.chat)
+        run_stage(record, self.backend, prompt, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
         self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))
         result.stages.append(record)

@@ -2,9 +2,9 @@
 
 Prompts are Python source, as in SMART-LLM: the skills as an import line,
 worked examples (each a task description followed by its plan), then the new
-task. The examples come first and the task's own details last, so that the
-long shared beginning of a prompt is the same for every task of a stage and a
-backend can keep it in its cache.
+task. The examples come first, always in file order, and the task's own
+details last: a :class:`Prompt` is the part shared by every task of a stage
+(whose key/value state a backend evaluates once) and the task's own part.
 
 Ablations (as in the paper): ``comments=False`` removes the comment lines
 from the examples' code, ``summary=False`` removes the summary block of the
@@ -91,25 +91,24 @@ def load_examples(folder: Path | None = None) -> list[Example]:
     return examples
 
 
+@dataclass(frozen=True)
+class Prompt:
+    """A stage's prompt: ``shared`` (its introduction and examples, the same for every task that keeps
+    as many examples) and ``own`` (the task's details). The two part between words (``# Your`` and
+    `` task``), where every tokenizer family splits, so that tokenized apart they give the tokens of
+    the whole."""
+
+    shared: str
+    own: str
+
+    @property
+    def text(self) -> str:
+        return self.shared + self.own
+
+
 def examples_for(stage: str, examples: Sequence[Example], options: PromptOptions) -> list[Example]:
     chosen = [e for e in examples if stage in e.stages]
     return chosen[: options.example_counts.get(stage, len(chosen))]
-
-
-def rank_by_relevance(examples: Sequence[Example], instruction: str, types: Sequence[str] = ()) -> list[Example]:
-    """Examples from most to least relevant to a task: shared words and object types."""
-    words = set(re.findall(r"[a-z]+", instruction.lower())) - _STOPWORDS
-    wanted = {t.lower() for t in types}
-
-    def score(e: Example) -> float:
-        own = set(re.findall(r"[a-z]+", e.instruction.lower())) - _STOPWORDS
-        kinds = {t.lower() for t in e.object_types()}
-        return len(words & own) + len(wanted & kinds) + 0.5 * len(words & kinds)
-
-    return sorted(examples, key=lambda e: -score(e))
-
-
-_STOPWORDS = {"the", "a", "an", "and", "in", "on", "of", "to", "then", "it", "put", "me", "please", "into", "up", "off"}
 
 
 # ------------------------------------------------------------------ transforms
@@ -186,14 +185,14 @@ ALLOCATION_INTRO = """\
 
 
 def decomposition_prompt(instruction: str, scene: SceneObjects, skills: SkillSet,
-                         examples: Sequence[Example], options: PromptOptions) -> str:
+                         examples: Sequence[Example], options: PromptOptions) -> Prompt:
     parts = [skills_header(skills), "\n", DECOMPOSITION_INTRO]
     for k, ex in enumerate(examples, start=1):
         objects = _example_scene(ex).python_list(ex.object_types())
         parts.append(f"\n# Example {k}\nobjects = {objects}\n# Task Description: {ex.instruction}\n")
         parts.append(shape(ex.decomposition, options))
-    parts.append(f"\n# Your task\nobjects = {scene.python_list()}\n# Task Description: {instruction}\n")
-    return "".join(parts)
+    own = f" task\nobjects = {scene.python_list()}\n# Task Description: {instruction}\n"
+    return Prompt("".join(parts) + "\n# Your", own)
 
 
 def plan_object_types(code: str, scene: SceneObjects) -> list[str]:
@@ -201,7 +200,7 @@ def plan_object_types(code: str, scene: SceneObjects) -> list[str]:
 
 
 def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects, catalogue: dict[int, Robot],
-                     examples: Sequence[Example], options: PromptOptions) -> str:
+                     examples: Sequence[Example], options: PromptOptions) -> Prompt:
     parts = [COALITION_INTRO]
     for k, ex in enumerate(examples, start=1):
         ex_team = [catalogue[i] for i in ex.robots]
@@ -209,8 +208,8 @@ def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects
         parts.append(f"\n# Example {k}\n{shape(ex.decomposition, options)}{robots_list(ex_team)}"
                      f"objects = {objects}\n# Coalition:\n{ex.coalition}")
     objects = scene.python_list(plan_object_types(decomposed, scene))
-    parts.append(f"\n# Your plan\n{shape(decomposed, options)}{robots_list(team)}objects = {objects}\n# Coalition:\n")
-    return "".join(parts)
+    own = f" plan\n{shape(decomposed, options)}{robots_list(team)}objects = {objects}\n# Coalition:\n"
+    return Prompt("".join(parts) + "\n# Your", own)
 
 
 def coalition_decisions(coalition: str) -> str:
@@ -220,7 +219,7 @@ def coalition_decisions(coalition: str) -> str:
 
 
 def allocation_prompt(decomposed: str, coalition: str | None, team: Sequence[Robot], skills: SkillSet,
-                      catalogue: dict[int, Robot], examples: Sequence[Example], options: PromptOptions) -> str:
+                      catalogue: dict[int, Robot], examples: Sequence[Example], options: PromptOptions) -> Prompt:
     """Decompositions appear here without their line comments, and coalitions without their
     reasoning: the allocated code restates every line with its comment, the allocation needs only
     whom each sub-task is started with, and the saving keeps more examples within a 4,096-token
@@ -234,5 +233,5 @@ def allocation_prompt(decomposed: str, coalition: str | None, team: Sequence[Rob
         parts.append(f"\n# Example {k}\n{shape(ex.decomposition, bare)}{robots_list(ex_team)}"
                      f"{coalition_part}# Allocated plan:\n{allocated}")
     coalition_part = f"# Coalition:\n{coalition_decisions(coalition)}" if options.coalition and coalition else ""
-    parts.append(f"\n# Your plan\n{shape(decomposed, bare)}{robots_list(team)}{coalition_part}# Allocated plan:\n")
-    return "".join(parts)
+    own = f" plan\n{shape(decomposed, bare)}{robots_list(team)}{coalition_part}# Allocated plan:\n"
+    return Prompt("".join(parts) + "\n# Your", own)

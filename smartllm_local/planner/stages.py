@@ -1,9 +1,11 @@
 """Running one stage: fit its prompt into the context, generate under its constraint, check the result.
 
 Context budget: the prompt is measured with the loaded model's tokenizer;
-when prompt + output budget exceed the context, examples are dropped, least
-relevant first, and the drop is recorded and reported rather than the prompt
-being truncated or the run failing.
+when prompt + output budget exceed the context, examples are dropped from the
+last, and the drop is recorded and reported rather than the prompt being
+truncated or the run failing. Dropping from the last keeps the examples left a
+prefix of every other task's, whose state the backend keeps (see
+prefix_cache.py).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from .backends.base import Backend, Sampling
 from .chat import ChatFormat, prompt_tokens
 from .constraints import Choose, Constraint
 from .generation import BudgetError, GuaranteeError, run_constraint
-from .prompts import Example
+from .prompts import Example, Prompt
 
 STOP_STRINGS = {
     "decomposition": ("\n# Example", "\n# Your task", "\n# Task Description", "\nobjects ="),
@@ -40,9 +42,12 @@ class StageRecord:
     refusal: str | None = None
     refused_by: str = ""  # who refused: "model", or "grammar" when it admitted nothing else, or "rule"
     prompt_tokens: int = 0
+    shared_tokens: int = 0  # of the prompt's tokens, those of the examples every task shares
+    reused_tokens: int = 0  # of those, the ones the backend had kept (from an earlier task or process)
     generated_tokens: int = 0
     forced_tokens: int = 0
     seconds: float = 0.0
+    prompt_seconds: float = 0.0  # of those, evaluating the prompt (the time to the first token)
     output_budget: int = 0
     examples: list[str] = field(default_factory=list)
     dropped: list[str] = field(default_factory=list)
@@ -59,8 +64,9 @@ class StageRecord:
 
     @classmethod
     def restored(cls, data: Mapping[str, Any]) -> "StageRecord":
+        """A saved record; one saved before a field was added gets its default."""
         known = {f.name for f in fields(cls)} - {"plan"}
-        if not isinstance(data, Mapping) or set(data) != known:
+        if not isinstance(data, Mapping) or not set(data) <= known or "stage" not in data:
             raise ValueError("not a saved stage record")
         return cls(**data)
 
@@ -71,46 +77,56 @@ class StageRecord:
     def timings(self) -> dict[str, float | int | str | list[str]]:
         return {
             "chat_template": self.chat_template,
-            "prompt_tokens": self.prompt_tokens, "generated_tokens": self.generated_tokens,
+            "prompt_tokens": self.prompt_tokens, "shared_tokens": self.shared_tokens,
+            "reused_tokens": self.reused_tokens, "generated_tokens": self.generated_tokens,
             "forced_tokens": self.forced_tokens, "output_budget": self.output_budget,
-            "seconds": round(self.seconds, 3),
+            "seconds": round(self.seconds, 3), "prompt_seconds": round(self.prompt_seconds, 3),
             "tokens_per_second": round(self.tokens_per_second, 2),
             "examples": self.examples, "dropped_examples": self.dropped, "capped_by_budget": self.capped,
             "world_check": {"tries": self.world_tries, "dead_ends": self.dead_ends},
         }
 
 
+@dataclass(frozen=True)
+class Fitted:
+    """A prompt as the model gets it: its text, its tokens (the first ``shared`` of them every task's
+    prompt begins with), and the examples it kept and dropped."""
+
+    text: str
+    tokens: list[int]
+    shared: int = 0
+    kept: list[Example] = field(default_factory=list)
+    dropped: list[Example] = field(default_factory=list)
+
+
 def fit_prompt(
-    build: Callable[[Sequence[Example]], str],
+    build: Callable[[Sequence[Example]], Prompt],
     examples: Sequence[Example],
-    ranked: Sequence[Example],
     backend: Backend,
     output_budget: int,
     chat: ChatFormat | None = None,
-) -> tuple[str, list[int], list[Example], list[Example]]:
-    """The prompt with as many examples as fit, dropping the least relevant (last of ``ranked``) first.
+) -> Fitted:
+    """The prompt with as many examples as fit, dropping the last first.
 
-    Examples keep their file order in the prompt. What must fit is the prompt as the model gets it
-    (in its chat template, with ``chat``). Returns that text, its tokens, the kept and the dropped.
+    What must fit is the prompt as the model gets it (in its chat template, with ``chat``).
     """
-    dropped: list[Example] = []
+    kept = list(examples)
     while True:
-        kept = [e for e in examples if e not in dropped]
-        prompt, tokens = prompt_tokens(backend, build(kept), chat)
+        text, tokens, shared = prompt_tokens(backend, build(kept), chat)
         if len(tokens) + output_budget < backend.n_ctx:
-            return prompt, tokens, kept, dropped
+            return Fitted(text, tokens, shared, kept, list(examples[len(kept):]))
         if not kept:
             raise UserError(
                 f"the prompt alone ({len(tokens)} tokens) and an output budget of {output_budget} tokens "
                 f"exceed the model's context of {backend.n_ctx} tokens; raise --n-ctx"
             )
-        dropped.append(next(e for e in reversed(ranked) if e not in dropped))
+        kept.pop()
 
 
 def run_stage(
     record: StageRecord,
     backend: Backend,
-    prompt_tokens: list[int],
+    prompt: Fitted,
     constraint: Constraint | None,
     *,
     output_budget: int,
@@ -118,10 +134,13 @@ def run_stage(
     rng: np.random.Generator,
 ) -> None:
     """Generate a stage's output into ``record`` (constrained, or free with stop strings)."""
-    context = list(prompt_tokens)
-    record.prompt_tokens = len(prompt_tokens)
+    context = list(prompt.tokens)
+    record.prompt, record.prompt_tokens, record.shared_tokens = prompt.text, len(context), prompt.shared
+    record.examples, record.dropped = [e.name for e in prompt.kept], [e.name for e in prompt.dropped]
     record.output_budget = output_budget
     started = time.perf_counter()
+    record.reused_tokens = backend.prefill(context, prompt.shared)
+    record.prompt_seconds = time.perf_counter() - started
     if constraint is None:
         result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,
                                   stop=STOP_STRINGS[record.stage], rng=rng)  # type: ignore[call-arg]

@@ -173,7 +173,7 @@ def efficiency_table(runs: Sequence[Run]) -> Table:
 def stage_table(runs: Sequence[Run]) -> Table:
     columns = ["Method", "Model", "Variant", "Tasks"]
     for stage in STAGE_NAMES:
-        columns += [f"{stage} s", f"{stage} prompt tok", f"{stage} gen tok"]
+        columns += [f"{stage} s", f"{stage} prompt tok", f"{stage} reused tok", f"{stage} gen tok"]
     table = Table("stages", "Time and tokens per stage (means per task that reached the stage)",
                   columns + ["execution s", "s/task", "total h"])
     for run in runs:
@@ -181,14 +181,17 @@ def stage_table(runs: Sequence[Run]) -> Table:
         row = _who(run) + [len(run.lines)]
         for stage in STAGE_NAMES:
             cost = costs.get(stage, {})
-            row += [cost.get("seconds"), _whole(cost.get("prompt")), _whole(cost.get("generated"))]
+            row += [cost.get("seconds"), _whole(cost.get("prompt")), _whole(cost.get("reused")),
+                    _whole(cost.get("generated"))]
         task = costs.get("task", {})
         total = task.get("total")
         row += [costs.get("execution", {}).get("seconds"), task.get("seconds"),
                 None if total is None else total / 3600]
         table.rows.append(row)
-    table.notes.append("Seconds are each task's own (its stages and its execution), summed over seeds for the "
-                       "total; a stage a method does not have is n/a.")
+    table.notes += ["Seconds are each task's own (its stages and its execution), summed over seeds for the "
+                    "total; a stage a method does not have is n/a.",
+                    "Reused: prompt tokens (the stage's examples) whose key/value state was kept from an "
+                    "earlier task or run rather than evaluated."]
     return table
 
 

@@ -114,6 +114,7 @@ def test_refusals_and_stage_costs_are_counted_from_the_lines(runs, report):
         ran = [line["tokens"][stage] for line in lines if stage in line.get("tokens", {})]
         assert float(stages[1][f"{stage} s"]) == pytest.approx(statistics.fmean(r["seconds"] for r in ran))
         assert float(stages[1][f"{stage} prompt tok"]) == round(statistics.fmean(r["prompt"] for r in ran))
+        assert float(stages[1][f"{stage} reused tok"]) == round(statistics.fmean(r["reused"] for r in ran))
     assert float(stages[1]["total h"]) == pytest.approx(sum(line["seconds"] for line in lines) / 3600)
 
 
@@ -137,12 +138,16 @@ def test_a_folder_without_a_run_is_exit_2(tmp_path, make, message):
 
 
 def test_progress_is_plain_lines_in_a_log(runs):
-    _, proc = runs["gemma"]
+    run, proc = runs["gemma"]
     steps = [line for line in proc.stderr.splitlines() if line.startswith("[")]
     # a step per stage and per execution of each of the 8 tasks, then the end
     assert steps[0] == "[0/32] decomposition kitchen-15"
     assert any(line.startswith("[24/32] execution kitchen-15") for line in steps)
     assert steps[-1].startswith("[32/32] done; SR so far ") and steps[-1].endswith("over 8 feasible task(s)")
+    # the running SR is the tables' mean: an error or a refusal counts 0
+    lines = [json.loads(x) for x in (run / "results.jsonl").read_text().splitlines()]
+    sr = sum(line.get("SR") or 0.0 for line in lines if line["feasible"]) / 8
+    assert f"SR so far {sr:.2f} over" in steps[-1]
 
 
 def test_progress_is_a_bar_on_a_terminal(tmp_path):

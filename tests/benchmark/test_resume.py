@@ -30,10 +30,12 @@ COMMAND = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--thread
 
 
 def _timeless(line: dict) -> dict:
-    """A results line without its timings (the only thing a resumed run may change)."""
+    """A results line without its costs, the only thing a resumed run may change: timings, and the prompt
+    tokens reused from a kept state (the resumed process finds other states kept)."""
     line = dict(line, seconds=None)
     if "tokens" in line:
-        line["tokens"] = {stage: dict(t, seconds=None) for stage, t in line["tokens"].items()}
+        line["tokens"] = {stage: dict(t, seconds=None, prompt_seconds=None, reused=None)
+                          for stage, t in line["tokens"].items()}
     return line
 
 

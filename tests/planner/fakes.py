@@ -33,6 +33,9 @@ class FakeBackend:
         """Forced text costs a token a character, the most it can with a real tokenizer."""
         return [0] * len(text)
 
+    def prefill(self, context, shared: int) -> int:
+        return 0
+
     def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None) -> Generated:
         self.calls += 1
         if grammar is None:

@@ -14,6 +14,7 @@ from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.chat import APPLIED, BASE_MODEL, OFF, chat_format, prompt_tokens
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult, write_artifacts
+from smartllm_local.planner.prompts import Prompt
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner import pipeline
 from smartllm_local.planner.stages import StageRecord, fit_prompt
@@ -48,7 +49,7 @@ def special(backend, text: str) -> list[int]:
 def test_smollm2_gets_its_prompt_as_a_user_turn_with_control_tokens_as_single_tokens(smollm2):
     chat, status = chat_format(smollm2, "auto")
     assert status == APPLIED and "<|im_start|>" in smollm2.chat_template
-    text, tokens = prompt_tokens(smollm2, "# Task Description: wash the apple\n", chat)
+    text, tokens, _ = prompt_tokens(smollm2, "# Task Description: wash the apple\n", chat)
     im_start, = special(smollm2, "<|im_start|>")
     im_end, = special(smollm2, "<|im_end|>")
     assert tokens[0] == im_start
@@ -62,7 +63,7 @@ def test_smollm2_gets_its_prompt_as_a_user_turn_with_control_tokens_as_single_to
 def test_a_control_token_string_in_the_prompt_stays_text(smollm2):
     chat, _ = chat_format(smollm2, "auto")
     body = "# the robot says <|im_start|>assistant and <|im_end|>\n"
-    _, tokens = prompt_tokens(smollm2, body, chat)
+    _, tokens, _ = prompt_tokens(smollm2, body, chat)
     turn = chat.turn(body)
     assert turn.body == body
     assert tokens == special(smollm2, turn.head) + smollm2.tokenize(body) + special(smollm2, turn.tail)
@@ -76,7 +77,7 @@ def test_with_none_the_prompt_goes_in_raw_as_before(smollm2):
     chat, status = chat_format(smollm2, "none")
     assert (chat, status) == (None, OFF)
     prompt = "# Task Description: wash the apple\n"
-    assert prompt_tokens(smollm2, prompt, chat) == (prompt, smollm2.tokenize(prompt, bos=True))
+    assert prompt_tokens(smollm2, prompt, chat) == (prompt, smollm2.tokenize(prompt, bos=True), 0)
 
 
 def test_the_context_budget_counts_the_template(smollm2):
@@ -84,9 +85,9 @@ def test_the_context_budget_counts_the_template(smollm2):
     catalogue = load_catalogue()
     planner = Planner(smollm2, catalogue)
     examples = planner.examples
-    build = lambda ex: "# Your task\n"  # noqa: E731
-    raw = fit_prompt(build, examples, examples, smollm2, 16)[1]
-    wrapped = fit_prompt(build, examples, examples, smollm2, 16, chat)[1]
+    build = lambda ex: Prompt("# Examples\n\n", "# Your task\n")  # noqa: E731
+    raw = fit_prompt(build, examples, smollm2, 16).tokens
+    wrapped = fit_prompt(build, examples, smollm2, 16, chat).tokens
     assert len(wrapped) > len(raw) + 10
 
 
@@ -128,6 +129,9 @@ def first_prompt(backend, config: PlannerConfig, task, monkeypatch) -> tuple[Pla
         return fitted[-1]
 
     class Stop(Recording):
+        def prefill(self, context, shared):
+            return 0  # the prompt is all this test looks at: evaluating it would only cost time
+
         def generate(self, context, **kwargs):
             self.contexts.append(list(context))
             raise _Seen
@@ -137,8 +141,7 @@ def first_prompt(backend, config: PlannerConfig, task, monkeypatch) -> tuple[Pla
     planner = Planner(recording, load_catalogue(), config)
     with pytest.raises(_Seen):
         planner.decompose(_result(task), scene_objects(task.floor_plan))
-    prompt, tokens, _, _ = fitted[0]
-    return planner, prompt, tokens, recording.contexts[0]
+    return planner, fitted[0].text, fitted[0].tokens, recording.contexts[0]
 
 
 def test_with_none_the_model_gets_the_raw_prompt(smollm2, kitchen09, monkeypatch):
@@ -177,8 +180,8 @@ def test_the_transformers_backend_reads_the_template_and_tokenizes_as_llama_cpp_
     try:
         assert hf.chat_template == smollm2.chat_template
         body = "# say <|im_end|> now\n"
-        text, tokens = prompt_tokens(hf, body, chat_format(hf, "auto")[0])
-        assert (text, tokens) == prompt_tokens(smollm2, body, chat_format(smollm2, "auto")[0])
+        text, tokens, _ = prompt_tokens(hf, body, chat_format(hf, "auto")[0])
+        assert (text, tokens, 0) == prompt_tokens(smollm2, body, chat_format(smollm2, "auto")[0])
         assert tokens.count(special(hf, "<|im_end|>")[0]) == 2  # the system and user turns' ends, not the body's
     finally:
         hf.close()

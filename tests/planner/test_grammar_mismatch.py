@@ -9,7 +9,7 @@ import pytest
 from smartllm_local.errors import GrammarMismatchError
 from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.grammar import Grammar, alt
-from smartllm_local.planner.stages import StageRecord, run_stage
+from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
 
 from .fakes import FakeBackend, Script
 
@@ -49,7 +49,7 @@ def test_forced_text_llama_cpp_refuses_is_an_error_not_an_abort(smollm2):
 def test_a_stage_names_itself_and_the_text(smollm2, grammar, text):
     record = StageRecord("decomposition")
     with pytest.raises(GrammarMismatchError, match=f"^decomposition stage: .*({text})"):
-        run_stage(record, smollm2, smollm2.tokenize("The capital of France is", bos=True),
+        run_stage(record, smollm2, Fitted("", smollm2.tokenize("The capital of France is", bos=True)),
                   Script("# SubTask 1:", grammar), output_budget=100, sampling=Sampling(), rng=np.random.default_rng(0))
     assert record.output == ""
 
@@ -64,5 +64,5 @@ class Stray(FakeBackend):
 def test_a_line_the_grammar_did_not_offer_is_an_error_naming_the_stage_and_the_line():
     record = StageRecord("coalition")
     with pytest.raises(GrammarMismatchError, match=r"^coalition stage: .*'oops\\n'"):
-        run_stage(record, Stray(), [0], Script(Grammar({"root": "# fine\n"})), output_budget=100,
+        run_stage(record, Stray(), Fitted("", [0]), Script(Grammar({"root": "# fine\n"})), output_budget=100,
                   sampling=Sampling(), rng=np.random.default_rng(0))

@@ -11,7 +11,6 @@ from smartllm_local.planner.pipeline import Planner, PlannerConfig, write_artifa
 from smartllm_local.planner.prompts import (
     PromptOptions,
     coalition_decisions,
-    load_examples,
     strip_comments,
     strip_summary,
 )
@@ -67,12 +66,12 @@ def test_strip_helpers():
     assert strip_comments(code) == "# SubTask 1: x (skills: GoToObject)\n# order\n\ndef subtask1_x():\n    GoToObject('Apple')\n"
 
 
-def test_examples_are_dropped_least_relevant_first_when_the_context_is_short(catalogue):
+def test_examples_are_dropped_from_the_last_when_the_context_is_short(catalogue):
+    """So the examples kept are the first of the file, and their text begins every prompt that keeps as many."""
     full = plan_with(FakeBackend(), catalogue)
-    size = len(full.stages[0].prompt) // 4 + 2
-    squeezed = plan_with(FakeBackend(n_ctx=size + 1024 - 900), catalogue)
+    squeezed = plan_with(FakeBackend(n_ctx=full.stages[0].prompt_tokens + 1024 - 300), catalogue)
     first = squeezed.stages[0]
-    assert first.dropped and len(first.examples) + len(first.dropped) == 5
+    assert first.dropped and first.examples + first.dropped == full.stages[0].examples
     assert "dropped example(s)" in squeezed.notices[0]
     with pytest.raises(UserError, match="raise --n-ctx"):
         plan_with(FakeBackend(n_ctx=1500), catalogue)
@@ -94,13 +93,6 @@ def test_output_budgets_follow_the_task(catalogue):
     restated = Planner(FakeBackend(n_ctx=16384), catalogue, PlannerConfig(budgets=budgets))
     decomposition, _, allocation = restated.plan(INSTRUCTION, 6, [29, 24, 25]).stages
     assert len(allocation.output) <= allocation.output_budget < len(allocation.output) + 64 * functions + 400
-
-
-def test_relevance_keeps_the_closest_example():
-    from smartllm_local.planner.prompts import rank_by_relevance
-
-    ranked = rank_by_relevance(load_examples(), "Make some toast with the bread")
-    assert ranked[0].name == "toast"
 
 
 def test_a_refusal_stops_the_pipeline_and_becomes_the_plan(catalogue, tmp_path):

@@ -21,9 +21,15 @@ import pytest
 
 from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
+from smartllm_local.planner.chat import prompt_tokens
 from smartllm_local.planner.grammar import Grammar, Matcher, alt, seq
 from smartllm_local.planner.models import embedded_model_path
-from smartllm_local.planner.stages import StageRecord, run_stage
+from smartllm_local.planner.prompts import (PromptOptions, allocation_prompt, coalition_prompt, decomposition_prompt,
+                                            examples_for, load_examples)
+from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+from smartllm_local.robots import load_catalogue
+from smartllm_local.tasks import load_tasks
 
 from .fakes import Script
 
@@ -127,6 +133,9 @@ class GrammarWriter:
     def __getattr__(self, name):
         return getattr(self.vocab, name)
 
+    def prefill(self, context, shared: int) -> int:
+        return 0  # a vocabulary cannot evaluate
+
     def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None) -> Generated:
         self.contexts.append(list(context))
         text = grammar.sample(random.Random(0))
@@ -139,7 +148,7 @@ def test_a_stage_writes_forced_text_in_one_batch_without_generating(vocab):
     backend = GrammarWriter(vocab)
     prompt = vocab.tokenize("# Your plan:\n", bos=True)
     record = StageRecord("allocation")
-    run_stage(record, backend, prompt, Script(head, line, tail), output_budget=200, sampling=Sampling(),
+    run_stage(record, backend, Fitted("", prompt), Script(head, line, tail), output_budget=200, sampling=Sampling(),
               rng=np.random.default_rng(0))
     assert record.output == head + "    GoToObject(robot_list[0], 'Apple')\n" + tail
     assert len(backend.contexts) == 1  # generation for the offered line only, none for forced text
@@ -163,3 +172,28 @@ def test_the_transformers_backend_spells_llama2_continuations_exactly(tmp_path):
         tokens = backend.tokenize_continuation(text)
         assert backend.detokenize(tokens) == text, text
     assert backend.tokenize("# Task\n", bos=True)[0] == tokenizer.bos_token_id
+
+
+def test_a_prompt_tokenized_in_its_two_parts_is_tokenized_as_a_whole(vocab):
+    """Every stage's prompt, for tasks of several scenes and teams: the shared examples tokenized on
+    their own and the task's part as their continuation give the tokens of the whole prompt, and the
+    shared tokens are the same for every task (what a kept prefix state is keyed by)."""
+    catalogue, examples, options = load_catalogue(), load_examples(), PromptOptions()
+    decomposition, coalition = examples[0].decomposition, examples[0].coalition
+    shared_tokens: dict[str, set[tuple[int, ...]]] = {}
+    for task in load_tasks()[::9]:
+        scene, team = scene_objects(task.floor_plan), catalogue.team(task.robots)
+        prompts = {
+            "decomposition": decomposition_prompt(task.instruction, scene, catalogue.skills,
+                                                  examples_for("decomposition", examples, options), options),
+            "coalition": coalition_prompt(decomposition, team, scene, catalogue.robots,
+                                          examples_for("coalition", examples, options), options),
+            "allocation": allocation_prompt(decomposition, coalition, team, catalogue.skills, catalogue.robots,
+                                            examples_for("allocation", examples, options), options),
+        }
+        for stage, prompt in prompts.items():
+            text, tokens, shared = prompt_tokens(vocab, prompt, None)
+            assert text == prompt.text and tokens == vocab.tokenize(text, bos=True), (vocab.family, task.id, stage)
+            assert vocab.detokenize(tokens[:shared]).endswith("# Your") and 0 < shared < len(tokens)
+            shared_tokens.setdefault(stage, set()).add(tuple(tokens[:shared]))
+    assert all(len(kinds) == 1 for kinds in shared_tokens.values()), vocab.family

@@ -17,7 +17,8 @@ from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.backends.transformers import _placement, _quiet_loading
 from smartllm_local.planner.grammar import Grammar, alt
 from smartllm_local.planner.models import embedded_model_path
-from smartllm_local.planner.pipeline import Planner, PlannerConfig
+from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
+from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.robots import load_catalogue
 
 LOAD_STDERR: dict[str, str] = {}
@@ -65,11 +66,17 @@ def test_constraints_bite_through_llguidance(hf_smollm2):
 
 def test_a_task_planned_through_all_stages(hf_smollm2):
     config = PlannerConfig(budgets={"decomposition": 600, "coalition": 300, "allocation": 700})
-    result = Planner(hf_smollm2, load_catalogue(), config).plan("Turn off the light.", 6, [1])
+    planner = Planner(hf_smollm2, load_catalogue(), config)
+    result = planner.plan("Turn off the light.", 6, [1])
     assert not result.error, result.error
     assert result.plan is not None
     stages = [r.stage for r in result.stages]
     assert result.refusal is not None or stages == ["decomposition", "coalition", "allocation"]
+    # the examples' state is kept in memory: decomposing again evaluates only the task's part, and
+    # writes what it wrote from an empty cache
+    again = planner.decompose(PlanResult("Turn off the light.", "FloorPlan6", [1]), scene_objects(6))
+    assert again.reused_tokens == again.shared_tokens == result.stages[0].shared_tokens > 0
+    assert result.stages[0].reused_tokens == 0 and again.output == result.stages[0].output
 
 
 # ------------------------------------------------------------------ loading quietly, failing clearly

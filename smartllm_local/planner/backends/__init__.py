@@ -22,8 +22,12 @@ def load_backend(
     threads: int | None = None,
     n_gpu_layers: int = 0,
     seed: int = 0,
+    prefix_cache: str | Path | None = None,
 ) -> Backend:
     """Load a model in a backend; ``model`` is a path or an embedded model name (None: the default).
+
+    ``prefix_cache``: the folder keeping the examples' key/value states for later processes (None: the
+    user's cache; "off": none). llama.cpp only: transformers keeps them for its own process.
 
     ``n_gpu_layers``: layers to offload to a GPU (llama.cpp, -1 for all); for transformers it is
     all-or-nothing: 0 runs on the CPU, any other value puts the whole model on the CUDA GPU.
@@ -33,9 +37,11 @@ def load_backend(
         os.environ[switch] = "1"
     if name == "llamacpp":
         from ..models import resolve_gguf
+        from ..prefix_cache import open_store
         from .llamacpp import LlamaCppBackend
 
-        return LlamaCppBackend(resolve_gguf(model), n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers, seed=seed)
+        return LlamaCppBackend(resolve_gguf(model), n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers, seed=seed,
+                               prefix_store=open_store(prefix_cache))
     if name == "transformers":
         from .transformers import TransformersBackend
 

@@ -50,6 +50,12 @@ class Backend(Protocol):
     def tokenize_continuation(self, text: str) -> list[int]:
         """Tokens that spell exactly ``text`` written after a context (see :func:`continuation_tokens`)."""
 
+    def prefill(self, context: Sequence[int], shared: int) -> int:
+        """Evaluate a prompt before generating. Its first ``shared`` tokens (a stage's examples, the same
+        for every task) come from a state kept from an earlier task or process where there is one, and
+        are otherwise evaluated on their own and kept, so that reuse changes no logit. Returns how many
+        tokens were reused."""
+
     def generate(
         self,
         context: Sequence[int],

@@ -14,7 +14,11 @@ returns NULL for a bad one (llama-cpp-python 0.3.36 does not check, and a bad
 grammar would crash the process at the first token).
 
 The key/value cache holds the last context; a new context that shares a
-prefix with it only evaluates the rest.
+prefix with it only evaluates the rest. A stage's prompt begins with its
+examples, whose state (one sequence's key/value cells, llama.cpp's
+``llama_state_seq_*``: no logits) is kept in memory and in an optional
+:class:`PrefixStore` on disk, and the rest of a prompt is always evaluated on a
+loaded state (see :class:`PrefixReuse`).
 
 The text of generated tokens is their bytes, decoded as they come (a
 character split across tokens is held back until complete), and it is
@@ -35,12 +39,13 @@ import numpy as np
 
 from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..grammar import Grammar, GrammarError, Matcher
+from ..prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
 from .base import Generated, Sampling, continuation_tokens, shared_prefix
 
 _TOP = 64
 
 
-class LlamaCppBackend:
+class LlamaCppBackend(PrefixReuse):
     """A GGUF model run by llama.cpp."""
 
     name = "llamacpp"
@@ -55,8 +60,10 @@ class LlamaCppBackend:
         seed: int = 0,
         n_batch: int = 512,
         vocab_only: bool = False,
+        prefix_store: PrefixStore | None = None,
     ):
-        """``vocab_only`` loads the tokenizer alone (llama.cpp's vocabulary files): it tokenizes but cannot generate."""
+        """``vocab_only`` loads the tokenizer alone (llama.cpp's vocabulary files): it tokenizes but cannot generate.
+        ``prefix_store`` keeps the examples' states for later processes (None: this process only)."""
         try:
             import llama_cpp
         except ImportError as exc:
@@ -84,6 +91,10 @@ class LlamaCppBackend:
         self._vocab = self.llm._model.vocab
         self._ctx = self.llm._ctx.ctx
         self._tokens: list[int] = []  # what the key/value cache holds
+        self._states = MemoryStates()
+        self.prefix_store = prefix_store
+        self._settings = {"backend": self.name, "llama_cpp": getattr(llama_cpp, "__version__", ""), "n_ctx": n_ctx,
+                          "n_batch": n_batch, "n_gpu_layers": n_gpu_layers}
         self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
         self._pieces: dict[int, bytes] = {}
@@ -127,13 +138,47 @@ class LlamaCppBackend:
         common = shared_prefix(self._tokens, context)
         if common == len(context) == len(self._tokens) and self._fresh:
             return
-        common = min(common, len(context) - 1)  # re-evaluate at least one token for its logits
-        self.llm.n_tokens = common
-        self.llm._ctx.kv_cache_seq_rm(-1, common, -1)
-        self._tokens = context[:common]
-        self._eval(context[common:])
+        self._truncate(min(common, len(context) - 1))  # re-evaluate at least one token for its logits
+        self._evaluate(context[len(self._tokens):])
 
-    def _eval(self, tokens: list[int]) -> None:
+    def _truncate(self, size: int) -> None:
+        """Keep the first ``size`` tokens of the cache; the logits are stale until the next evaluation."""
+        self.llm.n_tokens = size
+        if size == 0:  # as new: a cache whose cells are laid out afresh computes as a new context does
+            self._lib.llama_memory_clear(self._lib.llama_get_memory(self._ctx), True)
+        else:
+            self.llm._ctx.kv_cache_seq_rm(-1, size, -1)
+        self._tokens = self._tokens[:size]
+        self._fresh = False
+
+    # -------------------------------------------------------------- prefixes
+
+    def _store_key(self, prefix: Sequence[int]) -> str:
+        from ...provenance import sha256_file
+
+        return state_key({**self._settings, "model": sha256_file(self.model)}, prefix)
+
+    def _snapshot(self) -> bytes:
+        size = self._lib.llama_state_seq_get_size(self._ctx, 0)
+        buffer = (ctypes.c_uint8 * size)()
+        written = self._lib.llama_state_seq_get_data(self._ctx, buffer, size, 0)
+        return bytes(buffer)[:written]
+
+    def _restore(self, prefix: list[int], state: bytes) -> bool:
+        self._truncate(0)
+        source = (ctypes.c_uint8 * len(state)).from_buffer_copy(state)
+        if not self._lib.llama_state_seq_set_data(self._ctx, source, len(state), 0):
+            self._truncate(0)
+            return False
+        self.llm.input_ids[: len(prefix)] = prefix
+        self.llm.n_tokens = len(prefix)
+        self._tokens = list(prefix)
+        return True
+
+    def _state_size(self, state: bytes) -> int:
+        return len(state)
+
+    def _evaluate(self, tokens: list[int]) -> None:
         if not tokens:
             return
         self.llm.eval(tokens)
@@ -233,7 +278,7 @@ class LlamaCppBackend:
                         self._lib.llama_sampler_accept(sampler, token)
                     new = [token]
                 out.extend(new)
-                self._eval(new)
+                self._evaluate(new)
                 piece = decoder.decode(b"".join(self._piece(t) for t in new))
                 if matcher is not None and not matcher.advance(piece):
                     raise GrammarMismatchError(text + piece, "llama.cpp's grammar let the model write it, "

@@ -25,6 +25,7 @@ Loading shows no progress bars; transformers' warnings still show.
 from __future__ import annotations
 
 import contextlib
+import copy
 import importlib
 import importlib.util
 import logging
@@ -37,6 +38,7 @@ import numpy as np
 from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..grammar import Grammar, GrammarError
 from ..models import EMBEDDED, embedded_model_path, is_gguf
+from ..prefix_cache import MemoryStates, PrefixReuse
 from .base import Generated, Sampling, continuation_tokens, shared_prefix
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
@@ -129,7 +131,7 @@ def _quiet_loading(transformers: Any):
             log.enable_progress_bar()
 
 
-class TransformersBackend:
+class TransformersBackend(PrefixReuse):
     name = "transformers"
 
     def __init__(self, model: str | None, *, n_ctx: int = 4096, threads: int | None = None, n_gpu_layers: int = 0,
@@ -189,6 +191,7 @@ class TransformersBackend:
         self.chat_template = template.get("default") if isinstance(template, dict) else template
         self.bos_token, self.eos_token = self.tokenizer.bos_token or "", self.tokenizer.eos_token or ""
         self._tokens: list[int] = []
+        self._states = MemoryStates()
         self.evaluated_tokens = 0
         self._cache: Any = None
         self._logits: Any = None
@@ -207,7 +210,7 @@ class TransformersBackend:
         leading space at the start of what it decodes, wrong for a continuation)."""
         return b"" if self.ll_tokenizer.is_special_token(token) else self.ll_tokenizer.decode_bytes([token])
 
-    def _forward(self, tokens: list[int]) -> None:
+    def _evaluate(self, tokens: list[int]) -> None:
         torch = self._torch
         with torch.no_grad():
             ids = torch.tensor([tokens], dtype=torch.long, device=self.device)
@@ -224,15 +227,32 @@ class TransformersBackend:
         common = shared_prefix(self._tokens, context)
         if common == len(context) == len(self._tokens) and self._logits is not None:
             return
-        common = min(common, len(context) - 1)
-        if self._cache is not None and common > 0:
-            surplus = len(self._tokens) - common
+        self._truncate(min(common, len(context) - 1))
+        self._evaluate(context[len(self._tokens):])
+
+    def _truncate(self, size: int) -> None:
+        """Keep the first ``size`` tokens of the cache."""
+        if self._cache is not None and size > 0:
+            surplus = len(self._tokens) - size
             if surplus:
                 self._cache.crop(-surplus)  # transformers 5 takes the number of tokens to drop, negated
         else:
-            self._cache, common = None, 0
-        self._tokens = self._tokens[:common]
-        self._forward(context[common:])
+            self._cache, size = None, 0
+        self._tokens = self._tokens[:size]
+        self._logits = None
+
+    # prefixes (see PrefixReuse): kept in memory for this process; the store on disk is llama.cpp's
+    prefix_store = None
+
+    def _snapshot(self) -> Any:
+        return copy.deepcopy(self._cache)
+
+    def _restore(self, prefix: list[int], state: Any) -> bool:
+        self._cache, self._tokens, self._logits = copy.deepcopy(state), list(prefix), None
+        return True
+
+    def _state_size(self, state: Any) -> int:
+        return sum(t.nbytes for layer in state.layers for t in (layer.keys, layer.values) if t is not None)
 
     def generate(self, context: Sequence[int], *, grammar: Grammar | None, max_tokens: int, sampling: Sampling,
                  stop: Sequence[str] = (), rng: np.random.Generator | None = None) -> Generated:
@@ -262,7 +282,7 @@ class TransformersBackend:
             if matcher is not None and not matcher.consume_token(token):
                 raise GrammarError(f"llguidance refused token {token}: {matcher.get_error()}")
             out.append(token)
-            self._forward([token])
+            self._evaluate([token])
             text = self.detokenize(out)
             if matcher is not None and text.endswith("\n"):
                 if not grammar.matches(text):

@@ -1,0 +1,184 @@
+"""``smartllm-local bench``: the speed figures the README quotes, measured side by side in one run.
+
+- decoding: per model, the tokens per second the decomposition stage writes with its grammar and
+  without it (free generation with stop strings), over the same tasks, prompt evaluation left out;
+- prefix reuse: per model, the prompt tokens evaluated and the time to the first token of every
+  stage, for the first task of a run (nothing kept), the later ones (the examples' states kept in
+  memory) and the first task again in a new backend (the states from the disk store, as a second
+  ``plan`` process finds them);
+- the executor: every feasible task's reference plan, plans and actions per second;
+- optionally, ``benchmark run`` over every task with the first model, one seed, from an empty prefix
+  store, timed as a user would time it.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+from .benchmark import default_plans_dir
+from .errors import SmartLLMError
+from .executor import run_plan
+from .plan_language import parse_plan
+from .planner.backends import load_backend
+from .planner.pipeline import Planner, PlannerConfig, PlanResult
+from .planner.prompts import STAGES
+from .planner.scene_context import scene_objects
+from .provenance import versions
+from .robots import Catalogue
+from .tasks import Task
+from .world.controller import open_controller
+
+
+def spread_tasks(tasks: Sequence[Task], count: int) -> list[Task]:
+    """``count`` feasible tasks spread over the list (so over its categories)."""
+    feasible = [t for t in tasks if t.feasible]
+    step = max(1, len(feasible) // max(1, count))
+    return feasible[::step][:count]
+
+
+def decode_speed(model: str, catalogue: Catalogue, tasks: Sequence[Task], threads: int | None = None) -> dict[str, Any]:
+    """The decomposition stage's output tokens per second with its grammar and without, prompt evaluation
+    left out. Constrained output counts the tokens the model chose and those the grammar forced (in one
+    batch each); ``generated_per_s`` counts the chosen ones alone."""
+    backend = load_backend("llamacpp", model, threads=threads, prefix_cache="off")
+    found: dict[str, Any] = {}
+    try:
+        for name, grammar in (("constrained", True), ("free", False)):
+            planner = Planner(backend, catalogue, PlannerConfig(grammar=grammar))
+            generated = forced = 0
+            seconds = 0.0
+            for task in tasks:
+                result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
+                record = planner.decompose(result, scene_objects(task.floor_plan))
+                generated, forced = generated + record.generated_tokens, forced + record.forced_tokens
+                seconds += record.seconds - record.prompt_seconds
+            found[name] = {"tasks": len(tasks), "generated_tokens": generated, "forced_tokens": forced,
+                           "seconds": round(seconds, 3), "tokens_per_s": round((generated + forced) / seconds, 2),
+                           "generated_per_s": round(generated / seconds, 2)}
+    finally:
+        backend.close()
+    found["constrained_over_free"] = round(found["constrained"]["tokens_per_s"] / found["free"]["tokens_per_s"], 3)
+    return found
+
+
+def _costs(result: PlanResult) -> dict[str, dict[str, float]]:
+    return {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens, "evaluated": r.prompt_tokens - r.reused_tokens,
+                      "ttft_s": round(r.prompt_seconds, 3)} for r in result.stages}
+
+
+def prefix_reuse(model: str, catalogue: Catalogue, tasks: Sequence[Task], threads: int | None = None) -> dict[str, Any]:
+    """Prompt tokens evaluated and time to the first token per stage: the first task of a run, the later
+    ones, and the first again in a new backend on the same (at first empty) store."""
+    with tempfile.TemporaryDirectory(prefix="smartllm-bench-") as store:
+        runs: list[list[dict[str, dict[str, float]]]] = []
+        for batch in (tasks, tasks[:1]):  # a run, then a second "process"
+            backend = load_backend("llamacpp", model, threads=threads, prefix_cache=store)
+            try:
+                planner = Planner(backend, catalogue)
+                runs.append([_costs(planner.plan(t.instruction, t.floor_plan, list(t.robots))) for t in batch])
+            finally:
+                backend.close()
+    (first, *later), (again,) = runs
+    stages: dict[str, Any] = {}
+    for stage in STAGES:
+        if stage not in first:
+            continue
+        rest = [costs[stage] for costs in later if stage in costs]
+        stages[stage] = {
+            "first": first[stage], "second_process": again.get(stage),
+            "later_evaluated_mean": statistics.fmean(c["evaluated"] for c in rest) if rest else None,
+            "later_ttft_s_mean": round(statistics.fmean(c["ttft_s"] for c in rest), 3) if rest else None,
+            "later_over_first_prompt_tokens": round(statistics.fmean(c["evaluated"] for c in rest)
+                                                    / first[stage]["prompt"], 3) if rest else None,
+        }
+    later_costs = [c for costs in later for c in costs.values()]
+    return {
+        "tasks": len(tasks), "stages": stages,
+        "reused_over_fresh_prompt_tokens": round(sum(c["evaluated"] for c in later_costs)
+                                                 / sum(c["prompt"] for c in later_costs), 3) if later_costs else None,
+        "second_process_over_fresh_prompt_tokens": round(sum(c["evaluated"] for c in again.values())
+                                                         / sum(c["prompt"] for c in again.values()), 3),
+    }
+
+
+def executor_speed(catalogue: Catalogue, tasks: Sequence[Task], build: str | None = None) -> dict[str, Any]:
+    """Every feasible task's reference plan on one controller: plans and actions per second."""
+    plans = [(t, parse_plan((default_plans_dir() / f"{t.id}.py").read_text(encoding="utf-8"), form="allocated",
+                            skills=catalogue.skills, team_size=len(t.robots))) for t in tasks if t.feasible]
+    actions = 0
+    controller = open_controller(plans[0][0].floor_plan, agent_count=len(plans[0][0].robots), build=build)
+    try:
+        started = time.perf_counter()
+        for task, plan in plans:
+            execution = run_plan(plan, task.floor_plan, catalogue.team(task.robots), controller=controller,
+                                 skills=catalogue.skills)
+            actions += execution.attempted
+        seconds = time.perf_counter() - started
+    finally:
+        controller.stop()
+    return {"plans": len(plans), "actions": actions, "seconds": round(seconds, 3),
+            "plans_per_s": round(len(plans) / seconds, 2), "actions_per_s": round(actions / seconds, 1)}
+
+
+def benchmark_minutes(model: str, threads: int | None = None, out: Path | None = None) -> float:
+    """``smartllm-local benchmark run`` over every task, one seed, greedy, from an empty prefix store, timed
+    from start to end (model loading included), in minutes; its run folder is ``out`` if given."""
+    with tempfile.TemporaryDirectory(prefix="smartllm-bench-") as folder:
+        command = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--model", model,
+                   "--out", str(out or Path(folder) / "run"), "--prefix-cache", str(Path(folder) / "states"),
+                   *(["--threads", str(threads)] if threads else [])]
+        started = time.perf_counter()
+        done = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if done.returncode != 0:
+            raise SmartLLMError(f"the benchmark run failed: {done.stderr.strip()[-500:]}")
+        return round((time.perf_counter() - started) / 60, 2)
+
+
+def run_bench(models: Sequence[str], catalogue: Catalogue, tasks: Sequence[Task], *, sample: int,
+              whole_benchmark: bool, threads: int | None = None, benchmark_out: Path | None = None) -> dict[str, Any]:
+    """Everything above, as the JSON ``bench`` writes."""
+    chosen = spread_tasks(tasks, sample)
+    per_model = {m: {"decode": decode_speed(m, catalogue, chosen, threads),
+                     "prefix": prefix_reuse(m, catalogue, chosen, threads)} for m in models}
+    executor = executor_speed(catalogue, tasks)
+    return {
+        "machine": {"cpus": os.cpu_count(), "threads": threads or os.cpu_count(), "platform": platform.platform()},
+        "versions": versions(), "sample_tasks": [t.id for t in chosen], "models": per_model,
+        "constrained_over_free_decode": {m: r["decode"]["constrained_over_free"] for m, r in per_model.items()},
+        "reused_over_fresh_prompt_tokens": {m: r["prefix"]["reused_over_fresh_prompt_tokens"]
+                                            for m, r in per_model.items()},
+        "second_process_over_fresh_prompt_tokens": {m: r["prefix"]["second_process_over_fresh_prompt_tokens"]
+                                                    for m, r in per_model.items()},
+        "benchmark_model": models[0] if whole_benchmark else None,
+        "benchmark_minutes": benchmark_minutes(models[0], threads, benchmark_out) if whole_benchmark else None,
+        "executor": executor, "executor_actions_per_s": executor["actions_per_s"],
+    }
+
+
+def summary(report: dict[str, Any]) -> str:
+    """The figures as a few lines of text."""
+    lines = [f"{'model':<14}{'constrained tok/s':>18}{'free tok/s':>12}{'ratio':>7}"
+             f"{'later/first prompt':>20}{'2nd process':>13}"]
+    for model, found in report["models"].items():
+        decode, prefix = found["decode"], found["prefix"]
+        lines.append(f"{model:<14}{decode['constrained']['tokens_per_s']:>18}{decode['free']['tokens_per_s']:>12}"
+                     f"{decode['constrained_over_free']:>7}{prefix['reused_over_fresh_prompt_tokens']!s:>20}"
+                     f"{prefix['second_process_over_fresh_prompt_tokens']!s:>13}")
+        for stage, cost in prefix["stages"].items():
+            lines.append(f"  {stage:<14} first task: {cost['first']['prompt']} prompt tokens, ttft "
+                         f"{cost['first']['ttft_s']} s; later tasks: {cost['later_evaluated_mean']} evaluated "
+                         f"({cost['later_over_first_prompt_tokens']} of the first's), ttft {cost['later_ttft_s_mean']} s")
+    executor = report["executor"]
+    lines.append(f"executor: {executor['plans']} reference plans, {executor['actions']} actions in {executor['seconds']} s "
+                 f"({executor['plans_per_s']} plans/s, {executor['actions_per_s']} actions/s)")
+    if report["benchmark_minutes"] is not None:
+        lines.append(f"whole benchmark with {report['benchmark_model']}: {report['benchmark_minutes']} min")
+    return "\n".join(lines)

@@ -1,0 +1,234 @@
+"""Prompt prefixes evaluated once: their key/value state kept in memory and on disk.
+
+Every prompt of a stage begins with the same examples (see prompts.py), so the
+model's key/value state after them is the same for every task. A backend keeps
+the states it made in memory (bounded in bytes) for the rest of the process,
+and a :class:`PrefixStore` keeps them on disk for the next process: a second
+``plan`` call on the same model starts from the examples' state.
+
+An entry is keyed by everything the state depends on (the model file's digest,
+the backend and its settings, the prefix's tokens) and holds those tokens and
+the digest of its state, so a corrupt, truncated or colliding entry is never
+trusted: it is deleted and the prefix is evaluated again. The store is bounded
+in bytes: the least recently used entries go first.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from collections import OrderedDict
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from ..errors import ModelError
+from ..files import check_output_folder
+
+_MAGIC = b"smartllm-local prefix state 1\n"
+_SUFFIX = ".kv"
+DEFAULT_STORE_BYTES = 4 << 30  # a 70B model's examples take about 1 GB each stage
+DEFAULT_MEMORY_BYTES = 2 << 30
+
+
+def default_store_folder() -> Path:
+    from ..world.scenes import cache_root
+
+    return cache_root() / "prefix-states"
+
+
+def open_store(setting: str | Path | None) -> "PrefixStore | None":
+    """The store ``--prefix-cache`` names: a folder, ``off`` (none), or None for the user's cache."""
+    if setting is not None and str(setting) == "off":
+        return None
+    folder = Path(setting).expanduser() if setting is not None else default_store_folder()
+    return PrefixStore(check_output_folder(folder, "--prefix-cache"))
+
+
+def state_key(identity: Mapping[str, Any], prefix: Sequence[int]) -> str:
+    """The digest naming a prefix's state for a model as ``identity`` describes it."""
+    hasher = hashlib.sha256(json.dumps(identity, sort_keys=True).encode())
+    hasher.update(b"\0" + b",".join(str(t).encode() for t in prefix))
+    return hasher.hexdigest()
+
+
+class PrefixStore:
+    """Prefix states on disk, one file per entry, at most ``max_bytes`` in all."""
+
+    def __init__(self, folder: Path, max_bytes: int = DEFAULT_STORE_BYTES):
+        self.folder = Path(folder)
+        self.max_bytes = max_bytes
+        self.rejected = 0  # entries found corrupt and deleted
+
+    def _path(self, key: str) -> Path:
+        return self.folder / f"{key}{_SUFFIX}"
+
+    def load(self, key: str, prefix: Sequence[int]) -> bytes | None:
+        """The state stored for ``prefix`` under ``key``; None when there is none or it cannot be trusted."""
+        path = self._path(key)
+        try:
+            data = path.read_bytes()
+        except OSError:
+            return None
+        state = _unpack(data, prefix)
+        if state is None:
+            self.rejected += 1
+            _unlink(path)
+            return None
+        try:
+            os.utime(path)  # recently used: evicted last
+        except OSError:
+            pass
+        return state
+
+    def save(self, key: str, prefix: Sequence[int], state: bytes) -> bool:
+        """Store a state (atomically: a reader sees all of it or nothing), then keep the store in its
+        bound. A store that cannot be written only costs the next process the prefix: False."""
+        header = json.dumps({"tokens": list(prefix), "size": len(state),
+                             "sha256": hashlib.sha256(state).hexdigest()}).encode()
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=".entry.", dir=self.folder)
+            try:
+                with os.fdopen(fd, "wb") as handle:
+                    handle.write(_MAGIC + header + b"\n")
+                    handle.write(state)
+                os.replace(tmp, self._path(key))
+            except BaseException:
+                _unlink(Path(tmp))
+                raise
+        except OSError:
+            return False
+        self.evict()
+        return True
+
+    def evict(self) -> None:
+        """Delete the least recently used entries until the rest fit ``max_bytes``."""
+        entries = []
+        for path in self.folder.glob(f"*{_SUFFIX}"):
+            try:
+                stat = path.stat()
+            except OSError:
+                continue
+            entries.append((stat.st_mtime_ns, stat.st_size, path))
+        total = sum(size for _, size, _ in entries)
+        for _, size, path in sorted(entries):
+            if total <= self.max_bytes:
+                break
+            _unlink(path)
+            total -= size
+
+
+def _unpack(data: bytes, prefix: Sequence[int]) -> bytes | None:
+    if not data.startswith(_MAGIC):
+        return None
+    end = data.find(b"\n", len(_MAGIC))
+    if end < 0:
+        return None
+    try:
+        header = json.loads(data[len(_MAGIC):end])
+    except ValueError:
+        return None
+    state = data[end + 1:]
+    if (not isinstance(header, dict) or header.get("tokens") != list(prefix) or header.get("size") != len(state)
+            or header.get("sha256") != hashlib.sha256(state).hexdigest()):
+        return None
+    return state
+
+
+def _unlink(path: Path) -> None:
+    try:
+        path.unlink()
+    except OSError:
+        pass
+
+
+class MemoryStates:
+    """Prefix states kept by a backend for the rest of the process, least recently used dropped first
+    beyond ``max_bytes``."""
+
+    def __init__(self, max_bytes: int = DEFAULT_MEMORY_BYTES):
+        self.max_bytes = max_bytes
+        self._states: OrderedDict[tuple[int, ...], tuple[Any, int]] = OrderedDict()
+
+    def get(self, prefix: Sequence[int]) -> Any | None:
+        key = tuple(prefix)
+        found = self._states.get(key)
+        if found is None:
+            return None
+        self._states.move_to_end(key)
+        return found[0]
+
+    def put(self, prefix: Sequence[int], state: Any, size: int) -> None:
+        self._states[tuple(prefix)] = (state, size)
+        self._states.move_to_end(tuple(prefix))
+        while sum(s for _, s in self._states.values()) > self.max_bytes and len(self._states) > 1:
+            self._states.popitem(last=False)
+
+
+
+class PrefixReuse:
+    """What both backends do with a prompt's shared prefix (mixed into each). A backend provides
+    ``_states`` (a :class:`MemoryStates`), ``prefix_store`` (None for none), and the hooks below.
+
+    The prompt's own part is always evaluated on a state loaded back from its snapshot, also right
+    after the prefix was first evaluated: with a sliding-window model (Gemma-3) a loaded state does
+    not give quite the logits of the live cache it was taken from, so loading it every time is what
+    makes a task's output the same whichever way the state came (evaluated now, kept, or stored)."""
+
+    _states: MemoryStates
+    prefix_store: PrefixStore | None
+    n_ctx: int
+
+    def prefill(self, context: Sequence[int], shared: int) -> int:
+        reused = self._load_prefix(context[:shared])
+        self._sync(context)
+        return reused
+
+    def _load_prefix(self, prefix: Sequence[int]) -> int:
+        """Make the cache hold exactly ``prefix``, loaded from a kept state, the store, or a snapshot taken
+        after evaluating it on its own (then kept). Returns how many tokens were not evaluated now."""
+        prefix = list(prefix)
+        if not prefix or len(prefix) >= self.n_ctx:
+            return 0
+        state, key = self._states.get(prefix), None
+        if state is None and self.prefix_store is not None:
+            key = self._store_key(prefix)
+            state = self.prefix_store.load(key, prefix)
+        if state is not None and self._restore(prefix, state):
+            self._states.put(prefix, state, self._state_size(state))
+            return len(prefix)
+        self._truncate(0)
+        self._evaluate(prefix)
+        state = self._snapshot()
+        if not self._restore(prefix, state):
+            raise ModelError("the backend could not load back the state it had just saved")
+        self._states.put(prefix, state, self._state_size(state))
+        if self.prefix_store is not None:
+            self.prefix_store.save(key or self._store_key(prefix), prefix, state)
+        return 0
+
+    # hooks
+    def _sync(self, context: Sequence[int]) -> None:
+        raise NotImplementedError
+
+    def _truncate(self, size: int) -> None:
+        raise NotImplementedError
+
+    def _evaluate(self, tokens: list[int]) -> None:
+        raise NotImplementedError
+
+    def _snapshot(self) -> Any:
+        """The cache's state (it holds exactly the prefix)."""
+        raise NotImplementedError
+
+    def _restore(self, prefix: list[int], state: Any) -> bool:
+        """Load a kept state; False (the cache left empty) where the backend refuses it."""
+        raise NotImplementedError
+
+    def _state_size(self, state: Any) -> int:
+        raise NotImplementedError
+
+    def _store_key(self, prefix: Sequence[int]) -> str:
+        raise NotImplementedError

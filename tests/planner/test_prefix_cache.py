@@ -1,0 +1,143 @@
+"""The examples' key/value states, evaluated once: kept across tasks in a process and across processes on disk.
+
+The store's unit tests use bytes; the reuse tests use the real llama.cpp with the embedded models, in one
+process and through the CLI.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from smartllm_local.errors import UserError
+from smartllm_local.planner.backends import load_backend
+from smartllm_local.planner.pipeline import Planner
+from smartllm_local.planner.prefix_cache import PrefixStore, default_store_folder, open_store, state_key
+from smartllm_local.robots import load_catalogue
+from smartllm_local.tasks import find_task, load_tasks
+from tests.test_cli_errors import cli, one_line_error
+
+PREFIX = [1, 5, 9, 200]
+
+
+def entries(folder: Path) -> list[Path]:
+    return sorted(folder.glob("*.kv"))
+
+
+def test_a_stored_state_comes_back_for_its_prefix_only(tmp_path):
+    store = PrefixStore(tmp_path)
+    key = state_key({"model": "m"}, PREFIX)
+    assert store.save(key, PREFIX, b"state bytes")
+    assert store.load(key, PREFIX) == b"state bytes"
+    assert store.load(key, PREFIX[:-1]) is None  # same name, other tokens: never trusted
+    assert state_key({"model": "other"}, PREFIX) != key != state_key({"model": "m"}, PREFIX[:-1])
+    assert not list(tmp_path.glob(".entry.*"))  # no temporary file left behind
+
+
+@pytest.mark.parametrize("damage", [
+    lambda data: data[: len(data) // 2],  # truncated by a crash or a full disk
+    lambda data: data[:-1] + bytes([data[-1] ^ 1]),  # one bit of the state flipped
+    lambda data: b"not a state at all",
+    lambda data: b"",
+    lambda data: data.replace(b'"tokens": [1, 5', b'"tokens": [1, 6'),  # header of another prefix
+])
+def test_a_damaged_entry_is_deleted_and_never_trusted(tmp_path, damage):
+    store = PrefixStore(tmp_path)
+    key = state_key({"model": "m"}, PREFIX)
+    store.save(key, PREFIX, bytes(range(256)) * 4)
+    path, = entries(tmp_path)
+    path.write_bytes(damage(path.read_bytes()))
+    assert store.load(key, PREFIX) is None
+    assert not path.exists() and store.rejected == 1
+
+
+def test_the_store_keeps_within_its_bound_dropping_the_least_recently_used(tmp_path):
+    store = PrefixStore(tmp_path, max_bytes=3_500)
+    keys = [state_key({"n": n}, PREFIX) for n in range(3)]
+    for n, key in enumerate(keys):
+        store.save(key, PREFIX, bytes([n]) * 1_000)
+        os.utime(store._path(key), ns=(n * 10**9, n * 10**9))  # saved one second apart
+    assert store.load(keys[0], PREFIX) is not None  # used now: the most recent
+    store.save(state_key({"n": 3}, PREFIX), PREFIX, b"\3" * 1_000)
+    assert store.load(keys[1], PREFIX) is None  # the least recently used went
+    assert all(store.load(k, PREFIX) is not None for k in (keys[0], keys[2]))
+    assert sum(p.stat().st_size for p in entries(tmp_path)) <= 3_500
+
+
+def test_a_store_that_cannot_be_written_costs_only_the_reuse(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    store = PrefixStore(blocker / "states")  # under a file: never a folder
+    assert store.save(state_key({}, PREFIX), PREFIX, b"s") is False
+    assert store.load(state_key({}, PREFIX), PREFIX) is None
+
+
+def test_the_default_store_is_in_the_users_cache_and_off_is_none(monkeypatch, tmp_path):
+    monkeypatch.delenv("SMARTLLM_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert default_store_folder() == tmp_path / "smartllm-local" / "prefix-states"
+    assert open_store(None).folder == default_store_folder()
+    assert open_store("off") is None
+    assert open_store(tmp_path / "mine").folder == tmp_path / "mine"
+    (tmp_path / "a-file").write_text("x")
+    with pytest.raises(UserError, match="--prefix-cache"):
+        open_store(tmp_path / "a-file")
+
+
+def test_a_prefix_cache_that_is_a_file_is_exit_2_before_the_model_loads(tmp_path):
+    (tmp_path / "states").write_text("x")
+    one_line_error(cli("plan", "--task", "kitchen-01", "--prefix-cache", tmp_path / "states"),
+                   "--prefix-cache", "is an existing file")
+
+
+def test_later_tasks_reuse_the_examples_and_plan_what_they_plan_alone():
+    """Gemma-3, a sliding-window model, whose loaded states give other logits than the live cache they
+    were saved from: a task planned after another (its examples' states loaded from memory) writes
+    exactly what it writes alone (evaluated, saved and loaded back)."""
+    catalogue = load_catalogue()
+    first, second = (find_task(load_tasks(), t) for t in ("kitchen-01", "living-02"))
+    shared = load_backend("llamacpp", "gemma3-270m", prefix_cache="off")
+    try:
+        planner = Planner(shared, catalogue)
+        before = planner.plan(first.instruction, first.floor_plan, first.robots)
+        after = planner.plan(second.instruction, second.floor_plan, second.robots)
+    finally:
+        shared.close()
+    alone_backend = load_backend("llamacpp", "gemma3-270m", prefix_cache="off")
+    try:
+        alone = Planner(alone_backend, catalogue).plan(second.instruction, second.floor_plan, second.robots)
+    finally:
+        alone_backend.close()
+    assert [r.output for r in after.stages] == [r.output for r in alone.stages] and after.allocated
+    assert all(r.reused_tokens == 0 and r.shared_tokens > 0 for r in alone.stages)
+    for earlier, record in zip(before.stages, after.stages):
+        same_examples = earlier.examples == record.examples
+        assert record.reused_tokens == (record.shared_tokens if same_examples else 0), record.stage
+    assert after.stages[0].reused_tokens > 0
+
+
+def test_a_second_process_starts_from_the_stored_examples_and_a_damaged_store_is_rebuilt(tmp_path):
+    """SmolLM2 through the CLI: the second ``plan`` evaluates none of the examples, writes the same plan;
+    with every entry cut short, the third evaluates them again, writes the same plan, and stores them anew."""
+    states = tmp_path / "states"
+
+    def plan(name: str) -> tuple[str, dict[str, dict]]:
+        proc = cli("plan", "--task", "kitchen-01", "--prefix-cache", states, "--out", tmp_path / name, "--json")
+        assert proc.returncode == 0, proc.stderr
+        stages = json.loads((tmp_path / name / "result.json").read_text())["stages"]
+        return json.loads(proc.stdout)["allocated"], stages
+
+    first, cold = plan("first")
+    stored = entries(states)
+    assert len(stored) == 3 and all(t["reused_tokens"] == 0 for t in cold.values())  # one per stage
+    second, warm = plan("second")
+    assert second == first
+    assert all(t["reused_tokens"] == t["shared_tokens"] > 0 for t in warm.values()), warm
+    for path in stored:
+        path.write_bytes(path.read_bytes()[:1000])
+    third, rebuilt = plan("third")
+    assert third == first and all(t["reused_tokens"] == 0 for t in rebuilt.values())
+    assert [p.stat().st_size > 1000 for p in entries(states)] == [True] * 3

@@ -1,0 +1,42 @@
+"""``smartllm-local bench`` with the real SmolLM2, llama.cpp and the stand-in: its figures hang together."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from smartllm_local.tasks import load_tasks
+from tests.test_cli_errors import cli, one_line_error
+
+
+def test_bench_measures_decoding_reuse_and_the_executor(tmp_path):
+    out = tmp_path / "bench.json"
+    proc = cli("bench", "--models", "smollm2", "--sample", "2", "--no-benchmark", "--out", out)
+    assert proc.returncode == 0, proc.stderr
+    report = json.loads(out.read_text())
+    decode = report["models"]["smollm2"]["decode"]
+    for way in ("constrained", "free"):
+        found = decode[way]
+        assert found["tasks"] == 2 and found["generated_tokens"] > 0 and found["seconds"] > 0
+        written = found["generated_tokens"] + found["forced_tokens"]
+        assert found["tokens_per_s"] == pytest.approx(written / found["seconds"], rel=1e-3)
+    assert decode["free"]["forced_tokens"] == 0 < decode["constrained"]["forced_tokens"]
+    assert report["constrained_over_free_decode"]["smollm2"] == decode["constrained_over_free"] > 0
+    prefix = report["models"]["smollm2"]["prefix"]
+    for stage, cost in prefix["stages"].items():
+        assert cost["first"]["reused"] == 0, stage  # an empty store: the first task evaluates everything
+        assert cost["second_process"]["reused"] > 0, stage  # a new backend finds it on disk
+    # later tasks and the second process evaluate part of their prompts (how much is a figure, not a test)
+    assert 0 < report["reused_over_fresh_prompt_tokens"]["smollm2"] < 1
+    assert 0 < report["second_process_over_fresh_prompt_tokens"]["smollm2"] < 1
+    feasible = sum(t.feasible for t in load_tasks())
+    assert report["executor"]["plans"] == feasible and report["executor_actions_per_s"] > 0
+    assert report["benchmark_minutes"] is None
+    assert "smollm2" in proc.stdout and "actions/s" in proc.stdout
+
+
+def test_bench_finds_every_model_before_measuring(tmp_path):
+    one_line_error(cli("bench", "--models", "smollm2,missing.gguf", "--out", tmp_path / "b.json"),
+                   "missing.gguf does not exist")
+    assert not (tmp_path / "b.json").exists()
