@@ -94,7 +94,7 @@ def prefix_reuse(model: str, catalogue: Catalogue, tasks: Sequence[Task], thread
         rest = [costs[stage] for costs in later if stage in costs]
         stages[stage] = {
             "first": first[stage], "second_process": again.get(stage),
-            "later_evaluated_mean": statistics.fmean(c["evaluated"] for c in rest) if rest else None,
+            "later_evaluated_mean": round(statistics.fmean(c["evaluated"] for c in rest), 1) if rest else None,
             "later_ttft_s_mean": round(statistics.fmean(c["ttft_s"] for c in rest), 3) if rest else None,
             "later_over_first_prompt_tokens": round(statistics.fmean(c["evaluated"] for c in rest)
                                                     / first[stage]["prompt"], 3) if rest else None,

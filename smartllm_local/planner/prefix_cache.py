@@ -167,7 +167,6 @@ class MemoryStates:
             self._states.popitem(last=False)
 
 
-
 class PrefixReuse:
     """What both backends do with a prompt's shared prefix (mixed into each). A backend provides
     ``_states`` (a :class:`MemoryStates`), ``prefix_store`` (None for none), and the hooks below.
