@@ -23,10 +23,9 @@ import time
 from pathlib import Path
 from typing import Any, Sequence
 
-from .benchmark import default_plans_dir
+from .benchmark import load_reference_plan
 from .errors import SmartLLMError
 from .executor import run_plan
-from .plan_language import parse_plan
 from .planner.backends import load_backend
 from .planner.pipeline import Planner, PlannerConfig, PlanResult
 from .planner.prompts import STAGES
@@ -92,12 +91,13 @@ def prefix_reuse(model: str, catalogue: Catalogue, tasks: Sequence[Task], thread
         if stage not in first:
             continue
         rest = [costs[stage] for costs in later if stage in costs]
+        evaluated = statistics.fmean(c["evaluated"] for c in rest) if rest else None
         stages[stage] = {
             "first": first[stage], "second_process": again.get(stage),
-            "later_evaluated_mean": round(statistics.fmean(c["evaluated"] for c in rest), 1) if rest else None,
+            "later_evaluated_mean": round(evaluated, 1) if evaluated is not None else None,
             "later_ttft_s_mean": round(statistics.fmean(c["ttft_s"] for c in rest), 3) if rest else None,
-            "later_over_first_prompt_tokens": round(statistics.fmean(c["evaluated"] for c in rest)
-                                                    / first[stage]["prompt"], 3) if rest else None,
+            "later_over_first_prompt_tokens": round(evaluated / first[stage]["prompt"], 3)
+            if evaluated is not None else None,
         }
     later_costs = [c for costs in later for c in costs.values()]
     return {
@@ -111,8 +111,12 @@ def prefix_reuse(model: str, catalogue: Catalogue, tasks: Sequence[Task], thread
 
 def executor_speed(catalogue: Catalogue, tasks: Sequence[Task], build: str | None = None) -> dict[str, Any]:
     """Every feasible task's reference plan on one controller: plans and actions per second."""
-    plans = [(t, parse_plan((default_plans_dir() / f"{t.id}.py").read_text(encoding="utf-8"), form="allocated",
-                            skills=catalogue.skills, team_size=len(t.robots))) for t in tasks if t.feasible]
+    plans = []
+    for task in (t for t in tasks if t.feasible):
+        plan, problem = load_reference_plan(task, catalogue)
+        if plan is None:
+            raise SmartLLMError(f"task {task.id}: {problem}; smartllm-local benchmark check lists every such problem")
+        plans.append((task, plan))
     actions = 0
     controller = open_controller(plans[0][0].floor_plan, agent_count=len(plans[0][0].robots), build=build)
     try:

@@ -71,7 +71,7 @@ def check_reference_plans(
             if not task.feasible:
                 results.append(_check_infeasible(task, catalogue))
                 continue
-            plan, problem = _load_plan(task, folder / f"{task.id}.py", catalogue)
+            plan, problem = load_reference_plan(task, catalogue, folder)
             if plan is None:
                 results.append(ReferenceResult(task, None, False, problem))
                 continue
@@ -95,8 +95,7 @@ def check_reference_plans(
 def reference_ticks(task: Task, catalogue: Catalogue, controller: Any, plans_dir: Path | None = None) -> int | None:
     """How many ticks the task's reference plan takes to meet every goal condition (None: it has no
     plan that does), run on ``controller`` (the Speed measure's yardstick)."""
-    path = (plans_dir or default_plans_dir()) / f"{task.id}.py"
-    plan, _ = _load_plan(task, path, catalogue) if task.feasible and task.goals else (None, "")
+    plan, _ = load_reference_plan(task, catalogue, plans_dir) if task.feasible and task.goals else (None, "")
     if plan is None:
         return None
     execution = run_plan(plan, task.floor_plan, catalogue.team(task.robots), controller=controller,
@@ -105,8 +104,9 @@ def reference_ticks(task: Task, catalogue: Catalogue, controller: Any, plans_dir
     return execution.ticks if scores.TCR == 1.0 else None
 
 
-def _load_plan(task: Task, path: Path, catalogue: Catalogue) -> tuple[Plan | None, str]:
-    """The task's plan, validated against its team and floor plan, or None and why not."""
+def load_reference_plan(task: Task, catalogue: Catalogue, plans_dir: Path | None = None) -> tuple[Plan | None, str]:
+    """The task's reference plan, validated against its team and floor plan, or None and why not."""
+    path = (plans_dir or default_plans_dir()) / f"{task.id}.py"
     if not path.is_file():
         return None, f"no reference plan: {path} does not exist"
     try:

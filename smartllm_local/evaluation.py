@@ -11,7 +11,9 @@ refusing a feasible task is a failure.
 from __future__ import annotations
 
 import json
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -113,7 +115,7 @@ def execute_and_score(result: PlanResult, goals: Sequence[Goal], catalogue: Cata
 
 def run_benchmark(
     tasks: Sequence[Task],
-    method: Method | Planner,
+    method: Method | Planner | Sequence[Method],
     catalogue: Catalogue,
     *,
     out: Path | None = None,
@@ -127,10 +129,12 @@ def run_benchmark(
     With a ``store`` (the run folder), each finished stage is saved at once and each scored task's
     line appended at once; tasks and stages the store already holds are not run again. Any
     exception inside a task becomes that task's error and the run goes on; Ctrl-C stops it, and
-    the same run started again resumes it. Returns the outcomes of the tasks run this time.
+    the same run started again resumes it. Several methods (the same method on several workers,
+    such as a server's slots) plan that many tasks of a stage at once, each task on one worker.
+    Returns the outcomes of the tasks run this time.
     """
-    if isinstance(method, Planner):
-        method = SmartLLM(method, catalogue)
+    methods = [SmartLLM(m, catalogue) if isinstance(m, Planner) else m
+               for m in (method if isinstance(method, Sequence) else [method])]
     done = store.results() if store is not None else {}
     outcomes = [TaskOutcome(task) for task in tasks if task.id not in done]
     live: list[TaskOutcome] = []
@@ -142,26 +146,31 @@ def run_benchmark(
         if _goes_on(outcome):
             live.append(outcome)
 
-    stages = method.stages()
+    stages = methods[0].stages()
     total = (len(stages) + 1) * len(outcomes)  # a unit per stage and per execution of each task
     scored: list[TaskOutcome] = []
+    lock = threading.Lock()
     for number, stage in enumerate(stages):
         batch = [o for o in live if not any(r.stage == stage.name for r in o.result.stages)]  # type: ignore[union-attr]
-        skipped = len(outcomes) - len(batch)  # done before, or out of the run (an error, a refusal)
-        for k, outcome in enumerate(batch):
-            progress(Progress(stage.name, outcome.task.id, number * len(outcomes) + skipped + k, total, scored))
+        order = iter(range(len(outcomes) - len(batch), len(outcomes)))  # after those done before, or out of the run
+
+        def run(worker: Method, outcome: TaskOutcome) -> None:
+            with lock:
+                progress(Progress(stage.name, outcome.task.id, number * len(outcomes) + next(order), total, scored))
             result = outcome.result
             assert result is not None
             try:
-                stage.run(outcome.task, result)
+                worker.stages()[number].run(outcome.task, result)
             except SmartLLMError as exc:
                 outcome.error = f"{stage.name}: {exc}"
             except Exception as exc:  # a bug or a backend failure costs this task, not the run
                 outcome.error = f"{stage.name}: {type(exc).__name__}: {exc}"
             if store is not None and not outcome.error and result.stages and result.stages[-1].stage == stage.name:
-                store.save_stage(outcome.task.id, result.stages[-1])
-            if not _goes_on(outcome):
-                live.remove(outcome)
+                with lock:
+                    store.save_stage(outcome.task.id, result.stages[-1])
+
+        _spread(batch, methods, run)
+        live = [o for o in live if _goes_on(o)]
 
     controller = None
     try:
@@ -205,6 +214,36 @@ def run_benchmark(
             write_atomic(out / "results.jsonl", "".join(json.dumps(line) + "\n" for line in lines.values()))
         write_atomic(out / "summary.txt", summary_table([lines[t.id] for t in tasks if t.id in lines]) + "\n")
     return outcomes
+
+
+def _spread(batch: Sequence[TaskOutcome], workers: Sequence[Method],
+            run: Callable[[Method, TaskOutcome], None]) -> None:
+    """Run ``batch`` in order on one worker, or on all of them at once (each takes the next task when free)."""
+    if len(workers) == 1 or len(batch) < 2:
+        for outcome in batch:
+            run(workers[0], outcome)
+        return
+    queue = iter(batch)
+    lock = threading.Lock()
+
+    def work(worker: Method) -> None:
+        while True:
+            with lock:
+                outcome = next(queue, None)
+            if outcome is None:
+                return
+            run(worker, outcome)
+
+    pool = ThreadPoolExecutor(max_workers=len(workers), thread_name_prefix="planner")
+    futures = [pool.submit(work, w) for w in workers]
+    try:
+        for future in futures:
+            future.result()
+    except BaseException:  # Ctrl-C: no new task starts; those in flight end within the server timeout
+        queue = iter(())
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
 
 
 def _goes_on(outcome: TaskOutcome) -> bool:

@@ -16,7 +16,7 @@ from ..evaluation import execute_and_score, run_benchmark
 from ..results import summary_table, variability_table
 from ..files import check_output_folder, write_atomic
 from ..methods import METHODS, make_method
-from ..planner.backends import BACKENDS, Sampling, load_backend, model_location
+from ..planner.backends import BACKENDS, Sampling, check_server_options, load_backends, model_location
 from ..planner.chat import CHAT_TEMPLATE_MODES, check_mode
 from ..planner.models import DEFAULT_MODEL, EMBEDDED
 from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
@@ -42,7 +42,8 @@ class ModelOptions:
     def __init__(self, model: Optional[str], backend: str, n_ctx: int, threads: Optional[int], n_gpu_layers: int,
                  seed: int, temperature: float, no_comments: bool, no_summary: bool, no_coalition: bool,
                  no_grammar: bool, free_teams: bool = False, chat_template: str = "auto",
-                 free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None):
+                 free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None,
+                 endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -52,6 +53,11 @@ class ModelOptions:
         if n_ctx < 512:
             raise UserError("--n-ctx must be at least 512 tokens")
         check_mode(chat_template)
+        self.endpoints = [e.strip() for e in endpoint.split(",") if e.strip()] if endpoint else []
+        check_server_options(backend, self.endpoints, workers)
+        if server_timeout is not None and not (math.isfinite(server_timeout) and server_timeout > 0):
+            raise UserError(f"--server-timeout must be a number of seconds above 0, not {server_timeout}")
+        self.workers, self.server_timeout = workers, server_timeout
         self.model, self.backend, self.n_ctx, self.threads = model, backend, n_ctx, threads
         self.n_gpu_layers = n_gpu_layers
         self.prefix_cache = prefix_cache
@@ -72,15 +78,24 @@ class ModelOptions:
         """The planner's settings with another sampling seed."""
         return replace(self.config, sampling=replace(self.config.sampling, seed=seed))
 
-    def planner(self, catalogue) -> Planner:
-        backend = load_backend(self.backend, self.model, n_ctx=self.n_ctx, threads=self.threads,
-                               n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=self.prefix_cache)
-        return Planner(backend, catalogue, self.config)
+    def planners(self, catalogue) -> list[Planner]:
+        """One planner per worker (one, but for a server backend with --workers)."""
+        backends = load_backends(self.backend, self.model, workers=self.workers, endpoints=self.endpoints,
+                                 server_timeout=self.server_timeout, n_ctx=self.n_ctx, threads=self.threads,
+                                 n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=self.prefix_cache)
+        return [Planner(backend, catalogue, self.config) for backend in backends]
 
 
 # Options shared by every command that plans (typer option objects can be reused as defaults).
 _MODEL = typer.Option(None, help=MODEL_HELP)
-_BACKEND = typer.Option("llamacpp", help="llamacpp or transformers.")
+_BACKEND = typer.Option("llamacpp", help=(
+    "llamacpp or transformers (the model runs in this process), or server (a llama-server or llama_cpp.server "
+    "at --endpoint runs it; --model then names the served GGUF, read for its vocabulary only)."))
+_ENDPOINT = typer.Option(None, "--endpoint", metavar="URL[,URL...]", help=(
+    "--backend server: the servers' URLs, such as http://gpu-box:8080 (llama-server, with -np slots) or "
+    "http://127.0.0.1:8000 (python -m llama_cpp.server)."))
+_SERVER_TIMEOUT = typer.Option(None, "--server-timeout", help=(
+    "--backend server: seconds a request may go unanswered before its task fails (default 300)."))
 _N_CTX = typer.Option(4096, "--n-ctx", help="Context size in tokens.")
 _THREADS = typer.Option(None, help="CPU threads (default: all cores).")
 _GPU = typer.Option(0, "--n-gpu-layers", help="Layers to offload to a GPU (needs a CUDA or Metal build of llama.cpp).")
@@ -138,11 +153,13 @@ def plan_command(
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
     prefix_cache: Optional[str] = _PREFIX_CACHE,
+    endpoint: Optional[str] = _ENDPOINT,
+    server_timeout: Optional[float] = _SERVER_TIMEOUT,
 ) -> None:
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check, prefix_cache)
+                           no_world_check, prefix_cache, endpoint, 1, server_timeout)
     if out is not None:
         check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
@@ -161,7 +178,7 @@ def plan_command(
                             'smartllm-local plan "Put the apple in the fridge" --floor-plan 6 --robots 1,2')
         scene, team_ids = floor_plan_name(floor_plan), parse_robot_ids(robots)
     cat.team(team_ids)
-    planner = options.planner(cat)
+    planner = options.planners(cat)[0]
     try:
         result = planner.plan(instruction, scene, team_ids)
     finally:
@@ -226,11 +243,16 @@ def benchmark_run(
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
     prefix_cache: Optional[str] = _PREFIX_CACHE,
+    endpoint: Optional[str] = _ENDPOINT,
+    workers: int = typer.Option(1, "--workers", help=(
+        "--backend server: plan this many tasks at once, spread over the endpoints and their slots "
+        "(llama-server -np N has N). Through a server, plans can differ with it: see the README.")),
+    server_timeout: Optional[float] = _SERVER_TIMEOUT,
 ) -> None:
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check, prefix_cache)
+                           no_world_check, prefix_cache, endpoint, workers, server_timeout)
     check_output_folder(out, "--out")
     cat = load_catalogue(catalogue)
     tasks_files = [tasks] if tasks else default_task_files()
@@ -247,7 +269,8 @@ def benchmark_run(
     chosen_seeds = parse_seeds(seeds, seed)
     if len(chosen_seeds) > 1 and temperature == 0 and method != "decomp-random":
         raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
-    arguments = {k: v for k, v in ctx.params.items() if k not in ("out", "restart", "seeds", "prefix_cache")}
+    arguments = {k: v for k, v in ctx.params.items()
+                 if k not in ("out", "restart", "seeds", "prefix_cache", "workers", "server_timeout")}
     model_path = None if method == "reference" else model_location(backend, model)
     runs = []
     for s in chosen_seeds:  # every run folder is checked before the model loads
@@ -255,16 +278,16 @@ def benchmark_run(
         manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
                                 catalogue or default_catalogue_path(), data_dir("prompts"))
         runs.append((s, RunStore(folder, manifest, restart=restart)))
-    planner = None if method == "reference" else options.planner(cat)
+    planners = [] if method == "reference" else options.planners(cat)
     try:
         for s, store in runs:
             done = store.results()
             if done:
                 print(f"resuming the run in {store.out}: {sum(t.id in done for t in chosen)} of {len(chosen)} "
                       "tasks done", file=sys.stderr)
-            seeded = None if planner is None else Planner(planner.backend, cat, options.config_for(s))
+            seeded = [Planner(p.backend, cat, options.config_for(s)) for p in planners] or [None]
             with RunProgress(f"seed {s}" if seeds is not None else "") as progress:
-                run_benchmark(chosen, make_method(method, cat, seeded), cat, out=store.out, store=store,
+                run_benchmark(chosen, [make_method(method, cat, p) for p in seeded], cat, out=store.out, store=store,
                               build=str(thor_build) if thor_build else None, progress=progress)
     except KeyboardInterrupt:
         scored = sum(t.id in store.results() for _, store in runs for t in chosen)
@@ -272,7 +295,7 @@ def benchmark_run(
               file=sys.stderr)
         raise typer.Exit(130)
     finally:
-        if planner is not None:
+        for planner in planners:
             planner.backend.close()
     results = [store.results() for _, store in runs]
     per_run = [[lines[t.id] for t in chosen if t.id in lines] for lines in results]

@@ -1,17 +1,19 @@
-"""Model backends: llama.cpp (default) and transformers (+ llguidance). They only generate."""
+"""Model backends: llama.cpp (default), transformers (+ llguidance), and model servers. They only generate."""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any, Sequence
 
 from ...errors import UserError
 from ..models import EMBEDDED
 from .base import Backend, Generated, Sampling
 
-BACKENDS = ("llamacpp", "transformers")
+BACKENDS = ("llamacpp", "transformers", "server")
 
-__all__ = ["BACKENDS", "Backend", "Generated", "Sampling", "load_backend", "model_location"]
+__all__ = ["BACKENDS", "Backend", "Generated", "Sampling", "check_server_options", "load_backend", "load_backends",
+           "model_location"]
 
 
 def load_backend(
@@ -46,13 +48,49 @@ def load_backend(
         from .transformers import TransformersBackend
 
         return TransformersBackend(model, n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers, seed=seed)
+    if name == "server":
+        raise UserError("the server backend needs its endpoints: load it with load_backends")
     raise UserError(f"unknown backend {name!r}; choose one of {', '.join(BACKENDS)}")
 
 
-def model_location(name: str, model: str | None) -> Path:
-    """The file (or checkpoint folder) a backend would load for ``--model``, found without loading it."""
+def load_backends(
+    name: str,
+    model: str | None = None,
+    *,
+    workers: int = 1,
+    endpoints: Sequence[str] = (),
+    server_timeout: float | None = None,
+    **settings: Any,
+) -> list[Backend]:
+    """One backend per worker: several only for ``server``, spread over ``endpoints`` and their slots
+    (``model`` is then the served GGUF, read for its vocabulary alone, or None where the server says its path)."""
+    check_server_options(name, endpoints, workers)
+    if name != "server":
+        return [load_backend(name, model, **settings)]
+    from .server import DEFAULT_TIMEOUT, connect
+
+    return list(connect(endpoints, model, workers=workers, n_ctx=settings.get("n_ctx", 4096),
+                        timeout=server_timeout or DEFAULT_TIMEOUT))
+
+
+def check_server_options(name: str, endpoints: Sequence[str], workers: int) -> None:
+    """Endpoints and workers belong to the server backend, which needs at least one endpoint."""
+    if name == "server" and not endpoints:
+        raise UserError("--backend server needs --endpoint URL[,URL...] (a llama-server or llama_cpp.server)")
+    if name != "server" and (endpoints or workers != 1):
+        raise UserError("--endpoint and --workers are for --backend server; an in-process model plans one task "
+                        "at a time")
+    if workers < 1:
+        raise UserError(f"--workers must be 1 or more, not {workers}")
+
+
+def model_location(name: str, model: str | None) -> Path | None:
+    """The file (or checkpoint folder) a backend would load for ``--model``, found without loading it
+    (None: a server's model that ``--model`` does not name)."""
     from ..models import resolve_gguf
 
+    if name == "server" and model is None:
+        return None
     if name == "transformers" and model is not None and model not in EMBEDDED and Path(model).expanduser().is_dir():
         return Path(model).expanduser()
     return resolve_gguf(model)

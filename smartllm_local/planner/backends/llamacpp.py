@@ -30,7 +30,9 @@ grammar forces, the two disagree and generation stops with an error.
 from __future__ import annotations
 
 import codecs
+import contextlib
 import ctypes
+import io
 import os
 from pathlib import Path
 from typing import Sequence
@@ -72,18 +74,21 @@ class LlamaCppBackend(PrefixReuse):
             ) from exc
         self._lib = llama_cpp
         self.model = str(model_path)
+        # A vocabulary has no training context, which llama.cpp warns about on stderr as it loads one.
+        quiet = contextlib.redirect_stderr(io.StringIO()) if vocab_only else contextlib.nullcontext()
         try:
-            self.llm = llama_cpp.Llama(
-                model_path=str(model_path),
-                n_ctx=n_ctx,
-                n_threads=threads or max(1, os.cpu_count() or 1),
-                n_gpu_layers=n_gpu_layers,
-                seed=seed,
-                n_batch=n_batch,
-                logits_all=False,
-                vocab_only=vocab_only,
-                verbose=False,
-            )
+            with quiet:
+                self.llm = llama_cpp.Llama(
+                    model_path=str(model_path),
+                    n_ctx=n_ctx,
+                    n_threads=threads or max(1, os.cpu_count() or 1),
+                    n_gpu_layers=n_gpu_layers,
+                    seed=seed,
+                    n_batch=n_batch,
+                    logits_all=False,
+                    vocab_only=vocab_only,
+                    verbose=False,
+                )
         except (ValueError, RuntimeError) as exc:
             raise ModelError(f"llama.cpp could not load {model_path}: {exc}") from exc
         self.n_ctx = self.llm.n_ctx()
@@ -97,7 +102,7 @@ class LlamaCppBackend(PrefixReuse):
                           "n_batch": n_batch, "n_gpu_layers": n_gpu_layers}
         self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
-        self._pieces: dict[int, bytes] = {}
+        self._pieces: dict[tuple[int, bool], bytes] = {}
         self._full = np.zeros(self.n_vocab, dtype=[("id", np.intc), ("logit", np.single), ("p", np.single)])
         self._few = np.zeros(_TOP, dtype=self._full.dtype)
         self.n_gpu_layers = n_gpu_layers
@@ -116,18 +121,29 @@ class LlamaCppBackend(PrefixReuse):
     def tokenize_continuation(self, text: str) -> list[int]:
         return continuation_tokens(text, self.tokenize, self._piece)
 
-    def _piece(self, token: int) -> bytes:
-        """A token's bytes (llama-cpp-python's detokenize garbles pieces over 32 bytes, drops a space after BOS)."""
-        piece = self._pieces.get(token)
+    def text_of(self, tokens: Sequence[int]) -> str:
+        """The text that tokenizes back into ``tokens`` with control tokens parsed (``<|im_start|>`` written
+        out, not dropped as :meth:`detokenize` drops it): what a server that takes text is sent."""
+        return b"".join(self._piece(t, special=True) for t in tokens).decode("utf-8", errors="replace")
+
+    def adds_bos(self) -> bool:
+        """Whether the model's tokenizer puts a beginning-of-sequence token in front of a prompt."""
+        return self.llm.token_bos() != -1 and bool(self.llm._model.add_bos_token())
+
+    def _piece(self, token: int, special: bool = False) -> bytes:
+        """A token's bytes (llama-cpp-python's detokenize garbles pieces over 32 bytes, drops a space after BOS);
+        ``special`` writes a control token's text rather than nothing."""
+        key = (token, special)
+        piece = self._pieces.get(key)
         if piece is None:
             size = 64
             while True:
                 buffer = ctypes.create_string_buffer(size)
-                n = self._lib.llama_token_to_piece(self._vocab, token, buffer, size, 0, False)
+                n = self._lib.llama_token_to_piece(self._vocab, token, buffer, size, 0, special)
                 if n >= 0:
                     break
                 size = -n
-            piece = self._pieces[token] = buffer.raw[:n]
+            piece = self._pieces[key] = buffer.raw[:n]
         return piece
 
     def _sync(self, context: Sequence[int]) -> None:

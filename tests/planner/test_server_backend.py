@@ -1,0 +1,198 @@
+"""Planning against a real model server on loopback: llama-cpp-python's ``python -m llama_cpp.server``
+serving the embedded SmolLM2, driven through the CLI as a lab would drive its GPU box.
+
+A server that dies or stalls in the middle of a run costs the tasks it was serving an error, within the
+timeout, and the run goes on to its end.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.models import resolve_gguf
+from smartllm_local.robots import load_catalogue
+from tests.test_cli_errors import cli, one_line_error
+
+TASKS = ("kitchen-01", "living-01")
+
+
+class Server:
+    """A llama_cpp.server process on a free loopback port; its log says which requests it answered."""
+
+    def __init__(self, log: Path, threads: int = 1):
+        with socket.socket() as probe:
+            probe.bind(("127.0.0.1", 0))
+            self.port = probe.getsockname()[1]
+        self.url, self.log = f"http://127.0.0.1:{self.port}", log
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "llama_cpp.server", "--model", str(resolve_gguf(None)), "--host", "127.0.0.1",
+             "--port", str(self.port), "--n_ctx", "4096", "--n_threads", str(threads), "--logits_all", "False"],
+            stdout=open(log, "w"), stderr=subprocess.STDOUT, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+        deadline = time.monotonic() + 120
+        while True:
+            try:
+                urllib.request.urlopen(f"{self.url}/v1/models", timeout=2).read()
+                return
+            except OSError:
+                if self.process.poll() is not None or time.monotonic() > deadline:
+                    self.stop()
+                    raise RuntimeError(f"llama_cpp.server did not start: {log.read_text()[-2000:]}")
+                time.sleep(0.5)
+
+    def answered(self, request: str = "POST /v1/completions") -> int:
+        return self.log.read_text(errors="replace").count(request)
+
+    def wait_for(self, count: int, request: str = "POST /v1/completions", limit: float = 120) -> None:
+        deadline = time.monotonic() + limit
+        while self.answered(request) < count:
+            assert time.monotonic() < deadline and self.process.poll() is None, self.log.read_text()[-2000:]
+            time.sleep(0.2)
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            os.kill(self.process.pid, signal.SIGCONT)
+            self.process.kill()
+        self.process.wait(timeout=30)
+
+
+@pytest.fixture
+def server(tmp_path):
+    running = Server(tmp_path / "server.log", threads=2)
+    yield running
+    running.stop()
+
+
+def lines(folder: Path) -> dict[str, dict]:
+    return {line["id"]: line for line in map(json.loads, (folder / "results.jsonl").read_text().splitlines())}
+
+
+def test_two_workers_plan_over_two_servers_and_every_stage_validates(tmp_path):
+    servers = [Server(tmp_path / f"server-{n}.log") for n in range(2)]  # one core each: they run side by side
+    try:
+        out = tmp_path / "run"
+        args = ["benchmark", "run", "--backend", "server", "--endpoint", ",".join(s.url for s in servers),
+                "--workers", "2", "--out", out, *(a for t in TASKS for a in ("--task", t))]
+        run = cli(*args)
+        assert run.returncode == 0, run.stderr
+        assert all(s.answered() > 0 for s in servers)  # both endpoints planned
+    finally:
+        for s in servers:
+            s.stop()
+    catalogue = load_catalogue(None)
+    for task, line in lines(out).items():
+        assert not line.get("error"), line
+        result = json.loads((out / task / "result.json").read_text())
+        assert list(result["stages"]) == ["decomposition", "coalition", "allocation"]
+        assert all(line["tokens"][stage]["generated"] > 0 for stage in ("decomposition", "coalition", "allocation"))
+        plan = (out / task / "allocated.py").read_text()
+        parse_plan(plan, form="allocated", skills=catalogue.skills, team_size=len(result["robots"]))
+    assert set(lines(out)) == set(TASKS)
+    manifest = json.loads((out / "run.json").read_text())
+    assert manifest["identity"]["arguments"]["backend"] == "server" and "workers" not in manifest["identity"]["arguments"]
+
+
+def test_a_server_killed_mid_run_fails_its_tasks_with_a_clear_error_and_the_run_ends(server, tmp_path):
+    out = tmp_path / "run"
+    args = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--method", "decomp-rule", "--backend",
+            "server", "--endpoint", server.url, "--out", str(out), *(a for t in TASKS for a in ("--task", t))]
+    run = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    server.wait_for(2)
+    server.process.kill()
+    stdout, stderr = run.communicate(timeout=120)
+    assert run.returncode == 0, stderr
+    results = lines(out)
+    assert set(results) == set(TASKS)
+    for line in results.values():
+        assert line["error"].startswith("decomposition: the server at ") and "cannot be reached" in line["error"], line
+
+
+def test_a_stalled_server_fails_the_task_within_the_timeout(server, tmp_path):
+    out = tmp_path / "run"
+    args = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--method", "decomp-rule", "--backend",
+            "server", "--endpoint", server.url, "--server-timeout", "4", "--out", str(out), "--task", TASKS[0]]
+    run = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    server.wait_for(1, "POST /extras/tokenize")  # the planner has checked the server: its task is starting
+    os.kill(server.process.pid, signal.SIGSTOP)
+    stalled = time.monotonic()
+    stdout, stderr = run.communicate(timeout=60)
+    assert time.monotonic() - stalled < 30
+    assert run.returncode == 0, stderr
+    error = lines(out)[TASKS[0]]["error"]
+    assert "gave no answer in 4 s" in error and "--server-timeout" in error, error
+
+
+def test_server_options_are_checked_before_anything_runs(tmp_path):
+    with socket.socket() as probe:  # a port where nothing listens
+        probe.bind(("127.0.0.1", 0))
+        closed = probe.getsockname()[1]
+    one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--backend", "server"), "--endpoint")
+    one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--endpoint", "http://127.0.0.1:1"),
+                   "--backend server")
+    one_line_error(cli("benchmark", "run", "--out", tmp_path / "r", "--workers", "2"), "--backend server")
+    one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--backend", "server", "--endpoint",
+                       "ftp://host"), "not an http(s) URL")
+    one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--backend", "server", "--endpoint",
+                       f"http://127.0.0.1:{closed}"), "cannot be reached", "is it running?")
+    one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--backend", "server", "--endpoint",
+                       "http://127.0.0.1:1", "--server-timeout", "0"), "--server-timeout")
+
+
+def test_a_vocabulary_that_is_not_the_served_models_is_refused(server):
+    gemma = resolve_gguf("gemma3-270m")
+    one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--backend", "server", "--endpoint",
+                       server.url, "--model", gemma), "tokenizes text differently", "--model")
+
+
+LLAMA_SERVER = os.environ.get("SMARTLLM_LLAMA_SERVER")  # a llama-server binary (llama.cpp's tools/server)
+
+
+@pytest.mark.skipif(not LLAMA_SERVER, reason="set SMARTLLM_LLAMA_SERVER to a llama-server binary to run it")
+def test_llama_server_slots_plan_from_token_ids_with_the_servers_own_vocabulary(tmp_path):
+    """As from another machine: the served file is gone from this one once the server has loaded it, so
+    the tokenizer and chat template are the server's own."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    log, served = tmp_path / "llama-server.log", tmp_path / "served.gguf"
+    served.symlink_to(resolve_gguf(None))
+    process = subprocess.Popen([LLAMA_SERVER, "-m", str(served), "-c", "8192", "-np", "2", "-t", "2",
+                                "--host", "127.0.0.1", "--port", str(port)], stdout=open(log, "w"),
+                               stderr=subprocess.STDOUT)
+    try:
+        deadline = time.monotonic() + 120
+        while True:
+            try:
+                urllib.request.urlopen(f"http://127.0.0.1:{port}/health", timeout=2).read()
+                break
+            except OSError:
+                assert process.poll() is None and time.monotonic() < deadline, log.read_text()[-2000:]
+                time.sleep(0.5)
+        served.unlink()
+        out = tmp_path / "run"
+        tasks = (*TASKS, "kitchen-02")
+        run = cli("benchmark", "run", "--method", "decomp-rule", "--backend", "server", "--endpoint",
+                  f"http://127.0.0.1:{port}", "--workers", "2", "--out", out, *(a for t in tasks for a in ("--task", t)))
+        assert run.returncode == 0, run.stderr
+    finally:
+        process.kill()
+        process.wait(timeout=30)
+    results = lines(out)
+    assert set(results) == set(tasks) and not any(line.get("error") for line in results.values())
+    for task in tasks:
+        record = json.loads((out / task / "result.json").read_text())["stages"]["decomposition"]
+        assert record["chat_template"] == "applied", record  # SmolLM2's template, from the server's /props
+    decompositions = [line["tokens"]["decomposition"] for line in results.values()]
+    assert sum(d["reused"] > 0 for d in decompositions) >= 1  # a slot's second task starts from its cached prefix
+    served = log.read_text()
+    assert "launch_slot_: id  0" in served and "launch_slot_: id  1" in served  # both slots planned
