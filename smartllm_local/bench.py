@@ -8,11 +8,13 @@
   ``plan`` process finds them);
 - the executor: every feasible task's reference plan, plans and actions per second;
 - optionally, ``benchmark run`` over every task with the first model, one seed, from an empty prefix
-  store, timed as a user would time it.
+  store, timed as a user would time it, with the prompt tokens its later tasks evaluated per stage
+  (there tasks on the same floor plan also share their decomposition's scene).
 """
 
 from __future__ import annotations
 
+import json
 import os
 import platform
 import statistics
@@ -132,18 +134,38 @@ def executor_speed(catalogue: Catalogue, tasks: Sequence[Task], build: str | Non
             "plans_per_s": round(len(plans) / seconds, 2), "actions_per_s": round(actions / seconds, 1)}
 
 
-def benchmark_minutes(model: str, threads: int | None = None, out: Path | None = None) -> float:
+def time_benchmark(model: str, threads: int | None = None, out: Path | None = None) -> dict[str, Any]:
     """``smartllm-local benchmark run`` over every task, one seed, greedy, from an empty prefix store, timed
-    from start to end (model loading included), in minutes; its run folder is ``out`` if given."""
+    from start to end (model loading included), in minutes; and per stage, the prompt tokens its later
+    tasks evaluated over those of its first. Its run folder is ``out`` if given."""
     with tempfile.TemporaryDirectory(prefix="smartllm-bench-") as folder:
+        run = out or Path(folder) / "run"
         command = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--model", model,
-                   "--out", str(out or Path(folder) / "run"), "--prefix-cache", str(Path(folder) / "states"),
+                   "--out", str(run), "--prefix-cache", str(Path(folder) / "states"),
                    *(["--threads", str(threads)] if threads else [])]
         started = time.perf_counter()
         done = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         if done.returncode != 0:
             raise SmartLLMError(f"the benchmark run failed: {done.stderr.strip()[-500:]}")
-        return round((time.perf_counter() - started) / 60, 2)
+        minutes = round((time.perf_counter() - started) / 60, 2)
+        results = [json.loads(line) for line in (run / "results.jsonl").read_text(encoding="utf-8").splitlines()
+                   if line.strip()]
+    return {"minutes": minutes, "stages": later_prompt_costs(results)}
+
+
+def later_prompt_costs(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Per stage, over a run's results in order: the first task's prompt tokens, and the tokens the later
+    tasks evaluated (their prompts less what they reused), on average and over the first's."""
+    stages: dict[str, Any] = {}
+    for stage in STAGES:
+        costs = [c for c in (r.get("tokens", {}).get(stage) for r in results) if c and c["prompt"]]
+        if len(costs) > 1:
+            first, later = costs[0], costs[1:]
+            evaluated = statistics.fmean(c["prompt"] - c["reused"] for c in later)
+            stages[stage] = {"first_prompt": first["prompt"], "later_tasks": len(later),
+                             "later_evaluated_mean": round(evaluated, 1),
+                             "later_over_first_prompt_tokens": round(evaluated / first["prompt"], 3)}
+    return stages
 
 
 def run_bench(models: Sequence[str], catalogue: Catalogue, tasks: Sequence[Task], *, sample: int,
@@ -153,6 +175,7 @@ def run_bench(models: Sequence[str], catalogue: Catalogue, tasks: Sequence[Task]
     per_model = {m: {"decode": decode_speed(m, catalogue, chosen, threads),
                      "prefix": prefix_reuse(m, catalogue, chosen, threads)} for m in models}
     executor = executor_speed(catalogue, tasks)
+    whole = time_benchmark(models[0], threads, benchmark_out) if whole_benchmark else None
     return {
         "machine": {"cpus": os.cpu_count(), "threads": threads or os.cpu_count(), "platform": platform.platform()},
         "versions": versions(), "sample_tasks": [t.id for t in chosen], "models": per_model,
@@ -162,7 +185,7 @@ def run_bench(models: Sequence[str], catalogue: Catalogue, tasks: Sequence[Task]
         "second_process_over_fresh_prompt_tokens": {m: r["prefix"]["second_process_over_fresh_prompt_tokens"]
                                                     for m, r in per_model.items()},
         "benchmark_model": models[0] if whole_benchmark else None,
-        "benchmark_minutes": benchmark_minutes(models[0], threads, benchmark_out) if whole_benchmark else None,
+        "benchmark": whole, "benchmark_minutes": whole["minutes"] if whole else None,
         "executor": executor, "executor_actions_per_s": executor["actions_per_s"],
     }
 
@@ -185,4 +208,8 @@ def summary(report: dict[str, Any]) -> str:
                  f"({executor['plans_per_s']} plans/s, {executor['actions_per_s']} actions/s)")
     if report["benchmark_minutes"] is not None:
         lines.append(f"whole benchmark with {report['benchmark_model']}: {report['benchmark_minutes']} min")
+        for stage, cost in report["benchmark"]["stages"].items():
+            lines.append(f"  {stage:<14} first task: {cost['first_prompt']} prompt tokens; {cost['later_tasks']} later "
+                         f"tasks: {cost['later_evaluated_mean']} evaluated ({cost['later_over_first_prompt_tokens']} "
+                         f"of the first's)")
     return "\n".join(lines)

@@ -239,7 +239,7 @@ def _spread(batch: Sequence[TaskOutcome], workers: Sequence[Method],
     try:
         for future in futures:
             future.result()
-    except BaseException:  # Ctrl-C: no new task starts; those in flight end within the server timeout
+    except BaseException:  # Ctrl-C: no new task starts; closing the backends ends those in flight
         queue = iter(())
         pool.shutdown(wait=False, cancel_futures=True)
         raise

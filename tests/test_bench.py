@@ -6,6 +6,7 @@ import json
 
 import pytest
 
+from smartllm_local.bench import later_prompt_costs
 from smartllm_local.tasks import load_tasks
 from tests.test_cli_errors import cli, one_line_error
 
@@ -40,3 +41,20 @@ def test_bench_finds_every_model_before_measuring(tmp_path):
     one_line_error(cli("bench", "--models", "smollm2,missing.gguf", "--out", tmp_path / "b.json"),
                    "missing.gguf does not exist")
     assert not (tmp_path / "b.json").exists()
+
+
+def test_later_prompt_costs_reads_what_a_run_reused_per_stage():
+    def task(decomposition, allocation=None):
+        tokens = {"decomposition": dict(zip(("prompt", "reused"), decomposition))}
+        if allocation:
+            tokens["allocation"] = dict(zip(("prompt", "reused"), allocation))
+        return {"id": "t", "tokens": tokens}
+
+    # the first evaluates all; a task on its floor plan its instruction; a task on another its scene too;
+    # a task that never reached allocation (a stage left at 0 prompt tokens) is not counted there
+    results = [task((1000, 0), (800, 0)), task((1000, 980), (0, 0)), task((1100, 700), (900, 600))]
+    costs = later_prompt_costs(results)
+    assert costs["decomposition"] == {"first_prompt": 1000, "later_tasks": 2, "later_evaluated_mean": 210.0,
+                                      "later_over_first_prompt_tokens": 0.21}
+    assert costs["allocation"]["later_tasks"] == 1 and costs["allocation"]["later_evaluated_mean"] == 300.0
+    assert "coalition" not in costs and later_prompt_costs(results[:1]) == {}

@@ -108,22 +108,34 @@ def chat_format(backend: Backend, mode: str) -> tuple[ChatFormat | None, str]:
     return ChatFormat(backend.chat_template, bos_token=backend.bos_token, eos_token=backend.eos_token), APPLIED
 
 
-def prompt_tokens(backend: Backend, prompt: Prompt | str, chat: ChatFormat | None) -> tuple[str, list[int], int]:
-    """The text a model is given for ``prompt``, its tokens, and how many of them begin every prompt
-    with the same shared part (0 for a plain string): raw (after the model's BOS token), or as a
-    chat turn, where the template decides about BOS (as llama-cpp-python's chat does).
+def prompt_tokens(backend: Backend, prompt: Prompt | str,
+                  chat: ChatFormat | None) -> tuple[str, list[int], tuple[int, ...]]:
+    """The text a model is given for ``prompt``, its tokens, and where each of its shared prefixes ends
+    in them (none for a plain string): raw (after the model's BOS token), or as a chat turn, where the
+    template decides about BOS (as llama-cpp-python's chat does).
 
-    The shared part is tokenized on its own and the task's part as its continuation, so the shared
-    tokens are the same whatever follows them."""
-    shared, own = (prompt.shared, prompt.own) if isinstance(prompt, Prompt) else ("", prompt)
+    The first prefix is tokenized on its own and each later part as the continuation of what precedes
+    it, so a prefix's tokens are the same whatever follows them."""
+    parts = prompt.parts if isinstance(prompt, Prompt) else (prompt,)
+    prefixes, own = parts[:-1], parts[-1]
     if chat is None:
-        if not shared:
-            return own, backend.tokenize(own, bos=True), 0
-        head = backend.tokenize(shared, bos=True)
-        return shared + own, head + backend.tokenize_continuation(own), len(head)
-    turn = chat.turn(shared + own)
+        if not prefixes:
+            return own, backend.tokenize(own, bos=True), ()
+        tokens, bounds = _prefix_tokens(backend, backend.tokenize(prefixes[0], bos=True), prefixes[1:])
+        return "".join(parts), tokens + backend.tokenize_continuation(own), bounds
+    turn = chat.turn("".join(parts))
     start, tail = backend.tokenize(turn.head, special=True), backend.tokenize(turn.tail, special=True)
-    if shared and turn.body.startswith(shared) and len(turn.body) > len(shared):  # the template kept it as is
-        head = start + backend.tokenize(shared)
-        return turn.text, head + backend.tokenize_continuation(turn.body[len(shared):]) + tail, len(head)
-    return turn.text, start + backend.tokenize(turn.body) + tail, 0
+    shared = "".join(prefixes)
+    if prefixes and turn.body.startswith(shared) and len(turn.body) > len(shared):  # the template kept it as is
+        tokens, bounds = _prefix_tokens(backend, start + backend.tokenize(prefixes[0]), prefixes[1:])
+        return turn.text, tokens + backend.tokenize_continuation(turn.body[len(shared):]) + tail, bounds
+    return turn.text, start + backend.tokenize(turn.body) + tail, ()
+
+
+def _prefix_tokens(backend: Backend, head: list[int], rest: tuple[str, ...]) -> tuple[list[int], tuple[int, ...]]:
+    """The tokens of a prompt's prefixes, given the first's, and the position where each ends."""
+    tokens, bounds = list(head), [len(head)]
+    for part in rest:
+        tokens += backend.tokenize_continuation(part)
+        bounds.append(len(tokens))
+    return tokens, tuple(bounds)

@@ -1,10 +1,12 @@
 """Prompt prefixes evaluated once: their key/value state kept in memory and on disk.
 
 Every prompt of a stage begins with the same examples (see prompts.py), so the
-model's key/value state after them is the same for every task. A backend keeps
-the states it made in memory (bounded in bytes) for the rest of the process,
-and a :class:`PrefixStore` keeps them on disk for the next process: a second
-``plan`` call on the same model starts from the examples' state.
+model's key/value state after them is the same for every task; a decomposition
+then lists its scene's objects, the same for every task on that floor plan. A
+backend keeps the states it made in memory (bounded in bytes) for the rest of
+the process, and a :class:`PrefixStore` keeps them on disk for the next process:
+a second ``plan`` call on the same model starts from the examples' state, and
+on the same floor plan from the scene's.
 
 An entry is keyed by everything the state depends on (the model file's digest,
 the backend and its settings, the prefix's tokens) and holds those tokens and
@@ -76,11 +78,15 @@ class PrefixStore:
             self.rejected += 1
             _unlink(path)
             return None
+        self.touch(key)
+        return state
+
+    def touch(self, key: str) -> None:
+        """Mark an entry recently used: evicted last."""
         try:
-            os.utime(path)  # recently used: evicted last
+            os.utime(self._path(key))
         except OSError:
             pass
-        return state
 
     def save(self, key: str, prefix: Sequence[int], state: bytes) -> bool:
         """Store a state (atomically: a reader sees all of it or nothing), then keep the store in its
@@ -160,6 +166,10 @@ class MemoryStates:
         self._states.move_to_end(key)
         return found[0]
 
+    def touch(self, prefix: Sequence[int]) -> None:
+        if tuple(prefix) in self._states:
+            self._states.move_to_end(tuple(prefix))
+
     def put(self, prefix: Sequence[int], state: Any, size: int) -> None:
         self._states[tuple(prefix)] = (state, size)
         self._states.move_to_end(tuple(prefix))
@@ -168,10 +178,10 @@ class MemoryStates:
 
 
 class PrefixReuse:
-    """What both backends do with a prompt's shared prefix (mixed into each). A backend provides
+    """What both backends do with a prompt's shared prefixes (mixed into each). A backend provides
     ``_states`` (a :class:`MemoryStates`), ``prefix_store`` (None for none), and the hooks below.
 
-    The prompt's own part is always evaluated on a state loaded back from its snapshot, also right
+    Each part after a prefix is always evaluated on a state loaded back from its snapshot, also right
     after the prefix was first evaluated: with a sliding-window model (Gemma-3) a loaded state does
     not give quite the logits of the live cache it was taken from, so loading it every time is what
     makes a task's output the same whichever way the state came (evaluated now, kept, or stored)."""
@@ -180,33 +190,47 @@ class PrefixReuse:
     prefix_store: PrefixStore | None
     n_ctx: int
 
-    def prefill(self, context: Sequence[int], shared: int) -> int:
-        reused = self._load_prefix(context[:shared])
+    def prefill(self, context: Sequence[int], prefixes: Sequence[int]) -> int:
+        reused = self._load_prefixes(context, [end for end in prefixes if 0 < end < min(len(context), self.n_ctx)])
         self._sync(context)
         return reused
 
-    def _load_prefix(self, prefix: Sequence[int]) -> int:
-        """Make the cache hold exactly ``prefix``, loaded from a kept state, the store, or a snapshot taken
-        after evaluating it on its own (then kept). Returns how many tokens were not evaluated now."""
-        prefix = list(prefix)
-        if not prefix or len(prefix) >= self.n_ctx:
+    def _load_prefixes(self, context: Sequence[int], ends: Sequence[int]) -> int:
+        """Make the cache hold ``context[:ends[-1]]``: from the longest of the prefixes ending at ``ends`` that
+        has a kept state (in memory or the store), each longer one then evaluated on its own, snapshotted,
+        loaded back and kept. Returns how many tokens were not evaluated now."""
+        if not ends:
             return 0
-        state, key = self._states.get(prefix), None
-        if state is None and self.prefix_store is not None:
-            key = self._store_key(prefix)
-            state = self.prefix_store.load(key, prefix)
-        if state is not None and self._restore(prefix, state):
+        start, reused = 0, 0
+        for depth in reversed(range(len(ends))):
+            prefix = list(context[: ends[depth]])
+            state = self._states.get(prefix)
+            if state is None and self.prefix_store is not None:
+                state = self.prefix_store.load(self._store_key(prefix), prefix)
+            if state is not None and self._restore(prefix, state):
+                self._states.put(prefix, state, self._state_size(state))
+                self._touch([list(context[:end]) for end in ends[:depth]])
+                start, reused = depth + 1, len(prefix)
+                break
+        else:
+            self._truncate(0)
+        for end in ends[start:]:
+            prefix = list(context[:end])
+            self._evaluate(prefix[len(self._tokens):])
+            state = self._snapshot()
+            if not self._restore(prefix, state):
+                raise ModelError("the backend could not load back the state it had just saved")
             self._states.put(prefix, state, self._state_size(state))
-            return len(prefix)
-        self._truncate(0)
-        self._evaluate(prefix)
-        state = self._snapshot()
-        if not self._restore(prefix, state):
-            raise ModelError("the backend could not load back the state it had just saved")
-        self._states.put(prefix, state, self._state_size(state))
-        if self.prefix_store is not None:
-            self.prefix_store.save(key or self._store_key(prefix), prefix, state)
-        return 0
+            if self.prefix_store is not None:
+                self.prefix_store.save(self._store_key(prefix), prefix, state)
+        return reused
+
+    def _touch(self, prefixes: Sequence[list[int]]) -> None:
+        """Mark shorter prefixes used with a longer one, so that bounded stores keep them as long."""
+        for prefix in prefixes:
+            self._states.touch(prefix)
+            if self.prefix_store is not None:
+                self.prefix_store.touch(self._store_key(prefix))
 
     # hooks
     def _sync(self, context: Sequence[int]) -> None:

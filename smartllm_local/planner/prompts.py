@@ -4,7 +4,8 @@ Prompts are Python source, as in SMART-LLM: the skills as an import line,
 worked examples (each a task description followed by its plan), then the new
 task. The examples come first, always in file order, and the task's own
 details last: a :class:`Prompt` is the part shared by every task of a stage
-(whose key/value state a backend evaluates once) and the task's own part.
+(whose key/value state a backend evaluates once), for a decomposition the
+scene's objects (shared by the tasks on one floor plan), and the task's own part.
 
 Ablations (as in the paper): ``comments=False`` removes the comment lines
 from the examples' code, ``summary=False`` removes the summary block of the
@@ -93,17 +94,19 @@ def load_examples(folder: Path | None = None) -> list[Example]:
 
 @dataclass(frozen=True)
 class Prompt:
-    """A stage's prompt: ``shared`` (its introduction and examples, the same for every task that keeps
-    as many examples) and ``own`` (the task's details). The two part between words (``# Your`` and
-    `` task``), where every tokenizer family splits, so that tokenized apart they give the tokens of
-    the whole."""
+    """A stage's prompt in parts: prefixes shared by ever fewer prompts, then the task's own text.
 
-    shared: str
-    own: str
+    The first part (the introduction and examples) begins every prompt of the stage that keeps as
+    many examples; a decomposition's second part (the scene's object list) is also shared by every
+    task on the same floor plan. A backend keeps the key/value state at the end of each prefix.
+    Parts meet between words (``# Your`` and `` task``), where every tokenizer family splits, so
+    that tokenized apart they give the tokens of the whole."""
+
+    parts: tuple[str, ...]
 
     @property
     def text(self) -> str:
-        return self.shared + self.own
+        return "".join(self.parts)
 
 
 def examples_for(stage: str, examples: Sequence[Example], options: PromptOptions) -> list[Example]:
@@ -191,8 +194,8 @@ def decomposition_prompt(instruction: str, scene: SceneObjects, skills: SkillSet
         objects = _example_scene(ex).python_list(ex.object_types())
         parts.append(f"\n# Example {k}\nobjects = {objects}\n# Task Description: {ex.instruction}\n")
         parts.append(shape(ex.decomposition, options))
-    own = f" task\nobjects = {scene.python_list()}\n# Task Description: {instruction}\n"
-    return Prompt("".join(parts) + "\n# Your", own)
+    site = f" task\nobjects = {scene.python_list()}\n# Task"
+    return Prompt(("".join(parts) + "\n# Your", site, f" Description: {instruction}\n"))
 
 
 def plan_object_types(code: str, scene: SceneObjects) -> list[str]:
@@ -209,7 +212,7 @@ def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects
                      f"objects = {objects}\n# Coalition:\n{ex.coalition}")
     objects = scene.python_list(plan_object_types(decomposed, scene))
     own = f" plan\n{shape(decomposed, options)}{robots_list(team)}objects = {objects}\n# Coalition:\n"
-    return Prompt("".join(parts) + "\n# Your", own)
+    return Prompt(("".join(parts) + "\n# Your", own))
 
 
 def coalition_decisions(coalition: str) -> str:
@@ -234,4 +237,4 @@ def allocation_prompt(decomposed: str, coalition: str | None, team: Sequence[Rob
                      f"{coalition_part}# Allocated plan:\n{allocated}")
     coalition_part = f"# Coalition:\n{coalition_decisions(coalition)}" if options.coalition and coalition else ""
     own = f" plan\n{shape(decomposed, bare)}{robots_list(team)}{coalition_part}# Allocated plan:\n"
-    return Prompt("".join(parts) + "\n# Your", own)
+    return Prompt(("".join(parts) + "\n# Your", own))

@@ -89,12 +89,12 @@ class StageRecord:
 
 @dataclass(frozen=True)
 class Fitted:
-    """A prompt as the model gets it: its text, its tokens (the first ``shared`` of them every task's
-    prompt begins with), and the examples it kept and dropped."""
+    """A prompt as the model gets it: its text, its tokens, where in them each shared prefix ends (the
+    first is what every task's prompt begins with), and the examples it kept and dropped."""
 
     text: str
     tokens: list[int]
-    shared: int = 0
+    prefixes: tuple[int, ...] = ()
     kept: list[Example] = field(default_factory=list)
     dropped: list[Example] = field(default_factory=list)
 
@@ -112,9 +112,9 @@ def fit_prompt(
     """
     kept = list(examples)
     while True:
-        text, tokens, shared = prompt_tokens(backend, build(kept), chat)
+        text, tokens, prefixes = prompt_tokens(backend, build(kept), chat)
         if len(tokens) + output_budget < backend.n_ctx:
-            return Fitted(text, tokens, shared, kept, list(examples[len(kept):]))
+            return Fitted(text, tokens, prefixes, kept, list(examples[len(kept):]))
         if not kept:
             raise UserError(
                 f"the prompt alone ({len(tokens)} tokens) and an output budget of {output_budget} tokens "
@@ -135,11 +135,12 @@ def run_stage(
 ) -> None:
     """Generate a stage's output into ``record`` (constrained, or free with stop strings)."""
     context = list(prompt.tokens)
-    record.prompt, record.prompt_tokens, record.shared_tokens = prompt.text, len(context), prompt.shared
+    record.prompt, record.prompt_tokens = prompt.text, len(context)
+    record.shared_tokens = prompt.prefixes[0] if prompt.prefixes else 0
     record.examples, record.dropped = [e.name for e in prompt.kept], [e.name for e in prompt.dropped]
     record.output_budget = output_budget
     started = time.perf_counter()
-    record.reused_tokens = backend.prefill(context, prompt.shared)
+    record.reused_tokens = backend.prefill(context, prompt.prefixes)
     record.prompt_seconds = time.perf_counter() - started
     if constraint is None:
         result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,

@@ -77,7 +77,7 @@ def test_with_none_the_prompt_goes_in_raw_as_before(smollm2):
     chat, status = chat_format(smollm2, "none")
     assert (chat, status) == (None, OFF)
     prompt = "# Task Description: wash the apple\n"
-    assert prompt_tokens(smollm2, prompt, chat) == (prompt, smollm2.tokenize(prompt, bos=True), 0)
+    assert prompt_tokens(smollm2, prompt, chat) == (prompt, smollm2.tokenize(prompt, bos=True), ())
 
 
 def test_the_context_budget_counts_the_template(smollm2):
@@ -85,7 +85,7 @@ def test_the_context_budget_counts_the_template(smollm2):
     catalogue = load_catalogue()
     planner = Planner(smollm2, catalogue)
     examples = planner.examples
-    build = lambda ex: Prompt("# Examples\n\n", "# Your task\n")  # noqa: E731
+    build = lambda ex: Prompt(("# Examples\n\n", "# Your task\n"))  # noqa: E731
     raw = fit_prompt(build, examples, smollm2, 16).tokens
     wrapped = fit_prompt(build, examples, smollm2, 16, chat).tokens
     assert len(wrapped) > len(raw) + 10
@@ -181,7 +181,7 @@ def test_the_transformers_backend_reads_the_template_and_tokenizes_as_llama_cpp_
         assert hf.chat_template == smollm2.chat_template
         body = "# say <|im_end|> now\n"
         text, tokens, _ = prompt_tokens(hf, body, chat_format(hf, "auto")[0])
-        assert (text, tokens, 0) == prompt_tokens(smollm2, body, chat_format(smollm2, "auto")[0])
+        assert (text, tokens, ()) == prompt_tokens(smollm2, body, chat_format(smollm2, "auto")[0])
         assert tokens.count(special(hf, "<|im_end|>")[0]) == 2  # the system and user turns' ends, not the body's
     finally:
         hf.close()

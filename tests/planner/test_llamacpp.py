@@ -22,6 +22,32 @@ def test_unconstrained_and_constrained_greedy_differ_and_the_grammar_wins(smollm
     assert forced.stop == "line"
 
 
+@pytest.mark.parametrize("choices", [
+    (" Paris.\n", " Rome.\n"),  # the likeliest token is admitted
+    (" London.\n", " Rome.\n"),  # it is not; one of the 64 likeliest is
+    ("zqxj\n", "QQQ\n"),  # none of the 64 likeliest is: the whole vocabulary is masked
+])
+def test_greedy_under_a_grammar_picks_what_a_full_mask_picks(smollm2, choices):
+    """The shortcuts (the likeliest token first, then the 64 likeliest) choose the token the grammar's mask
+    over the whole vocabulary gives, in each of the three ways a choice is made."""
+    import numpy as np
+
+    grammar = Grammar({"root": alt(*choices)})
+    smollm2._sync(smollm2.tokenize(PROMPT, bos=True))
+    logits = smollm2._logits()
+    top = set(np.argsort(-logits)[:64].tolist())
+    sampler = smollm2._grammar_sampler(grammar)
+    try:
+        full = smollm2._masked(sampler, logits)
+        allowed = set(np.flatnonzero(np.isfinite(full)).tolist())
+        way = "first" if int(np.argmax(logits)) in allowed else "top" if allowed & top else "full"
+        assert way == {" Paris.\n": "first", " London.\n": "top", "zqxj\n": "full"}[choices[0]]
+        picked = smollm2._pick(logits, sampler, Sampling(), np.random.default_rng(0))
+        assert picked == int(np.argmax(full))
+    finally:
+        smollm2._lib.llama_sampler_free(sampler)
+
+
 def test_sampling_is_reproducible_and_stays_in_the_grammar(smollm2):
     context = smollm2.tokenize("# a list of fruit:\n", bos=True)
     grammar = Grammar({"root": seq("# ", rep(chars("abcdefghijklmnopqrstuvwxyz "), 1, 30), "\n")})

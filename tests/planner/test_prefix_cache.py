@@ -93,12 +93,14 @@ def test_a_prefix_cache_that_is_a_file_is_exit_2_before_the_model_loads(tmp_path
                    "--prefix-cache", "is an existing file")
 
 
-def test_later_tasks_reuse_the_examples_and_plan_what_they_plan_alone():
+def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone():
     """Gemma-3, a sliding-window model, whose loaded states give other logits than the live cache they
-    were saved from: a task planned after another (its examples' states loaded from memory) writes
-    exactly what it writes alone (evaluated, saved and loaded back)."""
+    were saved from: a task planned after another on the same floor plan (its examples' and scene's
+    states loaded from memory) writes exactly what it writes alone (evaluated, saved and loaded back),
+    and its decomposition evaluates only its instruction."""
     catalogue = load_catalogue()
-    first, second = (find_task(load_tasks(), t) for t in ("kitchen-01", "living-02"))
+    first, second = (find_task(load_tasks(), t) for t in ("living-01", "living-02"))
+    assert first.floor_plan == second.floor_plan
     shared = load_backend("llamacpp", "gemma3-270m", prefix_cache="off")
     try:
         planner = Planner(shared, catalogue)
@@ -113,15 +115,18 @@ def test_later_tasks_reuse_the_examples_and_plan_what_they_plan_alone():
         alone_backend.close()
     assert [r.output for r in after.stages] == [r.output for r in alone.stages] and after.allocated
     assert all(r.reused_tokens == 0 and r.shared_tokens > 0 for r in alone.stages)
-    for earlier, record in zip(before.stages, after.stages):
+    decomposition, *later = zip(before.stages, after.stages)
+    assert decomposition[1].reused_tokens > decomposition[1].shared_tokens > 0
+    assert decomposition[1].prompt_tokens - decomposition[1].reused_tokens < 30  # the instruction alone
+    for earlier, record in later:
         same_examples = earlier.examples == record.examples
         assert record.reused_tokens == (record.shared_tokens if same_examples else 0), record.stage
-    assert after.stages[0].reused_tokens > 0
 
 
 def test_a_second_process_starts_from_the_stored_examples_and_a_damaged_store_is_rebuilt(tmp_path):
-    """SmolLM2 through the CLI: the second ``plan`` evaluates none of the examples, writes the same plan;
-    with every entry cut short, the third evaluates them again, writes the same plan, and stores them anew."""
+    """SmolLM2 through the CLI: the second ``plan`` evaluates none of the examples, nor the scene's objects
+    in its decomposition, and writes the same plan; with every entry cut short, the third evaluates them
+    again, writes the same plan, and stores them anew."""
     states = tmp_path / "states"
 
     def plan(name: str) -> tuple[str, dict[str, dict]]:
@@ -132,12 +137,14 @@ def test_a_second_process_starts_from_the_stored_examples_and_a_damaged_store_is
 
     first, cold = plan("first")
     stored = entries(states)
-    assert len(stored) == 3 and all(t["reused_tokens"] == 0 for t in cold.values())  # one per stage
+    assert len(stored) == 4 and all(t["reused_tokens"] == 0 for t in cold.values())  # per stage, and the scene
     second, warm = plan("second")
     assert second == first
+    decomposition = warm.pop("decomposition")
+    assert decomposition["prompt_tokens"] - decomposition["reused_tokens"] < 40  # the instruction in its chat turn
     assert all(t["reused_tokens"] == t["shared_tokens"] > 0 for t in warm.values()), warm
     for path in stored:
         path.write_bytes(path.read_bytes()[:1000])
     third, rebuilt = plan("third")
     assert third == first and all(t["reused_tokens"] == 0 for t in rebuilt.values())
-    assert [p.stat().st_size > 1000 for p in entries(states)] == [True] * 3
+    assert [p.stat().st_size > 1000 for p in entries(states)] == [True] * 4

@@ -28,26 +28,28 @@ TASKS = ("kitchen-01", "living-01")
 
 
 class Server:
-    """A llama_cpp.server process on a free loopback port; its log says which requests it answered."""
+    """A server process on a free loopback port (``command`` with ``--host`` and ``--port`` added), ready
+    once ``ready`` answers; its log says which requests it answered. By default llama_cpp.server."""
 
-    def __init__(self, log: Path, threads: int = 1):
+    def __init__(self, log: Path, threads: int = 1, command: list[str] | None = None, ready: str = "/v1/models"):
         with socket.socket() as probe:
             probe.bind(("127.0.0.1", 0))
             self.port = probe.getsockname()[1]
         self.url, self.log = f"http://127.0.0.1:{self.port}", log
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "llama_cpp.server", "--model", str(resolve_gguf(None)), "--host", "127.0.0.1",
-             "--port", str(self.port), "--n_ctx", "4096", "--n_threads", str(threads), "--logits_all", "False"],
-            stdout=open(log, "w"), stderr=subprocess.STDOUT, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+        command = command or [sys.executable, "-m", "llama_cpp.server", "--model", str(resolve_gguf(None)),
+                              "--n_ctx", "4096", "--n_threads", str(threads), "--logits_all", "False"]
+        self.process = subprocess.Popen([*command, "--host", "127.0.0.1", "--port", str(self.port)],
+                                        stdout=open(log, "w"), stderr=subprocess.STDOUT,
+                                        env={**os.environ, "PYTHONUNBUFFERED": "1"})
         deadline = time.monotonic() + 120
         while True:
             try:
-                urllib.request.urlopen(f"{self.url}/v1/models", timeout=2).read()
+                urllib.request.urlopen(f"{self.url}{ready}", timeout=2).read()
                 return
             except OSError:
                 if self.process.poll() is not None or time.monotonic() > deadline:
                     self.stop()
-                    raise RuntimeError(f"llama_cpp.server did not start: {log.read_text()[-2000:]}")
+                    raise RuntimeError(f"{command[0]} did not start: {log.read_text()[-2000:]}")
                 time.sleep(0.5)
 
     def answered(self, request: str = "POST /v1/completions") -> int:
@@ -132,6 +134,26 @@ def test_a_stalled_server_fails_the_task_within_the_timeout(server, tmp_path):
     assert "gave no answer in 4 s" in error and "--server-timeout" in error, error
 
 
+def test_ctrl_c_ends_a_run_whose_workers_wait_on_a_stalled_server_at_once(server, tmp_path):
+    """Both workers wait on a server that stopped answering, with the default 300 s timeout: Ctrl-C ends
+    the run in seconds, and no task is scored with the error the interruption caused."""
+    out = tmp_path / "run"
+    args = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--method", "decomp-rule", "--backend",
+            "server", "--endpoint", server.url, "--workers", "2", "--out", str(out),
+            *(a for t in TASKS for a in ("--task", t))]
+    run = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    server.wait_for(1)  # a completion answered: both workers are planning
+    os.kill(server.process.pid, signal.SIGSTOP)
+    time.sleep(1)
+    run.send_signal(signal.SIGINT)
+    interrupted = time.monotonic()
+    _, stderr = run.communicate(timeout=120)
+    assert time.monotonic() - interrupted < 15, stderr
+    assert run.returncode == 130 and "interrupted: 0 of 2 tasks scored" in stderr, stderr
+    assert "Traceback" not in stderr and not (out / "results.jsonl").exists()
+
+
 def test_server_options_are_checked_before_anything_runs(tmp_path):
     with socket.socket() as probe:  # a port where nothing listens
         probe.bind(("127.0.0.1", 0))
@@ -161,32 +183,18 @@ LLAMA_SERVER = os.environ.get("SMARTLLM_LLAMA_SERVER")  # a llama-server binary 
 def test_llama_server_slots_plan_from_token_ids_with_the_servers_own_vocabulary(tmp_path):
     """As from another machine: the served file is gone from this one once the server has loaded it, so
     the tokenizer and chat template are the server's own."""
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
     log, served = tmp_path / "llama-server.log", tmp_path / "served.gguf"
     served.symlink_to(resolve_gguf(None))
-    process = subprocess.Popen([LLAMA_SERVER, "-m", str(served), "-c", "8192", "-np", "2", "-t", "2",
-                                "--host", "127.0.0.1", "--port", str(port)], stdout=open(log, "w"),
-                               stderr=subprocess.STDOUT)
+    server = Server(log, command=[LLAMA_SERVER, "-m", str(served), "-c", "8192", "-np", "2", "-t", "2"], ready="/health")
     try:
-        deadline = time.monotonic() + 120
-        while True:
-            try:
-                urllib.request.urlopen(f"http://127.0.0.1:{port}/health", timeout=2).read()
-                break
-            except OSError:
-                assert process.poll() is None and time.monotonic() < deadline, log.read_text()[-2000:]
-                time.sleep(0.5)
         served.unlink()
         out = tmp_path / "run"
         tasks = (*TASKS, "kitchen-02")
-        run = cli("benchmark", "run", "--method", "decomp-rule", "--backend", "server", "--endpoint",
-                  f"http://127.0.0.1:{port}", "--workers", "2", "--out", out, *(a for t in tasks for a in ("--task", t)))
+        run = cli("benchmark", "run", "--method", "decomp-rule", "--backend", "server", "--endpoint", server.url,
+                  "--workers", "2", "--out", out, *(a for t in tasks for a in ("--task", t)))
         assert run.returncode == 0, run.stderr
     finally:
-        process.kill()
-        process.wait(timeout=30)
+        server.stop()
     results = lines(out)
     assert set(results) == set(tasks) and not any(line.get("error") for line in results.values())
     for task in tasks:

@@ -176,12 +176,14 @@ def test_the_transformers_backend_spells_llama2_continuations_exactly(tmp_path):
 
 def test_a_prompt_tokenized_in_its_two_parts_is_tokenized_as_a_whole(vocab):
     """Every stage's prompt, for tasks of several scenes and teams: the shared examples tokenized on
-    their own and the task's part as their continuation give the tokens of the whole prompt, and the
-    shared tokens are the same for every task (what a kept prefix state is keyed by)."""
+    their own and each later part as the continuation give the tokens of the whole prompt, and the
+    shared tokens are the same for every task, a decomposition's scene part for every task on its
+    floor plan (what a kept prefix state is keyed by)."""
     catalogue, examples, options = load_catalogue(), load_examples(), PromptOptions()
     decomposition, coalition = examples[0].decomposition, examples[0].coalition
     shared_tokens: dict[str, set[tuple[int, ...]]] = {}
-    for task in load_tasks()[::9]:
+    site_tokens: dict[int, set[tuple[int, ...]]] = {}
+    for task in load_tasks()[::5]:
         scene, team = scene_objects(task.floor_plan), catalogue.team(task.robots)
         prompts = {
             "decomposition": decomposition_prompt(task.instruction, scene, catalogue.skills,
@@ -192,8 +194,15 @@ def test_a_prompt_tokenized_in_its_two_parts_is_tokenized_as_a_whole(vocab):
                                             examples_for("allocation", examples, options), options),
         }
         for stage, prompt in prompts.items():
-            text, tokens, shared = prompt_tokens(vocab, prompt, None)
+            text, tokens, prefixes = prompt_tokens(vocab, prompt, None)
             assert text == prompt.text and tokens == vocab.tokenize(text, bos=True), (vocab.family, task.id, stage)
+            shared = prefixes[0]
             assert vocab.detokenize(tokens[:shared]).endswith("# Your") and 0 < shared < len(tokens)
             shared_tokens.setdefault(stage, set()).add(tuple(tokens[:shared]))
+            if stage == "decomposition":  # then the scene's objects, ending before the instruction
+                assert vocab.detokenize(tokens[shared:prefixes[1]]) == f" task\nobjects = {scene.python_list()}\n# Task"
+                site_tokens.setdefault(task.floor_plan, set()).add(tuple(tokens[:prefixes[1]]))
+            else:
+                assert len(prefixes) == 1
     assert all(len(kinds) == 1 for kinds in shared_tokens.values()), vocab.family
+    assert all(len(kinds) == 1 for kinds in site_tokens.values()) and len(site_tokens) > 1, vocab.family

@@ -50,11 +50,12 @@ class Backend(Protocol):
     def tokenize_continuation(self, text: str) -> list[int]:
         """Tokens that spell exactly ``text`` written after a context (see :func:`continuation_tokens`)."""
 
-    def prefill(self, context: Sequence[int], shared: int) -> int:
-        """Evaluate a prompt before generating. Its first ``shared`` tokens (a stage's examples, the same
-        for every task) come from a state kept from an earlier task or process where there is one, and
-        are otherwise evaluated on their own and kept, so that reuse changes no logit. Returns how many
-        tokens were reused."""
+    def prefill(self, context: Sequence[int], prefixes: Sequence[int]) -> int:
+        """Evaluate a prompt before generating. ``prefixes`` are where its shared prefixes end, shortest
+        first (a stage's examples, the same for every task; then a decomposition's scene, the same for
+        every task on the floor plan). The longest prefix with a state kept from an earlier task or
+        process starts from that state; each longer one is evaluated on its own and kept, so that reuse
+        changes no logit. Returns how many tokens were reused."""
 
     def generate(
         self,

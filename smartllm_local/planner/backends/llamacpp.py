@@ -3,8 +3,10 @@
 llama-cpp-python's sampler chain applies a grammar to the whole vocabulary at
 every step: ~60 ms per token for Gemma-3's 262k tokens on two cores. Here the
 grammar is asked first only about the likeliest tokens: greedy decoding takes
-the best of the top 64 that the grammar admits (the same token a full mask
-would give, since any admitted token outside the top 64 scores lower), and
+the likeliest token if the grammar admits it, else the best of the top 64 that
+it admits (the same token a full mask would give, since any admitted token
+outside the top 64 scores lower; finding the 64 costs 0.5 ms a step on
+SmolLM2's vocabulary and 2.8 ms on Gemma-3's, so it is done only then), and
 sampling draws from the full distribution and keeps the draw if the grammar
 admits it (rejection sampling, which gives exactly the masked distribution).
 Only when that fails is the full vocabulary masked.
@@ -235,8 +237,9 @@ class LlamaCppBackend(PrefixReuse):
 
     def _pick(self, logits: np.ndarray, sampler, sampling: Sampling, rng: np.random.Generator) -> int:
         if sampling.temperature <= 0:
-            if sampler is None:
-                return int(np.argmax(logits))
+            best = int(np.argmax(logits))
+            if sampler is None or self._allowed(sampler, best):
+                return best
             top = np.argpartition(-logits, _TOP)[:_TOP]
             top = top[np.argsort(-logits[top], kind="stable")]
             self._few["id"] = top

@@ -25,6 +25,7 @@ fails with that message and a benchmark run goes on.
 
 from __future__ import annotations
 
+import functools
 import http.client
 import json
 import socket
@@ -70,23 +71,25 @@ class Connection:
         self._host, self._port, self._https = parts.hostname, parts.port, parts.scheme == "https"
         self._base = parts.path.rstrip("/")
         self._conn: http.client.HTTPConnection | None = None
+        self._closed = False  # by close(): no request is sent again
+        self._lock = threading.Lock()
 
     def call(self, method: str, path: str, body: dict[str, Any] | None = None) -> tuple[int, Any]:
         """The status and the decoded JSON answer; a dropped kept-alive connection is opened again once."""
         for attempt in (0, 1):
-            conn = self._conn or self._open()
             try:
+                conn = self._conn or self._open()
                 conn.request(method, self._base + path, body=None if body is None else json.dumps(body),
                              headers={"Content-Type": "application/json"})
                 answer = conn.getresponse()
                 raw = answer.read()
                 break
             except (socket.timeout, TimeoutError) as exc:
-                self.close()
+                self._drop()
                 raise ServerError(f"the server at {self.url} gave no answer in {self.timeout:g} s "
                                   "(stalled or overloaded); raise --server-timeout for a slow model") from exc
             except (ConnectionError, http.client.HTTPException, OSError) as exc:
-                self.close()
+                self._drop()
                 if attempt == 0 and isinstance(exc, (http.client.RemoteDisconnected, BrokenPipeError,
                                                      ConnectionResetError)):
                     continue  # the server closed an idle kept-alive connection
@@ -98,13 +101,32 @@ class Connection:
 
     def _open(self) -> http.client.HTTPConnection:
         kind = http.client.HTTPSConnection if self._https else http.client.HTTPConnection
-        self._conn = kind(self._host, self._port, timeout=self.timeout)
-        return self._conn
+        conn = kind(self._host, self._port, timeout=self.timeout)
+        conn.connect()  # its socket exists before close() can see it
+        with self._lock:
+            if not self._closed:
+                self._conn = conn
+                return conn
+        conn.close()
+        raise ServerError(f"the connection to the server at {self.url} was closed (the run is ending)")
 
     def close(self) -> None:
-        if self._conn is not None:
-            self._conn.close()
-            self._conn = None
+        """Close the connection for good; a request waiting on it in another thread (a worker, when Ctrl-C
+        ends a run) fails at once rather than at the timeout, and is not sent again."""
+        with self._lock:
+            self._closed = True
+        self._drop()
+
+    def _drop(self) -> None:
+        with self._lock:
+            conn, self._conn = self._conn, None
+        if conn is not None:
+            if conn.sock is not None:
+                try:
+                    conn.sock.shutdown(socket.SHUT_RDWR)  # wakes a thread waiting on it
+                except OSError:
+                    pass
+            conn.close()
 
 
 class Dialect(Protocol):
@@ -253,9 +275,13 @@ class RemoteVocabulary:
     def text_of(self, tokens: Sequence[int]) -> str:
         return self.detokenize(tokens)
 
-    def bos_added(self) -> int | None:
+    @functools.cached_property
+    def _bos(self) -> int | None:
         with_bos, without = self.tokenize("a", bos=True), self.tokenize("a")
         return with_bos[0] if len(with_bos) > len(without) else None
+
+    def bos_added(self) -> int | None:
+        return self._bos  # asked once per worker: the server is asked once
 
 
 def served_vocabulary(model: str | None, props: dict[str, Any], connection: Connection,
@@ -299,7 +325,7 @@ class ServerBackend:
     def tokenize_continuation(self, text: str) -> list[int]:
         return self.vocabulary.tokenize_continuation(text)
 
-    def prefill(self, context: Sequence[int], shared: int) -> int:
+    def prefill(self, context: Sequence[int], prefixes: Sequence[int]) -> int:
         """llama-server evaluates the prompt first (``n_predict`` 0) and says how much of it its cache held;
         llama-cpp-python's server cannot be asked, and evaluates it with the first line."""
         if not self.dialect.takes_tokens:
@@ -387,7 +413,8 @@ def connect(endpoints: Sequence[str], model: str | None, *, workers: int = 1, n_
         except ServerError as exc:
             raise UserError(f"--endpoint {url}: {exc}") from exc
         vocabulary = vocabulary or served_vocabulary(model, props, connection, dialect)
-        check_vocabulary(vocabulary, connection, dialect)
+        if not (isinstance(vocabulary, RemoteVocabulary) and vocabulary.connection.url == connection.url):
+            check_vocabulary(vocabulary, connection, dialect)  # not a server against its own tokenizer
         connection.close()
         slot_ctx = (props.get("default_generation_settings") or {}).get("n_ctx")
         if isinstance(slot_ctx, int) and slot_ctx < n_ctx:
