@@ -174,7 +174,7 @@ def test_the_transformers_backend_spells_llama2_continuations_exactly(tmp_path):
     assert backend.tokenize("# Task\n", bos=True)[0] == tokenizer.bos_token_id
 
 
-def test_a_prompt_tokenized_in_its_two_parts_is_tokenized_as_a_whole(vocab):
+def test_a_prompt_tokenized_in_its_parts_is_tokenized_as_a_whole(vocab):
     """Every stage's prompt, for tasks of several scenes and teams: the shared examples tokenized on
     their own and each later part as the continuation give the tokens of the whole prompt, and the
     shared tokens are the same for every task, a decomposition's scene part for every task on its
