@@ -32,6 +32,7 @@ _benchmark.app.command("run")(_plan.benchmark_run)
 app.command("plan")(_plan.plan_command)
 app.command("validate")(_plans.validate)
 app.command("execute")(_plans.execute)
+app.command("dispatch")(_plans.dispatch)
 app.command("bench")(_bench.bench_command)
 
 

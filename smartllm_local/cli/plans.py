@@ -1,4 +1,4 @@
-"""``smartllm-local validate`` and ``smartllm-local execute``: check and run plan files."""
+"""``smartllm-local validate``, ``execute`` and ``dispatch``: check plan files, run them in AI2-THOR or on a lab's robots."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import typer
 
 from ..errors import UserError
 from ..executor import run_plan
+from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..files import check_output_file, read_json, write_json
 from ..plan_language import read_plan
 from ..robots import load_catalogue, parse_robot_ids
@@ -114,3 +115,33 @@ def execute(
     for description, ok in scores.conditions:
         typer.echo(f"  [{'x' if ok else ' '}] {description}")
     typer.echo(f"SR {fmt(scores.SR)}  TCR {fmt(scores.TCR)}  GCR {fmt(scores.GCR)}  RU {fmt(scores.RU)}  Exe {fmt(scores.Exe)}")
+
+
+def dispatch(
+    plan: Path = typer.Argument(..., help="The allocated plan file (.py)."),
+    functions: Path = typer.Argument(..., help="The dispatch file (TOML): the module:function carrying out each skill."),
+    robots: str = typer.Option(..., help="The team as catalogue ids, e.g. 1,2,3; robots[i] is the i-th."),
+    trace: Optional[Path] = typer.Option(None, help="Write every action to this JSON file."),
+    catalogue: Optional[Path] = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json)."),
+) -> None:
+    """Run a plan on real robots: each skill call goes to the lab's own function for that skill.
+
+    Exits 0 when every action succeeded, 1 when one failed (raised, returned False or timed out)."""
+    if trace is not None:
+        check_output_file(trace, "--trace")
+    cat = load_catalogue(catalogue)
+    team_ids = parse_robot_ids(robots)
+    team = cat.team(team_ids)
+    parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team))
+    execution = dispatch_plan(parsed, team, load_dispatch(functions, cat.skills), skills=cat.skills)
+    if trace is not None:
+        write_json(trace, {"plan": str(plan), "dispatch": str(functions), "robots": team_ids,
+                           "transitions": execution.transitions, "ticks": execution.ticks,
+                           "actions": [e.as_dict() for e in execution.trace]})
+    typer.echo(f"{plan} with robots {team_ids}: {execution.succeeded}/{execution.attempted} actions succeeded "
+               f"in {execution.ticks} ticks, {execution.transitions} transition(s)")
+    for entry in execution.trace:
+        if not entry.success:
+            typer.echo(f"  tick {entry.tick}: {entry.skill}{tuple(entry.objects)} by {entry.robots} failed: {entry.error}")
+    if execution.succeeded < execution.attempted or execution.truncated:
+        raise typer.Exit(1)

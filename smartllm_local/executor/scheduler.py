@@ -21,15 +21,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Iterator, Sequence
+from typing import Any, Iterator, Protocol, Sequence
 
 from ..errors import UserError
 from ..plan_language.ir import (
     Call, Function, Join, NewThread, Plan, RobotIndexError, SkillCall, Sleep, Start, bind, resolve_robots,
 )
 from ..robots import Robot
-from ..skills import DEFAULT_SKILL_SET, SkillSet
-from .team_actions import TeamWorld
+from ..skills import DEFAULT_SKILL_SET, Skill, SkillSet
+from .team_actions import Outcome, TeamWorld
 
 DEFAULT_MAX_TICKS = 20_000
 Env = dict[str, tuple[int, ...]]
@@ -135,11 +135,16 @@ def execute(
     Raises:
         UserError: the plan is decomposed (it names no robots) or names robots outside the team.
     """
+    check_team(plan, len(team))
+    names = {name for call in plan.skill_calls() for name in call.objects} if object_filter else None
+    return run(plan, TeamWorld(controller, team, skills, focus=names), team, skills=skills, max_ticks=max_ticks)
+
+
+def check_team(plan: Plan, team_size: int) -> None:
+    """Refuse, before anything runs, a decomposed plan or one naming robots outside the team (a plan
+    validated without the team may still name robots it does not have)."""
     if plan.form != "allocated":
         raise UserError("only allocated plans (whose skill calls name robots) can be executed")
-    team_size = len(team)
-    # Resolve every robot reference before anything runs: a plan validated without the team
-    # (team_size=None) may still name robots it does not have.
     try:
         for step in plan.main:
             if isinstance(step, (Call, NewThread)):
@@ -147,8 +152,27 @@ def execute(
                 _robots_used(plan, fn, bind(fn, step.args, {}, team_size), team_size)
     except RobotIndexError as exc:
         raise UserError(f"the plan does not fit this team of {team_size}: {exc.message}") from None
-    names = {name for call in plan.skill_calls() for name in call.objects} if object_filter else None
-    world = TeamWorld(controller, team, skills, focus=names)
+
+
+class World(Protocol):
+    """What carries out a plan's skill calls: the simulated team (:class:`TeamWorld`) or a lab's own
+    code (:class:`~.dispatch.DispatchWorld`)."""
+
+    def perform_all(self, steps: Sequence[tuple[Skill, Sequence[str], Sequence[int]]]) -> list[Outcome]:
+        """Carry out one tick's skill calls (skill, object names, team slots), in launch order."""
+
+    def release(self) -> None:
+        """The run is over."""
+
+    @property
+    def objects(self) -> list[dict[str, Any]]:
+        """The world's objects as the run left them (AI2-THOR's metadata; [] where unknown)."""
+
+
+def run(plan: Plan, world: World, team: Sequence[Robot], *, skills: SkillSet = DEFAULT_SKILL_SET,
+        max_ticks: int = DEFAULT_MAX_TICKS) -> Execution:
+    """Run a checked allocated plan (see :func:`check_team`) with ``world`` carrying out its steps."""
+    team_size = len(team)
     trace: list[TraceEntry] = []
     pending: list[_Task] = []
     running: list[_Task] = []
@@ -212,6 +236,7 @@ def execute(
                 claimed.update(task.robots)
                 pending.remove(task)
                 running.append(task)
+        acting: list[tuple[str, SkillCall, tuple[int, ...]]] = []
         for task in list(running):
             step = task.advance()
             if task.upcoming is _END:
@@ -222,12 +247,12 @@ def execute(
                 task.began_at = tick
                 begin_ticks.add(tick)
                 starts.append((task.name, tick))
-            if step is None:
-                continue
-            call, members = step
-            outcome = world.perform(skills[call.skill], call.objects, members)
+            if step is not None:
+                acting.append((task.name, *step))
+        outcomes = world.perform_all([(skills[call.skill], call.objects, members) for _, call, members in acting])
+        for (name, call, members), outcome in zip(acting, outcomes):
             trace.append(TraceEntry(
-                tick=tick, subtask=task.name, robots=[team[m].id for m in members], skill=call.skill,
+                tick=tick, subtask=name, robots=[team[m].id for m in members], skill=call.skill,
                 objects=list(call.objects), action=outcome.action, object_id=outcome.object_id,
                 success=outcome.success, error=outcome.error,
             ))

@@ -188,6 +188,10 @@ class TeamWorld:
 
     # ---------------------------------------------------------------- acting
 
+    def perform_all(self, steps: Sequence[tuple[Skill, Sequence[str], Sequence[int]]]) -> list[Outcome]:
+        """One tick's steps, one after another in launch order (a later step sees what earlier ones did)."""
+        return [self.perform(*step) for step in steps]
+
     def perform(self, skill: Skill, objects: Sequence[str], members: Sequence[int]) -> Outcome:
         """Run one skill call by the team members ``members`` (team indices)."""
         names = ", ".join(self.team[m].name for m in members)
