@@ -13,6 +13,7 @@ import typer
 
 from ..errors import UserError
 from ..evaluation import execute_and_score, run_benchmark
+from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..results import summary_table, variability_table
 from ..files import check_output_folder, write_atomic
 from ..methods import METHODS, make_method
@@ -28,6 +29,7 @@ from ..robots import default_catalogue_path, load_catalogue, parse_robot_ids
 from ..run_store import RunStore
 from ..tasks import CATEGORIES, check_category, default_task_files, find_task, load_tasks
 from ..world.scenes import floor_plan_name
+from .plans import dispatch_report, dispatch_succeeded
 from .progress import RunProgress
 
 MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
@@ -134,6 +136,9 @@ def plan_command(
     task: Optional[str] = typer.Option(None, help="Plan this task of --tasks, with its floor plan and robots."),
     out: Optional[Path] = typer.Option(None, help="Write prompts, grammars, raw outputs and timings here."),
     execute: bool = typer.Option(False, "--execute", help="Run the plan in AI2-THOR and print the metrics."),
+    dispatch: Optional[Path] = typer.Option(None, "--dispatch", metavar="LAB.toml", help=(
+        "Run the plan on the lab's robots: each skill call goes to the function this dispatch file names "
+        "for it (see smartllm-local dispatch); exit 1 if an action failed.")),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     catalogue: Optional[Path] = _CATALOGUE,
     thor_build: Optional[Path] = _THOR_BUILD,
@@ -177,7 +182,15 @@ def plan_command(
             raise UserError('plan needs an instruction, --floor-plan and --robots (or --task ID), e.g. '
                             'smartllm-local plan "Put the apple in the fridge" --floor-plan 6 --robots 1,2')
         scene, team_ids = floor_plan_name(floor_plan), parse_robot_ids(robots)
-    cat.team(team_ids)
+    team = cat.team(team_ids)
+    if execute and dispatch is not None:
+        raise UserError("give --execute (in AI2-THOR) or --dispatch (on the lab's robots), not both")
+    functions = load_dispatch(dispatch, cat.skills) if dispatch is not None else None
+    if functions is not None:  # the grammars offer every skill of the team: each needs its function
+        missing = sorted({skill for robot in team for skill in robot.skills} - set(functions.functions))
+        if missing:
+            raise UserError(f"the team's robots have skill(s) {', '.join(missing)}, which the dispatch file "
+                            f"{dispatch} names no function for; add them under [skills]")
     planner = options.planners(cat)[0]
     try:
         result = planner.plan(instruction, scene, team_ids)
@@ -189,9 +202,15 @@ def plan_command(
     if execute and result.plan is not None and not result.error:
         scores = execute_and_score(result, goals, cat, trans=trans, max_trans=max_trans,
                                    build=str(thor_build) if thor_build else None)
+    dispatched = None
+    if functions is not None and result.plan is not None and not result.plan.is_refusal and not result.error:
+        dispatched = dispatch_plan(result.plan, team, functions, skills=cat.skills)
     extra = {"model": planner.backend.model, "backend": planner.backend.name, "chat_template": planner.chat_status}
     if scores is not None:
         extra["metrics"] = scores.metrics()
+    if dispatched is not None:
+        extra["dispatch"] = {"attempted": dispatched.attempted, "succeeded": dispatched.succeeded,
+                             "actions": [e.as_dict() for e in dispatched.trace]}
     if out is not None:
         write_artifacts(result, out, extra)
     if as_json:
@@ -205,7 +224,9 @@ def plan_command(
                 typer.echo(f"  [{'x' if ok else ' '}] {description}")
             typer.echo(f"SR {fmt(scores.SR)}  TCR {fmt(scores.TCR)}  GCR {fmt(scores.GCR)}  "
                        f"RU {fmt(scores.RU)}  Exe {fmt(scores.Exe)}  transitions {scores.transitions}")
-    if result.error:
+        if dispatched is not None:
+            typer.echo("dispatched: " + "\n".join(dispatch_report(dispatched)))
+    if result.error or (dispatched is not None and not dispatch_succeeded(dispatched)):
         raise typer.Exit(1)
 
 

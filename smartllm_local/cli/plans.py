@@ -9,7 +9,7 @@ from typing import Optional
 import typer
 
 from ..errors import UserError
-from ..executor import run_plan
+from ..executor import Execution, run_plan
 from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..files import check_output_file, read_json, write_json
 from ..plan_language import read_plan
@@ -138,10 +138,18 @@ def dispatch(
         write_json(trace, {"plan": str(plan), "dispatch": str(functions), "robots": team_ids,
                            "transitions": execution.transitions, "ticks": execution.ticks,
                            "actions": [e.as_dict() for e in execution.trace]})
-    typer.echo(f"{plan} with robots {team_ids}: {execution.succeeded}/{execution.attempted} actions succeeded "
-               f"in {execution.ticks} ticks, {execution.transitions} transition(s)")
-    for entry in execution.trace:
-        if not entry.success:
-            typer.echo(f"  tick {entry.tick}: {entry.skill}{tuple(entry.objects)} by {entry.robots} failed: {entry.error}")
-    if execution.succeeded < execution.attempted or execution.truncated:
+    typer.echo(f"{plan} with robots {team_ids}: " + "\n".join(dispatch_report(execution)))
+    if not dispatch_succeeded(execution):
         raise typer.Exit(1)
+
+
+def dispatch_report(execution: Execution) -> list[str]:
+    """How a dispatched run went: a summary line, then each failed action."""
+    return [f"{execution.succeeded}/{execution.attempted} actions succeeded in {execution.ticks} ticks, "
+            f"{execution.transitions} transition(s)"] + [
+        f"  tick {e.tick}: {e.skill}{tuple(e.objects)} by {e.robots} failed: {e.error}"
+        for e in execution.trace if not e.success]
+
+
+def dispatch_succeeded(execution: Execution) -> bool:
+    return execution.succeeded == execution.attempted and not execution.truncated

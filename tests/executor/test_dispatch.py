@@ -161,3 +161,30 @@ def test_the_dispatch_command_runs_a_plan_file_on_the_lab_s_functions(tmp_path, 
     assert run.returncode == 2 and run.stderr.startswith("error: cannot read the dispatch file missing.toml")
     run = _cli(tmp_path, "plan.py", "working.toml", "--robots", "1")
     assert run.returncode == 2 and "error:" in run.stderr and "Traceback" not in run.stderr
+
+
+def test_plan_dispatch_runs_the_model_s_plan_on_the_lab_s_functions(tmp_path, catalogue):
+    """A plan written by the embedded model goes straight to the lab's functions: one call per action."""
+    skills = "\n".join(f'{name} = "tests.executor.lab_robots:act"' for name in catalogue.skills)
+    (tmp_path / "all.toml").write_text(f"timeout = 5\n[skills]\n{skills}\n", encoding="utf-8")
+    (tmp_path / "some.toml").write_text(DISPATCH.format(timeout=5, open="open_it"), encoding="utf-8")
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": str(root), "LAB_ROBOTS_LOG": str(tmp_path / "calls.jsonl")}
+
+    def plan(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([SCRIPT, "plan", "--task", "kitchen-01", "--prefix-cache", "off", *args], cwd=tmp_path,
+                              env=env, capture_output=True, text=True, timeout=600)
+
+    run = plan("--dispatch", "all.toml", "--json")
+    assert run.returncode in (0, 1), run.stderr
+    report = json.loads(run.stdout)
+    actions = report["dispatch"]["actions"]
+    logged = [json.loads(line) for line in (tmp_path / "calls.jsonl").read_text().splitlines()]
+    assert len(actions) == len(logged) >= 1 and all(a["success"] for a in actions)
+    assert sorted(map(tuple, (c["objects"] for c in logged))) == sorted(tuple(a["objects"]) for a in actions)
+    assert run.returncode == 0
+
+    run = plan("--dispatch", "some.toml")  # kitchen-01's robot has skills this file leaves out
+    assert run.returncode == 2 and "names no function for" in run.stderr and "[skills]" in run.stderr
+    run = plan("--dispatch", "all.toml", "--execute")
+    assert run.returncode == 2 and "not both" in run.stderr
