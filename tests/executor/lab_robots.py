@@ -48,6 +48,10 @@ def open_it(robots, target):
 
 
 def hang(robots, target):
+    log = os.environ.get("LAB_ROBOTS_HANGING")
+    if log:  # says that the call has begun
+        with open(log, "w", encoding="utf-8") as handle:
+            handle.write(target)
     time.sleep(30)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import time
 from pathlib import Path
@@ -188,3 +189,25 @@ def test_plan_dispatch_runs_the_model_s_plan_on_the_lab_s_functions(tmp_path, ca
     assert run.returncode == 2 and "names no function for" in run.stderr and "[skills]" in run.stderr
     run = plan("--dispatch", "all.toml", "--execute")
     assert run.returncode == 2 and "not both" in run.stderr
+
+
+def test_ctrl_c_ends_a_run_waiting_on_a_hanging_action_at_once_and_writes_nothing(tmp_path):
+    (tmp_path / "plan.py").write_text(TEAM_PLAN, encoding="utf-8")
+    (tmp_path / "lab.toml").write_text(DISPATCH.format(timeout=600, open="hang"), encoding="utf-8")
+    root = Path(__file__).resolve().parents[2]
+    began = tmp_path / "hanging"
+    env = {**os.environ, "PYTHONPATH": str(root), "LAB_ROBOTS_HANGING": str(began)}
+    run = subprocess.Popen([SCRIPT, "dispatch", "plan.py", "lab.toml", "--robots", "1,2", "--trace", "trace.json"],
+                           cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not began.exists():  # the run waits on OpenObject, which will not return for 30 s
+            assert run.poll() is None and time.monotonic() < deadline, run.communicate()
+            time.sleep(0.05)
+        run.send_signal(signal.SIGINT)
+        sent = time.monotonic()
+        run.communicate(timeout=20)
+        assert run.returncode == 130 and time.monotonic() - sent < 5
+    finally:
+        run.kill()
+    assert not (tmp_path / "trace.json").exists()
