@@ -197,8 +197,11 @@ def test_ctrl_c_ends_a_run_waiting_on_a_hanging_action_at_once_and_writes_nothin
     root = Path(__file__).resolve().parents[2]
     began = tmp_path / "hanging"
     env = {**os.environ, "PYTHONPATH": str(root), "LAB_ROBOTS_HANGING": str(began)}
+    # SIGINT as a terminal delivers it: a test run in the background (as CI may be) has it ignored, and
+    # the child would inherit that
     run = subprocess.Popen([SCRIPT, "dispatch", "plan.py", "lab.toml", "--robots", "1,2", "--trace", "trace.json"],
-                           cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                           cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + 120
         while not began.exists():  # the run waits on OpenObject, which will not return for 30 s
