@@ -18,7 +18,9 @@ from statistics import mean
 from typing import Any, Iterable, Sequence
 
 from .errors import UserError
-from .executor import Execution, run_plan
+from .domain import Domain
+from .executor import Execution, run_plan, run_site_plan
+from .executor.site import unattainable
 from .plan_language import Plan, read_plan
 from .robots import Catalogue, load_catalogue, team_skills
 from .scoring import Scores, score_execution
@@ -54,32 +56,38 @@ def check_reference_plans(
     *,
     build: str | None = None,
     catalogue: Catalogue | None = None,
+    domain: Domain | None = None,
 ) -> list[ReferenceResult]:
-    """Run every feasible task's reference plan; check every infeasible task's missing skills.
+    """Run every feasible task's reference plan (in AI2-THOR, or on a site domain's site); check that every
+    infeasible task's team lacks its missing skills (and, on a site, cannot meet some goal condition).
 
     A missing or invalid plan is a failed result and the check goes on.
 
     Raises:
         WorldError: the AI2-THOR process failed (no later run could be trusted).
     """
-    catalogue = catalogue or load_catalogue()
-    folder = Path(plans_dir) if plans_dir is not None else default_plans_dir()
+    site = domain if domain is not None and not domain.is_household else None
+    catalogue = catalogue or (domain.catalogue if domain is not None else load_catalogue())
+    folder = Path(plans_dir) if plans_dir is not None else (domain.plans_dir() if domain else default_plans_dir())
     results: list[ReferenceResult] = []
     controller = None
     try:
         for task in tasks:
             if not task.feasible:
-                results.append(_check_infeasible(task, catalogue))
+                results.append(_check_infeasible(task, catalogue, site))
                 continue
-            plan, problem = load_reference_plan(task, catalogue, folder)
+            plan, problem = load_reference_plan(task, catalogue, folder, site)
             if plan is None:
                 results.append(ReferenceResult(task, None, False, problem))
                 continue
             team = catalogue.team(task.robots)
-            if controller is None:
+            if controller is None and site is None:
                 controller = open_controller(task.floor_plan, agent_count=len(team), build=build)
             try:
-                execution = run_plan(plan, task.floor_plan, team, controller=controller, skills=catalogue.skills)
+                if site is not None:
+                    execution = run_site_plan(plan, site, team)
+                else:
+                    execution = run_plan(plan, task.floor_plan, team, controller=controller, skills=catalogue.skills)
             except UserError as exc:  # the executor's own checks: the plan does not fit the team
                 results.append(ReferenceResult(task, None, False, f"invalid reference plan: {exc}"))
                 continue
@@ -104,13 +112,14 @@ def reference_ticks(task: Task, catalogue: Catalogue, controller: Any, plans_dir
     return execution.ticks if scores.TCR == 1.0 else None
 
 
-def load_reference_plan(task: Task, catalogue: Catalogue, plans_dir: Path | None = None) -> tuple[Plan | None, str]:
-    """The task's reference plan, validated against its team and floor plan, or None and why not."""
+def load_reference_plan(task: Task, catalogue: Catalogue, plans_dir: Path | None = None,
+                        site: Domain | None = None) -> tuple[Plan | None, str]:
+    """The task's reference plan, validated against its team and floor plan (or site), or None and why not."""
     path = (plans_dir or default_plans_dir()) / f"{task.id}.py"
     if not path.is_file():
         return None, f"no reference plan: {path} does not exist"
     try:
-        types = {o["objectType"] for o in load_scene(task.floor_plan)}
+        types = set(site.places) if site is not None else {o["objectType"] for o in load_scene(task.floor_plan)}
         plan = read_plan(path, form="allocated", skills=catalogue.skills, team_size=len(task.robots),
                          scene_types=types)
     except UserError as exc:
@@ -120,12 +129,15 @@ def load_reference_plan(task: Task, catalogue: Catalogue, plans_dir: Path | None
     return plan, ""
 
 
-def _check_infeasible(task: Task, catalogue: Catalogue) -> ReferenceResult:
-    """Not run (there is nothing to run); the team must lack every skill listed as missing."""
-    if not task.missing_skills:
-        return ReferenceResult(task, None, False, "an infeasible task must list its missing_skills")
-    have = team_skills(catalogue.team(task.robots))
-    present = sorted(set(task.missing_skills) & have)
+def _check_infeasible(task: Task, catalogue: Catalogue, site: Domain | None = None) -> ReferenceResult:
+    """Not run (there is nothing to run); the team must lack every skill listed as missing. On a site, a
+    task may list none when the site shows it infeasible: some goal condition no plan for the team can meet."""
+    team = catalogue.team(task.robots)
+    blocked = unattainable(site, task.goals, team) if site is not None else []
+    if not task.missing_skills and not blocked:
+        return ReferenceResult(task, None, False, "an infeasible task must list its missing_skills"
+                               + (" or have a goal condition its team cannot meet" if site is not None else ""))
+    present = sorted(set(task.missing_skills) & team_skills(team))
     if present:
         return ReferenceResult(task, None, False, f"missing_skills {present} are skills the team has")
     return ReferenceResult(task, None, True)

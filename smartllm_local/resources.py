@@ -1,4 +1,4 @@
-"""Where the project's data folders (benchmark/, prompts/) live.
+"""Where the project's data folders (benchmark/, domains/, prompts/) live.
 
 In a source checkout or an editable install they sit beside the package; a
 wheel carries them inside the package as ``_data/``.
@@ -12,7 +12,7 @@ _PACKAGE_DIR = Path(__file__).resolve().parent
 
 
 def data_dir(name: str) -> Path:
-    """Return the folder ``name`` ("benchmark" or "prompts"), wherever it was installed."""
+    """Return the folder ``name`` ("benchmark", "domains" or "prompts"), wherever it was installed."""
     for candidate in (_PACKAGE_DIR / "_data" / name, _PACKAGE_DIR.parent / name):
         if candidate.is_dir():
             return candidate

@@ -24,8 +24,17 @@ class Robot:
     name: str
     skills: frozenset[str]
     mass_capacity: float
+    kind: str = ""  # a site domain's robot kind ("aerial", "ground"): which places it can reach
+    capacities: tuple[tuple[str, float], ...] = ()  # a site domain's capacities, by name
+
+    def capacity(self, name: str) -> float:
+        """A site domain's capacity (0 when the robot has none)."""
+        return dict(self.capacities).get(name, 0.0)
 
     def describe(self) -> str:
+        if self.capacities:
+            held = "; ".join(f"{name} {value:g}" for name, value in self.capacities)
+            return f"{self.name} ({self.kind or 'robot'}; skills: {', '.join(sorted(self.skills))}; {held})"
         return f"{self.name} (skills: {', '.join(sorted(self.skills))}; carries up to {self.mass_capacity:g} kg)"
 
 

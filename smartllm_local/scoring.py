@@ -66,6 +66,11 @@ _STATE_TESTS = {
 }
 
 
+#: The site simulator's goal states (:mod:`.executor.site`), each with the site entry property it reads.
+SITE_STATES = {"COVERED": "isCovered", "PHOTOGRAPHED": "isPhotographed", "RETURNED": "hasWholeTeam"}
+_STATE_TESTS.update({state: (lambda o, p=prop: bool(o.get(p))) for state, prop in SITE_STATES.items()})
+
+
 def normalize_name(name: str) -> str:
     return name.strip().lower()
 
@@ -97,8 +102,9 @@ class Condition:
         return f"{self.subject} is {self.state}" if self.state else f"{self.subject} contains {self.item}"
 
 
-def parse_goals(data: Any, where: str = "goals") -> tuple[Goal, ...]:
-    """Check and convert a list of goal entries; errors name the entry and the field."""
+def parse_goals(data: Any, where: str = "goals", states: Sequence[str] = STATES) -> tuple[Goal, ...]:
+    """Check and convert a list of goal entries (``states``: those the domain's world has); errors name
+    the entry and the field."""
     if not isinstance(data, list):
         raise TaskFileError(f"{where}: expected a list of {{\"name\", \"contains\", \"state\"}} entries")
     goals = []
@@ -122,8 +128,8 @@ def parse_goals(data: Any, where: str = "goals") -> tuple[Goal, ...]:
             state = state.strip().upper()
             if state in ("", "NONE"):
                 state = None
-        if state is not None and state not in STATES:
-            raise TaskFileError(f"{at}.state: {entry.get('state')!r} is not one of {', '.join(STATES)} or null")
+        if state is not None and state not in states:
+            raise TaskFileError(f"{at}.state: {entry.get('state')!r} is not one of {', '.join(states)} or null")
         if state is None and not contains:
             raise TaskFileError(f"{at}: a goal needs a state or a non-empty contains list")
         goals.append(Goal(name=name.strip(), contains=tuple(c.strip() for c in contains), state=state))
@@ -248,6 +254,6 @@ def score_execution(execution: Any, goals: Sequence[Goal], *, trans: int | None 
 
 
 __all__ = [
-    "STATES", "Goal", "Condition", "Scores", "parse_goals", "condition_holds", "containment",
+    "SITE_STATES", "STATES", "Goal", "Condition", "Scores", "parse_goals", "condition_holds", "containment",
     "robot_utilization", "score", "score_execution",
 ]

@@ -9,6 +9,7 @@ ids must be unique.
 
 from __future__ import annotations
 
+import copy
 import difflib
 import json
 from dataclasses import dataclass
@@ -20,8 +21,9 @@ import jsonschema
 
 from .errors import TaskFileError, UnknownFloorPlanError, UserError
 from .resources import data_dir
+from .domain import Domain
 from .robots import Catalogue, load_catalogue
-from .scoring import Goal, parse_goals
+from .scoring import STATES, Goal, parse_goals
 from .world.object_types import SLICE_RESULTS
 from .world.scenes import floor_plan_name, load_scene
 
@@ -52,9 +54,14 @@ class Task:
     notes: str = ""
     source: str = ""  # file:line
 
+    def _floor_plan_field(self) -> int | str:
+        """iTHOR floor plans by number, as task files give them; a site domain's site by name."""
+        number = self.floor_plan[len("FloorPlan"):]
+        return int(number) if self.floor_plan.startswith("FloorPlan") and number.isdigit() else self.floor_plan
+
     def as_json(self) -> dict[str, Any]:
         data: dict[str, Any] = {
-            "id": self.id, "category": self.category, "floor_plan": int(self.floor_plan[len("FloorPlan"):]),
+            "id": self.id, "category": self.category, "floor_plan": self._floor_plan_field(),
             "instruction": self.instruction, "robots": list(self.robots),
             "goals": [g.as_dict() for g in self.goals], "trans": self.trans, "max_trans": self.max_trans,
             "feasible": self.feasible,
@@ -80,6 +87,16 @@ def task_schema() -> dict[str, Any]:
     return json.loads((benchmark_dir() / "task.schema.json").read_text(encoding="utf-8"))
 
 
+def site_task_schema(domain: Domain) -> dict[str, Any]:
+    """The task schema for a site domain: ``floor_plan`` names its site, goals use its states, and an
+    infeasible task may list no missing skills (the site shows why it is infeasible, see :mod:`.benchmark`)."""
+    schema = copy.deepcopy(task_schema())
+    del schema["then"]["properties"]["missing_skills"]["minItems"]
+    schema["properties"]["floor_plan"] = {"const": domain.site}
+    schema["properties"]["goals"]["items"]["properties"]["state"] = {"enum": [None, *domain.states]}
+    return schema
+
+
 @lru_cache(maxsize=256)
 def _scene_types(floor_plan: str) -> frozenset[str]:
     types = {o["objectType"] for o in load_scene(floor_plan)}
@@ -87,27 +104,28 @@ def _scene_types(floor_plan: str) -> frozenset[str]:
     return frozenset(t.lower() for t in types)
 
 
-def check_task(data: Any, catalogue: Catalogue, where: str) -> tuple[Task | None, list[str]]:
-    """Check one decoded line; return the task and the problems found."""
+def check_task(data: Any, catalogue: Catalogue, where: str, domain: Domain | None = None) -> tuple[Task | None, list[str]]:
+    """Check one decoded line (of ``domain``'s tasks, default household); return the task and the problems found."""
     problems = []
-    validator = jsonschema.Draft202012Validator(task_schema())
+    site = domain is not None and not domain.is_household
+    validator = jsonschema.Draft202012Validator(site_task_schema(domain) if site else task_schema())  # type: ignore[arg-type]
     for error in sorted(validator.iter_errors(data), key=lambda e: list(e.absolute_path)):
         field = "/".join(str(p) for p in error.absolute_path) or "(line)"
         problems.append(f"{where}: {field}: {error.message}")
     if problems:
         return None, problems
     try:
-        scene = floor_plan_name(data["floor_plan"])
+        scene = data["floor_plan"] if site else floor_plan_name(data["floor_plan"])
     except UnknownFloorPlanError as exc:
         return None, [f"{where}: floor_plan: {exc}"]
     unknown = [r for r in data["robots"] if r not in catalogue.robots]
     if unknown:
         problems.append(f"{where}: robots: {unknown} are not in the catalogue {catalogue.path}")
     try:
-        goals = parse_goals(data["goals"], where="goals")
+        goals = parse_goals(data["goals"], where="goals", states=domain.states if site else STATES)  # type: ignore[union-attr]
     except TaskFileError as exc:
         return None, problems + [f"{where}: {exc}"]
-    types = _scene_types(scene)
+    types = frozenset(p.lower() for p in domain.places) if site else _scene_types(scene)  # type: ignore[union-attr]
     for goal in goals:
         for name in (goal.name, *goal.contains):
             if name.lower() not in types:
@@ -126,17 +144,17 @@ def check_task(data: Any, catalogue: Catalogue, where: str) -> tuple[Task | None
 
 
 def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
-               catalogue: Catalogue | None = None) -> list[Task]:
-    """Read task files (default: the project's benchmark) and check every line.
+               catalogue: Catalogue | None = None, domain: Domain | None = None) -> list[Task]:
+    """Read task files (default: the domain's benchmark, household's by default) and check every line.
 
     Raises:
         TaskFileError: listing every bad line as ``file:line: problem``.
     """
     if paths is None:
-        paths = default_task_files()
+        paths = domain.task_files() if domain is not None else default_task_files()
     elif isinstance(paths, (str, Path)):
         paths = [paths]
-    catalogue = catalogue or load_catalogue()
+    catalogue = catalogue or (domain.catalogue if domain is not None else load_catalogue())
     tasks: list[Task] = []
     problems: list[str] = []
     seen: dict[str, str] = {}
@@ -156,7 +174,7 @@ def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
             except ValueError as exc:
                 problems.append(f"{where}: not valid JSON ({exc})")
                 continue
-            task, found = check_task(data, catalogue, where)
+            task, found = check_task(data, catalogue, where, domain)
             problems += found
             if task is None:
                 continue

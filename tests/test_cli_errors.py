@@ -176,7 +176,7 @@ def test_main_keeps_its_exit_codes(monkeypatch, capsys, raised, code, stderr):
     def fail(*args, **kwargs):
         raise raised
 
-    monkeypatch.setattr(plans, "load_catalogue", fail)
+    monkeypatch.setattr(plans, "load_domain", fail)
     monkeypatch.setattr(sys, "argv", ["smartllm-local", "validate", "plan.py"])
     with pytest.raises(SystemExit) as exited:
         main()

@@ -1,4 +1,4 @@
-"""The wheel carries the data folders (benchmark/, prompts/) and both console scripts."""
+"""The wheel carries the data folders (benchmark/, domains/, prompts/) and both console scripts."""
 
 from __future__ import annotations
 
@@ -19,6 +19,9 @@ def test_the_wheel_holds_the_benchmark_and_the_prompts(tmp_path):
                      "smartllm_local/_data/benchmark/robots.json", "smartllm_local/_data/benchmark/task.schema.json",
                      "smartllm_local/_data/benchmark/reference_plans/kitchen-01.py",
                      "smartllm_local/_data/prompts/examples.json",
+                     "smartllm_local/_data/domains/patrol/domain.toml",
+                     "smartllm_local/_data/domains/patrol/reference_plans/patrol-01.py",
+                     "smartllm_local/_data/domains/_starter/domain.toml",
                      "smartllm_local/_data/prompts/decomposition/toast.py",
                      "smartllm_local/world/thor_server.py"):
         assert required in names, required

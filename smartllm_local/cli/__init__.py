@@ -16,6 +16,7 @@ import typer
 from ..errors import SmartLLMError, UserError
 from . import bench as _bench
 from . import benchmark as _benchmark
+from . import domains as _domains
 from . import plan as _plan
 from . import plans as _plans
 from . import scenes as _scenes
@@ -28,6 +29,7 @@ app = typer.Typer(
 )
 app.add_typer(_scenes.app, name="scenes")
 app.add_typer(_benchmark.app, name="benchmark")
+app.add_typer(_domains.app, name="domain")
 _benchmark.app.command("run")(_plan.benchmark_run)
 app.command("plan")(_plan.plan_command)
 app.command("validate")(_plans.validate)

@@ -9,8 +9,10 @@ from typing import Optional
 import typer
 
 from ..files import check_output_file, write_atomic
+from ..domain import load_domain
 from ..robots import load_catalogue
-from ..tasks import CATEGORIES, check_category, default_task_files, load_tasks
+from ..tasks import CATEGORIES, check_category, load_tasks
+from .plans import DOMAIN_HELP
 
 app = typer.Typer(help="The benchmark: list its tasks, check it, import SMART-LLM's task files.", no_args_is_help=True)
 
@@ -18,12 +20,14 @@ app = typer.Typer(help="The benchmark: list its tasks, check it, import SMART-LL
 @app.command("list")
 def list_tasks(
     category: Optional[str] = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
-    tasks: Optional[Path] = typer.Option(None, help="A task file (default: the project's benchmark)."),
+    tasks: Optional[Path] = typer.Option(None, help="A task file (default: the domain's benchmark)."),
     as_json: bool = typer.Option(False, "--json", help="Print the tasks as JSON lines."),
+    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
-    """Print the tasks: id, category, floor plan, robots and instruction."""
+    """Print the tasks: id, category, floor plan (or site), robots and instruction."""
     check_category(category)
-    chosen = [t for t in load_tasks(tasks or default_task_files()) if category in (None, t.category)]
+    dom = load_domain(domain)
+    chosen = [t for t in load_tasks(tasks or dom.task_files(), domain=dom) if category in (None, t.category)]
     if as_json:
         for task in chosen:
             typer.echo(json.dumps(task.as_json()))
@@ -38,15 +42,17 @@ def list_tasks(
 
 @app.command("check")
 def check(
-    tasks: Optional[Path] = typer.Option(None, help="A task file (default: the project's benchmark)."),
-    plans: Optional[Path] = typer.Option(None, help="Reference plans folder (default: benchmark/reference_plans)."),
+    tasks: Optional[Path] = typer.Option(None, help="A task file (default: the domain's benchmark)."),
+    plans: Optional[Path] = typer.Option(None, help="Reference plans folder (default: the domain's reference_plans)."),
     thor_build: Optional[Path] = typer.Option(None, help="A Unity AI2-THOR executable (default: the stand-in)."),
+    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Validate the task files and run every reference plan; print a per-category table."""
     from ..benchmark import check_reference_plans, category_table
 
-    loaded = load_tasks(tasks or default_task_files())
-    results = check_reference_plans(loaded, plans, build=str(thor_build) if thor_build else None)
+    dom = load_domain(domain)
+    loaded = load_tasks(tasks or dom.task_files(), domain=dom)
+    results = check_reference_plans(loaded, plans, build=str(thor_build) if thor_build else None, domain=dom)
     typer.echo(category_table(results))
     failed = [r for r in results if not r.passed]
     for result in failed:

@@ -29,7 +29,7 @@ from ..robots import default_catalogue_path, load_catalogue, parse_robot_ids
 from ..run_store import RunStore
 from ..tasks import CATEGORIES, check_category, default_task_files, find_task, load_tasks
 from ..world.scenes import floor_plan_name
-from .plans import dispatch_report, dispatch_succeeded
+from .plans import dispatch_report, dispatch_succeeded, run_record
 from .progress import RunProgress
 
 MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
@@ -187,7 +187,7 @@ def plan_command(
         raise UserError("give --execute (in AI2-THOR) or --dispatch (on the lab's robots), not both")
     functions = load_dispatch(dispatch, cat.skills) if dispatch is not None else None
     if functions is not None:  # the grammars offer every skill of the team: each needs its function
-        missing = sorted({skill for robot in team for skill in robot.skills} - set(functions.functions))
+        missing = functions.unnamed(skill for robot in team for skill in robot.skills)
         if missing:
             raise UserError(f"the team's robots have skill(s) {', '.join(missing)}, which the dispatch file "
                             f"{dispatch} names no function for; add them under [skills]")
@@ -210,7 +210,7 @@ def plan_command(
         extra["metrics"] = scores.metrics()
     if dispatched is not None:
         extra["dispatch"] = {"attempted": dispatched.attempted, "succeeded": dispatched.succeeded,
-                             "actions": [e.as_dict() for e in dispatched.trace]}
+                             **run_record(dispatched)}
     if out is not None:
         write_artifacts(result, out, extra)
     if as_json:

@@ -1,23 +1,26 @@
-"""``smartllm-local validate``, ``execute`` and ``dispatch``: check plan files, run them in AI2-THOR or on a lab's robots."""
+"""``smartllm-local validate``, ``execute`` and ``dispatch``: check plan files, run them (in AI2-THOR or on a
+site domain's site) or on a lab's robots."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 
 import typer
 
 from ..errors import UserError
-from ..executor import Execution, run_plan
+from ..domain import load_domain
+from ..executor import Execution, run_plan, run_site_plan
 from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..files import check_output_file, read_json, write_json
 from ..plan_language import read_plan
-from ..robots import load_catalogue, parse_robot_ids
+from ..robots import parse_robot_ids
 from ..scoring import parse_goals, score_execution
-from ..tasks import default_task_files, find_task, load_tasks
+from ..tasks import find_task, load_tasks
 from ..world.scenes import floor_plan_name, load_scene
 
+DOMAIN_HELP = "The domain: household (the default), patrol, or a domain folder (see `smartllm-local domain`)."
 THOR_BUILD_HELP = "A Unity AI2-THOR executable to run in (default: $SMARTLLM_THOR_BUILD, else the headless stand-in)."
 
 
@@ -27,13 +30,21 @@ def validate(
     floor_plan: Optional[str] = typer.Option(None, help="Also check object names against this floor plan."),
     robots: Optional[str] = typer.Option(None, help="Also check robots[i] against this team (catalogue ids, e.g. 1,2,3)."),
     catalogue: Optional[Path] = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json)."),
+    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Parse and validate a plan without running it."""
     if stage not in ("decomposed", "allocated"):
         raise UserError(f"--stage must be decomposed or allocated, not {stage!r}")
-    cat = load_catalogue(catalogue)
+    dom = load_domain(domain, catalogue=catalogue)
+    cat = dom.catalogue
     team_size = len(cat.team(parse_robot_ids(robots))) if robots else None
-    scene_types = {o["objectType"] for o in load_scene(floor_plan_name(floor_plan))} if floor_plan else None
+    if not dom.is_household:
+        if floor_plan:
+            raise UserError(f"--floor-plan is for the household domain; the {dom.name} domain's plans are checked "
+                            f"against its site {dom.site}")
+        scene_types: set[str] | None = set(dom.places)
+    else:
+        scene_types = {o["objectType"] for o in load_scene(floor_plan_name(floor_plan))} if floor_plan else None
     parsed = read_plan(plan, form=stage, skills=cat.skills, team_size=team_size, scene_types=scene_types)  # type: ignore[arg-type]
     if parsed.is_refusal:
         typer.echo(f"{plan}: valid refusal: {parsed.refusal}")
@@ -70,39 +81,48 @@ def execute(
     trace: Optional[Path] = typer.Option(None, help="Write every primitive action to this JSON file."),
     catalogue: Optional[Path] = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json)."),
     thor_build: Optional[Path] = typer.Option(None, help=THOR_BUILD_HELP),
+    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
-    """Run a plan with a robot team in AI2-THOR and print SR, TCR, GCR, RU and Exe."""
+    """Run a plan with a robot team (in AI2-THOR, or on a site domain's site) and print SR, TCR, GCR, RU and Exe."""
     given_transitions = trans is not None or max_trans is not None
     if trace is not None:
         check_output_file(trace, "--trace")
-    cat = load_catalogue(catalogue)
+    dom = load_domain(domain, catalogue=catalogue)
+    cat = dom.catalogue
+    if not dom.is_household and (floor_plan or thor_build):
+        raise UserError(f"--floor-plan and --thor-build are for the household domain; the {dom.name} domain's "
+                        f"plans run on its site {dom.site}")
     if task is not None:
         if floor_plan or robots or goal:
             raise UserError("give either --task (with --tasks) or --floor-plan/--robots/--goal, not both")
-        chosen = find_task(load_tasks(tasks or default_task_files(), catalogue=cat), task)
+        chosen = find_task(load_tasks(tasks or dom.task_files(), catalogue=cat, domain=dom), task)
         scene, team_ids, goals = chosen.floor_plan, list(chosen.robots), list(chosen.goals)
         trans = chosen.trans if trans is None else trans
         max_trans = chosen.max_trans if max_trans is None else max_trans
     else:
         if tasks is not None:
             raise UserError("--tasks needs --task ID")
-        if not (floor_plan and robots and goal):
-            raise UserError("execute needs --floor-plan, --robots and --goal (or --task ID)")
-        scene, team_ids = floor_plan_name(floor_plan), parse_robot_ids(robots)
-        goals = list(parse_goals(read_json(goal, "goal file"), where=str(goal)))
+        if not ((floor_plan or not dom.is_household) and robots and goal):
+            raise UserError("execute needs --floor-plan, --robots and --goal (or --task ID)" if dom.is_household
+                            else "execute needs --robots and --goal (or --task ID)")
+        scene = floor_plan_name(floor_plan) if dom.is_household else dom.site
+        team_ids = parse_robot_ids(robots)
+        goals = list(parse_goals(read_json(goal, "goal file"), where=str(goal), states=dom.states))
         if not goals:
             raise UserError(f"goal file {goal}: a goal file needs at least one condition, "
                             'e.g. [{"name": "Fridge", "contains": ["Apple"], "state": null}]')
     if given_transitions:
         check_transitions(trans, max_trans)
     team = cat.team(team_ids)
-    parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team))
-    execution = run_plan(parsed, scene, team, build=str(thor_build) if thor_build else None, skills=cat.skills)
+    parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team),
+                       scene_types=None if dom.is_household else set(dom.places))
+    if dom.is_household:
+        execution = run_plan(parsed, scene, team, build=str(thor_build) if thor_build else None, skills=cat.skills)
+    else:
+        execution = run_site_plan(parsed, dom, team)
     scores = score_execution(execution, goals, trans=trans, max_trans=max_trans)
     if trace is not None:
-        write_json(trace, {"plan": str(plan), "floor_plan": scene, "robots": team_ids,
-                           "transitions": execution.transitions, "ticks": execution.ticks,
-                           "actions": [e.as_dict() for e in execution.trace]})
+        write_json(trace, {"plan": str(plan), "floor_plan": scene, "robots": team_ids, **run_record(execution)})
     if as_json:
         typer.echo(json.dumps(scores.metrics()))
         return
@@ -123,24 +143,30 @@ def dispatch(
     robots: str = typer.Option(..., help="The team as catalogue ids, e.g. 1,2,3; robots[i] is the i-th."),
     trace: Optional[Path] = typer.Option(None, help="Write every action to this JSON file."),
     catalogue: Optional[Path] = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json)."),
+    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Run a plan on real robots: each skill call goes to the lab's own function for that skill.
 
     Exits 0 when every action succeeded, 1 when one failed (raised, returned False or timed out)."""
     if trace is not None:
         check_output_file(trace, "--trace")
-    cat = load_catalogue(catalogue)
+    cat = load_domain(domain, catalogue=catalogue).catalogue
     team_ids = parse_robot_ids(robots)
     team = cat.team(team_ids)
     parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team))
     execution = dispatch_plan(parsed, team, load_dispatch(functions, cat.skills), skills=cat.skills)
     if trace is not None:
         write_json(trace, {"plan": str(plan), "dispatch": str(functions), "robots": team_ids,
-                           "transitions": execution.transitions, "ticks": execution.ticks,
-                           "actions": [e.as_dict() for e in execution.trace]})
+                           **run_record(execution)})
     typer.echo(f"{plan} with robots {team_ids}: " + "\n".join(dispatch_report(execution)))
     if not dispatch_succeeded(execution):
         raise typer.Exit(1)
+
+
+def run_record(execution: Execution) -> dict[str, Any]:
+    """A run's structure and every action, as ``--trace`` files and ``plan --json`` write them."""
+    return {"transitions": execution.transitions, "ticks": execution.ticks,
+            "actions": [e.as_dict() for e in execution.trace]}
 
 
 def dispatch_report(execution: Execution) -> list[str]:

@@ -1,7 +1,8 @@
-"""Running plans: the interpreter (scheduler) and what skills do (team actions).
+"""Running plans: the interpreter (scheduler) and what skills do (team actions, the site simulator).
 
 :func:`run_plan` opens (or reuses) a Controller for the plan's floor plan and
-team, and executes; the scorer reads the :class:`Execution` it returns.
+team, and executes; :func:`run_site_plan` runs a site domain's plan on its
+simulated site. The scorer reads the :class:`Execution` either returns.
 """
 
 from __future__ import annotations
@@ -13,9 +14,11 @@ from ..robots import Robot
 from ..skills import DEFAULT_SKILL_SET, SkillSet
 from ..world.controller import open_controller
 from ..world.scenes import floor_plan_name
-from .scheduler import DEFAULT_MAX_TICKS, Execution, TraceEntry, execute
+from ..domain import Domain
+from .scheduler import DEFAULT_MAX_TICKS, Execution, TraceEntry, check_team, execute, run
+from .site import SiteWorld
 
-__all__ = ["Execution", "TraceEntry", "execute", "run_plan"]
+__all__ = ["Execution", "TraceEntry", "execute", "run_plan", "run_site_plan"]
 
 
 def run_plan(
@@ -43,3 +46,14 @@ def run_plan(
         return execute(plan, controller, team, skills=skills, max_ticks=max_ticks, object_filter=object_filter)
     finally:
         controller.stop()
+
+
+def run_site_plan(plan: Plan, domain: Domain, team: Sequence[Robot], *,
+                  max_ticks: int = DEFAULT_MAX_TICKS) -> Execution:
+    """Execute ``plan`` with ``team`` on a site domain's simulated site (:mod:`.site`).
+
+    Raises:
+        UserError: the plan is decomposed or names robots outside the team.
+    """
+    check_team(plan, len(team))
+    return run(plan, SiteWorld(domain, team), team, skills=domain.catalogue.skills, max_ticks=max_ticks)

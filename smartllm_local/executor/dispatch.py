@@ -25,7 +25,7 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Iterable, Sequence
 
 try:
     import tomllib
@@ -49,6 +49,10 @@ class Dispatch:
     functions: dict[str, Callable[..., Any]]
     timeout: float
     path: str
+
+    def unnamed(self, skills: Iterable[str]) -> list[str]:
+        """The skills among ``skills`` that this file names no function for, sorted."""
+        return sorted(set(skills) - set(self.functions))
 
 
 def load_dispatch(path: str | Path, skills: SkillSet) -> Dispatch:
@@ -149,7 +153,7 @@ def dispatch_plan(plan: Plan, team: Sequence[Robot], dispatch: Dispatch, *, skil
         UserError: the plan does not fit the team, or uses a skill the dispatch file names no function for.
     """
     check_team(plan, len(team))
-    missing = sorted({call.skill for call in plan.skill_calls()} - set(dispatch.functions))
+    missing = dispatch.unnamed(call.skill for call in plan.skill_calls())
     if missing:
         raise UserError(f"the plan uses {', '.join(missing)}, which the dispatch file {dispatch.path} "
                         "names no function for; add them under [skills]")

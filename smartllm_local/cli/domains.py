@@ -1,0 +1,70 @@
+"""``smartllm-local domain``: list the built-in domains, start a domain of your own, check one."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import typer
+
+from ..domain import DOMAIN_FILE, builtin_domains, load_domain, starter_domain
+from ..errors import UserError
+
+app = typer.Typer(help="Domains: your own robots, skills and site (see the README's \"Your own robots\").",
+                  no_args_is_help=True)
+
+
+@app.command("list")
+def list_domains() -> None:
+    """Print the built-in domains with their robots and skills."""
+    for name in builtin_domains():
+        domain = load_domain(name)
+        typer.echo(f"{name:<12}{len(domain.catalogue.robots):>3} robots, {len(domain.catalogue.skills):>2} skills  "
+                   f"{domain.description}")
+
+
+@app.command("new")
+def new(folder: Path = typer.Argument(..., help="The folder to create (it must not exist yet).")) -> None:
+    """Write a commented starting domain (domain.toml, a task, its reference plan) to edit into your own."""
+    if folder.exists():
+        raise UserError(f"{folder} already exists: `domain new` writes a new folder, so give one that does not exist")
+    if not folder.parent.is_dir():
+        raise UserError(f"{folder.parent} is not a folder: create it first, or give a folder inside an existing one")
+    # Copied beside the target, then renamed into place: an interrupted copy leaves no half-made domain.
+    staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
+    staging.chmod(0o755)  # mkdtemp's folder is private; a domain folder is not
+    try:
+        shutil.copytree(starter_domain(), staging, dirs_exist_ok=True)
+        os.replace(staging, folder)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    typer.echo(f"wrote {folder}/{DOMAIN_FILE}, tasks.jsonl and reference_plans/: edit them, then run "
+               f"`smartllm-local domain check {folder}`")
+
+
+@app.command("check")
+def check(domain: str = typer.Argument(..., help="A domain folder, or a built-in domain's name.")) -> None:
+    """Check a domain: its file, its tasks and its reference plans (run on its site). Exit 1 if a plan fails."""
+    from ..benchmark import category_table, check_reference_plans
+    from ..tasks import load_tasks
+
+    loaded = load_domain(domain)
+    if loaded.is_household:
+        raise UserError("the household domain runs in AI2-THOR: check it with `smartllm-local benchmark check`")
+    catalogue = loaded.catalogue
+    typer.echo(f"{loaded.name}: {len(catalogue.skills)} skills, {len(catalogue.robots)} robots, "
+               f"{len(loaded.places)} site entries on {loaded.site}")
+    files = [f for f in loaded.task_files() if f.is_file()]
+    if not files:
+        typer.echo(f"no tasks: add {loaded.folder}/tasks.jsonl to benchmark it")
+        return
+    results = check_reference_plans(load_tasks(files, domain=loaded), domain=loaded)
+    typer.echo(category_table(results))
+    failed = [r for r in results if not r.passed]
+    for result in failed:
+        typer.echo(f"FAILED {result.task.id}: {result.problem}")
+    if failed:
+        raise typer.Exit(1)

@@ -1,0 +1,367 @@
+"""Domains: which robots exist, what they can do, the world they work in and how goals are judged.
+
+``household`` is SMART-LLM's AI2-THOR kitchen domain (its robots in ``benchmark/robots.json``, its
+worlds the iTHOR floor plans). Any other domain is a folder::
+
+    DIR/domain.toml          the skills, robots, capacities, site and goal states (schema-checked)
+    DIR/tasks.jsonl          its benchmark tasks (optional)
+    DIR/reference_plans/     a plan per feasible task that scores SR = 1 (optional)
+
+A domain file's skills name the *effect* each has in the site simulator (``move``, ``photograph``,
+``patrol``), so a lab may call them what its robots call them; its robots carry the numeric
+capacities the domain declares, and a skill that ``pools`` a capacity is done by a team whose
+members' capacities add up (as household lifts pool mass). Every problem in a file is reported as
+``file:line: what is wrong; what to do``.
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+from .errors import UserError
+from .resources import data_dir
+from .robots import Catalogue, Robot, load_catalogue
+from .scoring import SITE_STATES, STATES
+from .skills import Skill, SkillSet
+
+HOUSEHOLD = "household"
+DOMAIN_FILE = "domain.toml"
+
+#: What a skill does in the site simulator, and the argument type it takes.
+EFFECTS = {"move": "place", "photograph": "object", "patrol": "region"}
+#: The kinds of entries a site holds; ``place`` is any of them.
+ENTRY_KINDS = ("location", "region", "object")
+ARGUMENT_TYPES = (*ENTRY_KINDS, "place")
+
+
+class DomainError(UserError):
+    """A domain file or folder that cannot be used as it is."""
+
+
+@dataclass(frozen=True)
+class Place:
+    """A site entry: a location, a region (with an area) or an object, at a point of the 2-D site."""
+
+    name: str
+    kind: str
+    at: tuple[float, float]
+    area: float = 0.0
+    reach: frozenset[str] | None = None  # the robot kinds that can get there; None: every kind
+
+    def reachable_by(self, robot: Robot) -> bool:
+        return self.reach is None or robot.kind in self.reach
+
+
+@dataclass(frozen=True)
+class Domain:
+    """A domain: its catalogue (robots and skills), and for a site domain, the site and the skills' effects."""
+
+    name: str
+    description: str
+    catalogue: Catalogue
+    folder: Path | None = None
+    site: str = ""
+    start: str = ""
+    places: Mapping[str, Place] = field(default_factory=dict)
+    effects: Mapping[str, str] = field(default_factory=dict)  # skill -> move | photograph | patrol
+    pools: Mapping[str, str] = field(default_factory=dict)  # skill -> the capacity a team pools for it
+    capacities: Mapping[str, str] = field(default_factory=dict)  # capacity -> what it measures
+
+    @property
+    def is_household(self) -> bool:
+        return self.folder is None
+
+    @property
+    def states(self) -> tuple[str, ...]:
+        """The goal states its tasks may ask for (household: the scorer's AI2-THOR states)."""
+        return STATES if self.is_household else tuple(SITE_STATES)
+
+    def task_files(self) -> list[Path]:
+        if self.folder is None:
+            from .tasks import default_task_files
+
+            return default_task_files()
+        return [self.folder / "tasks.jsonl"]
+
+    def plans_dir(self) -> Path:
+        if self.folder is None:
+            return data_dir("benchmark") / "reference_plans"
+        return self.folder / "reference_plans"
+
+    def place(self, name: str) -> Place | None:
+        """The site entry a plan names (case-insensitively), or None."""
+        return self.places.get(name) or next((p for p in self.places.values() if p.name.lower() == name.lower()), None)
+
+
+def builtin_domains() -> list[str]:
+    """The domains that ship with the project, household first."""
+    folder = data_dir("domains")
+    return [HOUSEHOLD, *sorted(p.name for p in folder.iterdir()
+                               if (p / DOMAIN_FILE).is_file() and not p.name.startswith("_"))]
+
+
+def starter_domain() -> Path:
+    """The commented starting domain that ``domain new`` copies."""
+    return data_dir("domains") / "_starter"
+
+
+def load_domain(name_or_dir: str | Path | None = None, *, catalogue: str | Path | None = None) -> Domain:
+    """A built-in domain by name (default household) or a domain folder; ``catalogue`` replaces
+    household's robot catalogue (another domain's robots are in its domain file)."""
+    name = str(name_or_dir) if name_or_dir is not None else HOUSEHOLD
+    if name == HOUSEHOLD:
+        cat = load_catalogue(catalogue)
+        return Domain(HOUSEHOLD, "SMART-LLM's household tasks in AI2-THOR's iTHOR floor plans.", cat)
+    if catalogue is not None:
+        raise DomainError(f"--catalogue applies to the household domain; the {name} domain's robots are in its "
+                          f"{DOMAIN_FILE}")
+    folder = Path(name)
+    if not (folder / DOMAIN_FILE).is_file() and name in builtin_domains():
+        folder = data_dir("domains") / name
+    if not (folder / DOMAIN_FILE).is_file():
+        known = builtin_domains()
+        close = difflib.get_close_matches(name, known, n=1)
+        hint = f"; did you mean {close[0]}?" if close else ""
+        raise DomainError(f"no domain {name!r}: give a built-in domain ({', '.join(known)}) or a folder holding "
+                          f"{DOMAIN_FILE}{hint}")
+    return read_domain_file(folder / DOMAIN_FILE)
+
+
+class _Checker:
+    """Reads a domain file, collecting problems with their line numbers."""
+
+    def __init__(self, path: Path, text: str):
+        self.path, self.lines = path, text.splitlines()
+        self.problems: list[str] = []
+
+    def line_of(self, *keys: str) -> int:
+        """The line defining ``keys`` (a path such as ("skills", "Patrol", "pools")): the header of the
+        longest table it names, then each further ``key =`` line after it; 1 when none is found."""
+        def first(pattern: str, start: int) -> int | None:
+            compiled = re.compile(pattern)
+            return next((k for k in range(start, len(self.lines)) if compiled.match(self.lines[k])), None)
+
+        line, rest = 0, keys
+        for depth in range(len(keys), 0, -1):
+            dotted = r"\s*\.\s*".join(f'"?{re.escape(k)}"?' for k in keys[:depth])
+            found = first(rf"^\s*\[+\s*{dotted}\s*\]+", 0)
+            if found is not None:
+                line, rest = found, keys[depth:]
+                break
+        for key in rest:
+            found = first(rf'^\s*"?{re.escape(key)}"?\s*=', line)
+            if found is not None:
+                line = found
+        return line + 1
+
+    def fail(self, keys: Iterable[str], message: str) -> None:
+        self.problems.append(f"{self.path}:{self.line_of(*keys)}: {message}")
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and value == value
+
+
+def read_domain_file(path: Path) -> Domain:
+    """Read and check a domain file; every problem is reported at once, each with its line."""
+    try:
+        text = path.read_text(encoding="utf-8")
+        data = tomllib.loads(text)
+    except OSError as exc:
+        raise DomainError(f"cannot read domain file {path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise DomainError(f"domain file {path} is not UTF-8 text ({exc.reason})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise DomainError(f"{path}: not valid TOML: {exc}") from None
+    check = _Checker(path, text)
+    known = {"name", "description", "start", "site", "capacities", "skills", "robots", "world"}
+    for key in sorted(set(data) - known):
+        check.fail([key], f"unknown key {key!r}; a domain file has {', '.join(sorted(known))}")
+    name = data.get("name")
+    if not isinstance(name, str) or not name.isidentifier():
+        check.fail(["name"], 'needs name = "..." (letters, digits and underscores)')
+        name = path.parent.name
+    site = data.get("site", "site")
+    if not isinstance(site, str) or not site.strip():
+        check.fail(["site"], 'site must name the site, e.g. site = "campus"')
+    capacities = _capacities(check, data.get("capacities", {}))
+    places = _places(check, data.get("world"))
+    effects, pools, skills = _skills(check, data.get("skills"), capacities, places)
+    if "photograph" in effects.values() and "camera_range" not in capacities:
+        check.fail(["capacities"], 'a skill photographs, so [capacities] needs camera_range = "metres from '
+                                   'which a robot can take a picture"')
+    named = set(data["skills"]) if isinstance(data.get("skills"), dict) else set()  # a bad skill is reported once
+    robots = _robots(check, data.get("robots"), named, capacities)
+    start = data.get("start")
+    if not isinstance(start, str) or start not in places:
+        check.fail(["start"], f'start must name the site entry every robot starts at, e.g. start = "Base"; '
+                              f"got {start!r}")
+    if check.problems:
+        raise DomainError("\n".join(check.problems))
+    catalogue = Catalogue(robots={r.id: r for r in robots}, skills=SkillSet(skills), path=str(path))
+    return Domain(name=name, description=str(data.get("description", "")), catalogue=catalogue,
+                  folder=path.parent, site=str(site), start=str(start), places=places, effects=effects, pools=pools,
+                  capacities=capacities)
+
+
+def _capacities(check: _Checker, table: Any) -> dict[str, str]:
+    if not isinstance(table, dict):
+        check.fail(["capacities"], "[capacities] maps each capacity to what it measures, "
+                                   'e.g. visibility_area = "square metres a robot sees at once"')
+        return {}
+    out = {}
+    for key, meaning in table.items():
+        if not key.isidentifier() or not isinstance(meaning, str):
+            check.fail(["capacities", key], f"capacity {key!r}: give what it measures as text")
+            continue
+        out[key] = meaning
+    return out
+
+
+def _places(check: _Checker, world: Any) -> dict[str, Place]:
+    if not isinstance(world, dict):
+        check.fail(["world"], "needs the site: [world.locations.NAME], [world.regions.NAME], "
+                              "[world.objects.NAME] tables, each with at = [x, y]")
+        return {}
+    places: dict[str, Place] = {}
+    for plural in sorted(set(world) - {f"{k}s" for k in ENTRY_KINDS}):
+        check.fail(["world", plural], f"unknown world table {plural!r}; the site has locations, regions and objects")
+    for kind in ENTRY_KINDS:
+        table = world.get(f"{kind}s", {})
+        if not isinstance(table, dict):
+            check.fail(["world", f"{kind}s"], f"world.{kind}s must be tables such as [world.{kind}s.NAME]")
+            continue
+        for name, entry in table.items():
+            where = ["world", f"{kind}s", name]
+            if not name.isidentifier() or len(name) > 60:
+                check.fail(where, f"{name!r} must be a name of letters, digits and underscores (plans quote it)")
+                continue
+            if name.lower() in {p.lower() for p in places}:
+                check.fail(where, f"{name} is defined twice; each site entry needs a name of its own")
+                continue
+            if not isinstance(entry, dict):
+                check.fail(where, f"world.{kind}s.{name} must be a table with at = [x, y]")
+                continue
+            allowed = {"at", "reach", "description"} | ({"area"} if kind == "region" else set())
+            for key in sorted(set(entry) - allowed):
+                check.fail([*where, key], f"{name}: unknown key {key!r}; a {kind} has {', '.join(sorted(allowed))}")
+            at = entry.get("at")
+            if not (isinstance(at, list) and len(at) == 2 and all(_number(v) for v in at)):
+                check.fail(where, f"{name}: at must be [x, y] in metres")
+                continue
+            area = entry.get("area", 0.0)
+            if kind == "region" and (not _number(area) or area <= 0):
+                check.fail(where, f"{name}: a region needs area = square metres, above 0")
+                area = 0.0
+            reach = entry.get("reach")
+            if reach is not None and not (isinstance(reach, list) and reach and all(isinstance(k, str) for k in reach)):
+                check.fail([*where, "reach"], f"{name}: reach lists the robot kinds that can get there, "
+                                              'e.g. reach = ["aerial"]')
+                continue
+            places[name] = Place(name, kind, (float(at[0]), float(at[1])), float(area),
+                                 frozenset(reach) if reach is not None else None)
+    return places
+
+
+def _skills(check: _Checker, table: Any, capacities: Mapping[str, str],
+            places: Mapping[str, Place]) -> tuple[dict[str, str], dict[str, str], list[Skill]]:
+    effects: dict[str, str] = {}
+    pools: dict[str, str] = {}
+    skills: list[Skill] = []
+    if not isinstance(table, dict) or not table:
+        check.fail(["skills"], 'needs skills: [skills.NAME] tables with effect = "move", "photograph" or "patrol"')
+        return effects, pools, skills
+    for name, entry in table.items():
+        where = ["skills", name]
+        if not name.isidentifier():
+            check.fail(where, f"skill {name!r} must be a Python identifier (plans call it)")
+            continue
+        if not isinstance(entry, dict):
+            check.fail(where, f"skills.{name} must be a table with effect = ...")
+            continue
+        for key in sorted(set(entry) - {"effect", "pools", "description"}):
+            check.fail([*where, key], f"skill {name}: unknown key {key!r}; a skill has effect, pools and description")
+        effect = entry.get("effect")
+        if effect not in EFFECTS:
+            check.fail(where, f"skill {name}: effect must be one of {', '.join(EFFECTS)}, got {effect!r}")
+            continue
+        argument = EFFECTS[effect]
+        if argument != "place" and not any(p.kind == argument for p in places.values()):
+            check.fail(where, f"skill {name} takes a {argument}, and the site has none: add a "
+                              f"[world.{argument}s.NAME] table")
+        pool = entry.get("pools")
+        if pool is not None:
+            if pool not in capacities:
+                check.fail([*where, "pools"], f"skill {name} pools {pool!r}, which is not under [capacities]")
+            else:
+                pools[name] = pool
+        if effect == "patrol" and name not in pools and pool is None:
+            check.fail(where, f"skill {name} patrols, so it needs pools = the capacity a team adds up to cover a "
+                              'region\'s area, e.g. pools = "visibility_area"')
+        effects[name] = effect
+        skills.append(Skill(name, effect, (argument,), 1))
+    return effects, pools, skills
+
+
+def _robots(check: _Checker, entries: Any, names: set[str], capacities: Mapping[str, str]) -> list[Robot]:
+    if not isinstance(entries, list) or not entries:
+        check.fail(["robots"], "needs robots: [[robots]] tables with id, name, kind, skills and each capacity")
+        return []
+    robots: list[Robot] = []
+    for k, entry in enumerate(entries):
+        label = entry.get("name", f"robots[{k}]") if isinstance(entry, dict) else f"robots[{k}]"
+        at = _RobotPlace(check, label)
+        if not isinstance(entry, dict):
+            check.fail(["robots"], f"robots[{k}] must be a [[robots]] table")
+            continue
+        allowed = {"id", "name", "kind", "skills", *capacities}
+        for key in sorted(set(entry) - allowed):
+            at.fail(f"robot {label}: unknown key {key!r}; a robot has id, name, kind, skills"
+                    + (f" and the capacities {', '.join(capacities)}" if capacities else ""))
+        rid = entry.get("id")
+        if not isinstance(rid, int) or isinstance(rid, bool) or rid < 0:
+            at.fail(f"robot {label}: id must be a non-negative integer (teams are given as ids, e.g. --robots 1,2)")
+            continue
+        if rid in {r.id for r in robots}:
+            at.fail(f"robot {label}: id {rid} is used twice")
+            continue
+        kind = entry.get("kind", "")
+        robot_skills = entry.get("skills")
+        if not isinstance(robot_skills, list) or not all(isinstance(s, str) for s in robot_skills):
+            at.fail(f"robot {label}: skills must list skill names")
+            continue
+        for unknown in [s for s in robot_skills if s not in names]:
+            close = difflib.get_close_matches(unknown, names, n=1)
+            at.fail(f"robot {label} has skill {unknown!r}, which the domain does not define"
+                    + (f"; did you mean {close[0]}?" if close else f"; define it as [skills.{unknown}]"))
+        values = {}
+        for capacity in capacities:
+            value = entry.get(capacity)
+            if not _number(value) or value < 0:
+                at.fail(f"robot {label}: needs {capacity} = a number of 0 or more ({capacities[capacity]})")
+                continue
+            values[capacity] = float(value)
+        robots.append(Robot(id=rid, name=str(entry.get("name") or f"robot{rid}"), skills=frozenset(robot_skills),
+                            mass_capacity=0.0, kind=str(kind), capacities=tuple(sorted(values.items()))))
+    return robots
+
+
+class _RobotPlace:
+    """Problems of one ``[[robots]]`` entry, reported at its ``name =`` line."""
+
+    def __init__(self, check: _Checker, label: str):
+        self.check, self.label = check, label
+
+    def fail(self, message: str) -> None:
+        line = next((k + 1 for k, text in enumerate(self.check.lines)
+                     if re.match(rf'^\s*name\s*=\s*"{re.escape(str(self.label))}"', text)), self.check.line_of("robots"))
+        self.check.problems.append(f"{self.check.path}:{line}: {message}")

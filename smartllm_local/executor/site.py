@@ -1,0 +1,144 @@
+"""The site simulator: a domain's robots moving over a 2-D site, patrolling regions and photographing objects.
+
+This is SMART-LLM's real-robot experiment in simulation. Every robot starts at the domain's ``start``
+entry. A skill's effect (declared in the domain file) decides what a call does:
+
+- ``move`` (GoToLocation): the robots go to the named location, region or object.
+- ``photograph`` (ClickPicture): succeeds when one of the robots is within its ``camera_range`` of
+  the object; the object counts as PHOTOGRAPHED.
+- ``patrol`` (Patrol): the robots go to the region and sweep it together; the region counts as
+  COVERED when their pooled capacity (the skill's ``pools``, e.g. visibility area) reaches its area.
+
+A place with ``reach`` can be entered only by robots of those kinds (a roof, by aerial robots). Each
+call takes one tick, as in AI2-THOR. A robot that cannot do what it was asked stays where it was.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+from ..domain import Domain, Place
+from ..robots import Robot
+from ..scoring import SITE_STATES, Goal
+from ..skills import Skill
+from .team_actions import Outcome
+
+
+class SiteWorld:
+    """A run's site: where each robot is, which regions are covered and which objects photographed."""
+
+    def __init__(self, domain: Domain, team: Sequence[Robot]):
+        self.domain, self.team = domain, list(team)
+        start = domain.places[domain.start]
+        self.positions = [start.at for _ in self.team]
+        self.covered: set[str] = set()
+        self.photographed: set[str] = set()
+
+    def perform_all(self, steps: Sequence[tuple[Skill, Sequence[str], Sequence[int]]]) -> list[Outcome]:
+        return [self.perform(skill, objects, members) for skill, objects, members in steps]
+
+    def perform(self, skill: Skill, objects: Sequence[str], members: Sequence[int]) -> Outcome:
+        """Carry out one call; a failure leaves the site as it was and says why."""
+        effect = self.domain.effects[skill.name]
+        place = self.domain.place(objects[0]) if objects else None
+        robots = [self.team[m] for m in members]
+        problem = why_not(self.domain, effect, skill.name, place, robots, objects[0] if objects else "")
+        if not problem and effect == "photograph":
+            problem = self._out_of_range(place, members)  # type: ignore[arg-type]
+        if problem:
+            return Outcome(success=False, error=problem, action=skill.name)
+        assert place is not None
+        if effect in ("move", "patrol"):
+            for m in members:
+                self.positions[m] = place.at
+        if effect == "patrol":
+            self.covered.add(place.name)
+        elif effect == "photograph":
+            self.photographed.add(place.name)
+        return Outcome(success=True, error="", action=skill.name, object_id=place.name)
+
+    def _out_of_range(self, place: Place, members: Sequence[int]) -> str:
+        nearest = min(members, key=lambda m: math.dist(self.positions[m], place.at))
+        distance = math.dist(self.positions[nearest], place.at)
+        robot = self.team[nearest]
+        if any(math.dist(self.positions[m], place.at) <= self.team[m].capacity("camera_range") for m in members):
+            return ""
+        return (f"{place.name} is {distance:.0f} m from {robot.name}, beyond its camera_range of "
+                f"{robot.capacity('camera_range'):g} m: go to it first")
+
+    def release(self) -> None:
+        pass
+
+    @property
+    def objects(self) -> list[dict[str, Any]]:
+        """Every site entry with its goal-state properties, in the shape the scorer reads."""
+        def state(p: Place) -> dict[str, bool]:
+            held = {"COVERED": p.name in self.covered, "PHOTOGRAPHED": p.name in self.photographed,
+                    "RETURNED": all(at == p.at for at in self.positions)}
+            return {SITE_STATES[name]: value for name, value in held.items()}
+
+        return [{"objectType": p.name, "objectId": p.name, "kind": p.kind, **state(p)}
+                for p in self.domain.places.values()]
+
+
+def why_not(domain: Domain, effect: str, skill: str, place: Place | None, robots: Sequence[Robot], name: str) -> str:
+    """Why these robots cannot do this call anywhere on the site ("" if they can): the place, its kind,
+    its reach, and for a patrol, whether their pooled capacity covers the region."""
+    if place is None:
+        return f"there is no {name!r} on the site {domain.site}"
+    wanted = {"photograph": "object", "patrol": "region"}.get(effect)
+    if wanted and place.kind != wanted:
+        return f"{skill} takes {_a(wanted)}, and {place.name} is {_a(place.kind)}"
+    barred = [r.name for r in robots if not place.reachable_by(r)]
+    if barred:
+        kinds = " or ".join(sorted(place.reach or ()))
+        return f"{', '.join(barred)} cannot reach {place.name}: only {kinds} robots can"
+    if effect == "photograph" and not any(r.capacity("camera_range") > 0 for r in robots):
+        return f"{', '.join(r.name for r in robots)} has no camera (camera_range 0)"
+    if effect == "patrol":
+        capacity = domain.pools[skill]
+        pooled = sum(r.capacity(capacity) for r in robots)
+        if pooled < place.area:
+            return (f"{place.name} has an area of {place.area:g}; {', '.join(r.name for r in robots)} pool "
+                    f"{capacity} {pooled:g}: patrol it with a larger team")
+    return ""
+
+
+def unattainable(domain: Domain, goals: Sequence[Goal], team: Sequence[Robot]) -> list[str]:
+    """The goal conditions no plan for this team can meet, each with why: a region the team cannot reach
+    or cannot pool enough capacity to cover, an object no camera of the team can get within range of, a
+    place some robot cannot return to. What an infeasible task must show, and what a planner refuses on."""
+    by_effect = {effect: [r for r in team if any(domain.effects.get(s) == effect for s in r.skills)]
+                 for effect in ("move", "photograph", "patrol")}
+    movers = {r.name for r in by_effect["move"]} | {r.name for r in by_effect["patrol"]}
+    start = domain.places[domain.start]
+    problems = []
+    for goal in goals:
+        place = domain.place(goal.name)
+        if place is None:
+            problems.append(f"there is no {goal.name!r} on the site {domain.site}")
+            continue
+        if goal.state == "COVERED":
+            skills = [s for s, e in domain.effects.items() if e == "patrol"]
+            able = [r for r in by_effect["patrol"] if place.reachable_by(r)]
+            best = max((sum(r.capacity(domain.pools[s]) for r in able if s in r.skills) for s in skills), default=0.0)
+            if best < place.area:
+                problems.append(f"{place.name} COVERED: the team's robots that can patrol it pool {best:g}, "
+                                f"less than its area {place.area:g}")
+        elif goal.state == "PHOTOGRAPHED":
+            def sees(r: Robot) -> bool:
+                spots = [start] + ([p for p in domain.places.values() if p.reachable_by(r)] if r.name in movers else [])
+                return any(math.dist(p.at, place.at) <= r.capacity("camera_range") for p in spots)
+            if not any(sees(r) for r in by_effect["photograph"]):
+                problems.append(f"{place.name} PHOTOGRAPHED: no robot of the team with a camera can get within "
+                                "range of it")
+        elif goal.state == "RETURNED":
+            stuck = [r.name for r in team if place.at != start.at and (r.name not in movers or not place.reachable_by(r))]
+            if stuck:
+                problems.append(f"{place.name} RETURNED: {', '.join(stuck)} cannot get there")
+    return problems
+
+
+def _a(noun: str) -> str:
+    return f"{'an' if noun[0] in 'aeiou' else 'a'} {noun}"

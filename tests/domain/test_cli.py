@@ -1,0 +1,119 @@
+"""``--domain`` on the commands that run plans, and ``smartllm-local domain new|check|list``, as console scripts."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+
+from smartllm_local.domain import load_domain
+
+from ..executor.test_cli import SCRIPT, assert_one_line_error
+
+PATROL = load_domain("patrol")
+
+
+def cli(*args: str | Path, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([SCRIPT, *map(str, args)], cwd=cwd, capture_output=True, text=True, timeout=120)
+
+
+def test_execute_a_patrol_task_scores_it_and_writes_its_trace(tmp_path):
+    plan = PATROL.plans_dir() / "patrol-11.py"
+    result = cli("execute", plan, "--domain", "patrol", "--task", "patrol-11", "--trace", "t.json", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "[x] NorthField is COVERED" in result.stdout and "[x] FenceBreach is PHOTOGRAPHED" in result.stdout
+    assert "SR 1.00  TCR 1.00  GCR 1.00  RU 1.00  Exe 1.00" in result.stdout
+    trace = json.loads((tmp_path / "t.json").read_text())
+    assert trace["floor_plan"] == "campus" and trace["transitions"] == 1
+    assert trace["actions"][0] == {"tick": 0, "subtask": "sweep_north_field", "robots": [1, 2, 4, 5],
+                                   "skill": "Patrol", "objects": ["NorthField"], "action": "Patrol",
+                                   "objectId": "NorthField", "success": True, "errorMessage": ""}
+
+
+def test_execute_with_a_goal_file_reports_failed_actions(tmp_path):
+    (tmp_path / "plan.py").write_text("def go(robot_list):\n    GoToLocation(robot_list[0], 'WaterTank')\n"
+                                      "    ClickPicture(robot_list[0], 'WaterTank')\n\n\ngo([robots[0]])\n")
+    (tmp_path / "goal.json").write_text(json.dumps([{"name": "WaterTank", "contains": [], "state": "PHOTOGRAPHED"}]))
+    result = cli("execute", "plan.py", "--domain", "patrol", "--robots", "4", "--goal", "goal.json", "--json",
+                 cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads(result.stdout)
+    assert metrics["GCR"] == 0.0 and metrics["Exe"] == 0.0
+
+
+def test_validate_checks_names_against_the_site(tmp_path):
+    (tmp_path / "plan.py").write_text("def go(robot_list):\n    GoToLocation(robot_list[0], 'Fridge')\n\n\n"
+                                      "go([robots[0]])\n")
+    bad = cli("validate", "plan.py", "--domain", "patrol", cwd=tmp_path)
+    assert bad.returncode == 2 and "GoToLocation: there is no 'Fridge' in this scene" in bad.stderr
+    household_skill = tmp_path / "h.py"
+    household_skill.write_text("def go(robot_list):\n    GoToObject(robot_list[0], 'Base')\n\n\ngo([robots[0]])\n")
+    wrong = cli("validate", household_skill, "--domain", "patrol", cwd=tmp_path)
+    assert wrong.returncode == 2 and "GoToObject" in wrong.stderr
+    good = cli("validate", PATROL.plans_dir() / "patrol-12.py", "--domain", "patrol", "--robots", "1,2,3,6",
+               cwd=tmp_path)
+    assert good.returncode == 0 and "valid allocated plan" in good.stdout
+
+
+def test_household_options_are_refused_for_a_site_domain(tmp_path):
+    plan = PATROL.plans_dir() / "patrol-01.py"
+    assert_one_line_error(cli("execute", plan, "--domain", "patrol", "--floor-plan", "6", "--task", "patrol-01",
+                              cwd=tmp_path), "--floor-plan and --thor-build are for the household domain")
+    assert_one_line_error(cli("execute", plan, "--domain", "patrol", "--catalogue", "x.json", "--task", "patrol-01",
+                              cwd=tmp_path), "robots are in its domain.toml")
+    assert_one_line_error(cli("execute", plan, "--domain", "nowhere", "--task", "patrol-01", cwd=tmp_path),
+                          "no domain 'nowhere'")
+
+
+def test_benchmark_list_and_check_take_the_domain(tmp_path):
+    listed = cli("benchmark", "list", "--domain", "patrol", "--json", cwd=tmp_path)
+    assert listed.returncode == 0, listed.stderr
+    tasks = [json.loads(line) for line in listed.stdout.splitlines()]
+    assert len(tasks) == 15 and tasks[0]["floor_plan"] == "campus"
+    checked = cli("benchmark", "check", "--domain", "patrol", cwd=tmp_path)
+    assert checked.returncode == 0, checked.stdout + checked.stderr
+    assert "all             12   12/12   1.00   1.00   1.00   1.00" in checked.stdout
+    assert "infeasible       3     3/3" in checked.stdout
+
+
+def test_domain_new_writes_a_domain_that_checks_and_runs(tmp_path):
+    made = cli("domain", "new", "mine", cwd=tmp_path)
+    assert made.returncode == 0, made.stderr
+    assert sorted(p.name for p in (tmp_path / "mine").iterdir()) == ["domain.toml", "reference_plans", "tasks.jsonl"]
+    assert [p.name for p in tmp_path.iterdir()] == ["mine"]  # nothing left of the staging folder
+    checked = cli("domain", "check", "mine", cwd=tmp_path)
+    assert checked.returncode == 0, checked.stdout + checked.stderr
+    assert checked.stdout.startswith("my_site: 3 skills, 2 robots, 4 site entries on yard")
+    assert "1/1" in checked.stdout
+    ran = cli("execute", "mine/reference_plans/yard-01.py", "--domain", "mine", "--task", "yard-01", cwd=tmp_path)
+    assert ran.returncode == 0 and "SR 1.00" in ran.stdout
+    again = cli("domain", "new", "mine", cwd=tmp_path)
+    assert_one_line_error(again, "mine already exists")
+
+
+def test_domain_check_reports_a_broken_domain_at_its_line(tmp_path):
+    cli("domain", "new", "mine", cwd=tmp_path)
+    toml = tmp_path / "mine" / "domain.toml"
+    toml.write_text(toml.read_text().replace('skills = ["GoToLocation", "ClickPicture", "Patrol"]\nvisibility_area = 300',
+                                             'skills = ["GoToLocation", "Fly"]\nvisibility_area = 300'))
+    result = cli("domain", "check", "mine", cwd=tmp_path)
+    line = next(k for k, text in enumerate(toml.read_text().splitlines(), 1) if text == 'name = "rover"')
+    assert_one_line_error(result, f"mine/domain.toml:{line}: robot rover has skill 'Fly', which the domain does "
+                                  "not define; define it as [skills.Fly]")
+
+
+def test_domain_check_fails_a_reference_plan_that_falls_short(tmp_path):
+    cli("domain", "new", "mine", cwd=tmp_path)
+    plan = tmp_path / "mine" / "reference_plans" / "yard-01.py"
+    plan.write_text(plan.read_text().replace("GoToLocation(robot_list[0], 'ShedDoor')",
+                                             "GoToLocation(robot_list[0], 'Chimney')"))
+    result = cli("domain", "check", "mine", cwd=tmp_path)
+    assert result.returncode == 1
+    assert "FAILED yard-01:" in result.stdout and "rover cannot reach Chimney" in result.stdout
+
+
+def test_domain_list_shows_the_builtin_domains(tmp_path):
+    result = cli("domain", "list", cwd=tmp_path)
+    assert result.returncode == 0
+    names = [line.split()[0] for line in result.stdout.splitlines()]
+    assert names == ["household", "patrol"]

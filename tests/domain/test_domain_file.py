@@ -1,0 +1,114 @@
+"""Domain files: the patrol domain loads as written, and every kind of mistake is one error at its line."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from smartllm_local.domain import DomainError, builtin_domains, load_domain, starter_domain
+from smartllm_local.errors import CatalogueError
+
+PATROL = load_domain("patrol")
+STARTER = (starter_domain() / "domain.toml").read_text(encoding="utf-8")
+
+
+def test_builtin_domains_are_household_and_patrol():
+    assert builtin_domains() == ["household", "patrol"]  # the starter is not a domain to plan in
+
+
+def test_patrol_holds_the_papers_skills_and_a_mixed_team():
+    assert list(PATROL.catalogue.skills) == ["GoToLocation", "ClickPicture", "Patrol"]
+    assert PATROL.effects == {"GoToLocation": "move", "ClickPicture": "photograph", "Patrol": "patrol"}
+    assert PATROL.pools == {"Patrol": "visibility_area"}
+    kinds = {r.name: r.kind for r in PATROL.catalogue.robots.values()}
+    assert kinds["drone1"] == "aerial" and kinds["rover1"] == "ground"
+    assert PATROL.catalogue.robots[1].capacity("visibility_area") == 1500
+    assert PATROL.catalogue.robots[6].capacity("camera_range") == 0
+    roof = PATROL.place("warehouseroof")  # names match case-insensitively, as in plans
+    assert roof is not None and roof.kind == "region" and roof.reach == frozenset({"aerial"}) and roof.area == 500
+    assert PATROL.states == ("COVERED", "PHOTOGRAPHED", "RETURNED")
+
+
+def test_household_is_the_default_and_keeps_its_catalogue():
+    household = load_domain()
+    assert household.is_household and household.name == "household"
+    assert "PickupObject" in household.catalogue.skills and 1 in household.catalogue.robots
+
+
+def test_an_unknown_domain_names_the_known_ones():
+    with pytest.raises(DomainError, match=r"no domain 'patrl'.*household, patrol.*did you mean patrol"):
+        load_domain("patrl")
+
+
+def test_catalogue_is_refused_for_a_site_domain():
+    with pytest.raises(DomainError, match="robots are in its domain.toml"):
+        load_domain("patrol", catalogue="benchmark/robots.json")
+
+
+def write(tmp_path: Path, text: str) -> Path:
+    (tmp_path / "domain.toml").write_text(text, encoding="utf-8")
+    return tmp_path
+
+
+def line_of(text: str, needle: str) -> int:
+    return next(k for k, line in enumerate(text.splitlines(), start=1) if needle in line)
+
+
+@pytest.mark.parametrize("old, new, needle, message", [
+    # a robot with a skill the domain does not define: the robot's name line, and the fix
+    ('skills = ["GoToLocation", "ClickPicture", "Patrol"]\nvisibility_area = 300',
+     'skills = ["GoToLocation", "ClickPicture", "Patroll"]\nvisibility_area = 300',
+     'name = "rover"', r"robot rover has skill 'Patroll', which the domain does not define; did you mean Patrol\?"),
+    # an argument type with no entries: the skill's line
+    ('[world.regions.Yard]\nat = [30, 20]\narea = 800\n', '',
+     "[skills.Patrol]", r"skill Patrol takes a region, and the site has none: add a \[world.regions.NAME\] table"),
+    # an unknown key in a skill
+    ('effect = "photograph"\n', 'effect = "photograph"\nrange = 3\n',
+     "range = 3", r"skill ClickPicture: unknown key 'range'"),
+    # an unknown effect
+    ('effect = "move"', 'effect = "fly"', "[skills.GoToLocation]", r"effect must be one of move, photograph, patrol"),
+    # a patrol skill that pools nothing
+    ('pools = "visibility_area"\n', '', "[skills.Patrol]", r"needs pools = the capacity"),
+    # a robot missing a capacity
+    ('visibility_area = 900\n', '', 'name = "drone"', r"robot drone: needs visibility_area = a number"),
+    # a region without an area
+    ('area = 800\n', '', "[world.regions.Yard]", r"Yard: a region needs area"),
+    # a start that is not on the site
+    ('start = "Dock"', 'start = "Harbour"', "start = ", r"start must name the site entry every robot starts at"),
+    # a mistyped top-level key
+    ('site = "yard"', 'sites = "yard"', "sites = ", r"unknown key 'sites'"),
+    # the same id twice
+    ('id = 2\n', 'id = 1\n', 'name = "rover"', r"robot rover: id 1 is used twice"),
+])
+def test_a_mistake_is_reported_at_its_line_with_the_fix(tmp_path, old, new, needle, message):
+    assert old in STARTER
+    text = STARTER.replace(old, new, 1)
+    folder = write(tmp_path, text)
+    with pytest.raises(DomainError) as caught:
+        load_domain(folder)
+    problems = str(caught.value).splitlines()
+    assert len(problems) == 1, problems
+    match = re.match(rf"^{re.escape(str(folder / 'domain.toml'))}:(\d+): (.+)$", problems[0])
+    assert match, problems[0]
+    assert int(match.group(1)) == line_of(text, needle), (problems[0], needle)
+    assert re.search(message, match.group(2)), match.group(2)
+
+
+def test_every_problem_is_reported_at_once(tmp_path):
+    text = STARTER.replace('effect = "move"', 'effect = "fly"').replace('start = "Dock"', 'start = "Nowhere"')
+    with pytest.raises(DomainError) as caught:
+        load_domain(write(tmp_path, text))
+    assert len(str(caught.value).splitlines()) == 2  # the robots' skill is not reported again as undefined
+    assert "effect must be one of" in str(caught.value) and "start must name" in str(caught.value)
+
+
+def test_invalid_toml_is_one_error_naming_the_file(tmp_path):
+    with pytest.raises(DomainError, match=r"domain.toml: not valid TOML: .*line 1"):
+        load_domain(write(tmp_path, "name = \n"))
+
+
+def test_a_team_from_a_domain_checks_its_ids():
+    with pytest.raises(CatalogueError, match="unknown robot id"):
+        PATROL.catalogue.team([1, 99])
