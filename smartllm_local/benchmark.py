@@ -100,14 +100,18 @@ def check_reference_plans(
     return results
 
 
-def reference_ticks(task: Task, catalogue: Catalogue, controller: Any, plans_dir: Path | None = None) -> int | None:
+def reference_ticks(task: Task, catalogue: Catalogue, controller: Any, plans_dir: Path | None = None, *,
+                    site: Domain | None = None) -> int | None:
     """How many ticks the task's reference plan takes to meet every goal condition (None: it has no
-    plan that does), run on ``controller`` (the Speed measure's yardstick)."""
-    plan, _ = load_reference_plan(task, catalogue, plans_dir) if task.feasible and task.goals else (None, "")
+    plan that does), run on ``controller`` or on ``site`` (the Speed measure's yardstick)."""
+    if site is not None and plans_dir is None:
+        plans_dir = site.plans_dir()
+    plan, _ = load_reference_plan(task, catalogue, plans_dir, site) if task.feasible and task.goals else (None, "")
     if plan is None:
         return None
-    execution = run_plan(plan, task.floor_plan, catalogue.team(task.robots), controller=controller,
-                         skills=catalogue.skills)
+    team = catalogue.team(task.robots)
+    execution = run_site_plan(plan, site, team) if site is not None else \
+        run_plan(plan, task.floor_plan, team, controller=controller, skills=catalogue.skills)
     scores = score_execution(execution, task.goals)
     return execution.ticks if scores.TCR == 1.0 else None
 

@@ -20,11 +20,12 @@ from typing import Any, Callable, Sequence
 
 from .benchmark import reference_ticks
 from .errors import SmartLLMError
-from .executor import run_plan
+from .domain import Domain
+from .executor import run_plan, run_site_plan
 from .files import write_atomic
 from .methods import Method, SmartLLM
 from .planner.pipeline import Planner, PlanResult, restore_stage, write_artifacts
-from .planner.scene_context import scene_objects
+from .planner.scene_context import scene_objects, site_objects
 from .results import metric_mean, summary_table
 from .robots import Catalogue
 from .run_store import RunStore
@@ -103,13 +104,16 @@ class Progress:
 
 def execute_and_score(result: PlanResult, goals: Sequence[Goal], catalogue: Catalogue, *,
                       trans: int | None = None, max_trans: int | None = None, controller: Any = None,
-                      build: str | None = None) -> Scores:
-    """Run a planned task's allocated plan and score it (a refusal runs nothing)."""
+                      build: str | None = None, site: Domain | None = None) -> Scores:
+    """Run a planned task's allocated plan (in AI2-THOR, or on ``site``) and score it (a refusal runs nothing)."""
     if result.plan is None:
         raise SmartLLMError(result.error or "there is no valid plan to execute")
     team = catalogue.team(result.robots)
-    execution = run_plan(result.plan, result.floor_plan, team, controller=controller, build=build,
-                         skills=catalogue.skills)
+    if site is not None:
+        execution = run_site_plan(result.plan, site, team)
+    else:
+        execution = run_plan(result.plan, result.floor_plan, team, controller=controller, build=build,
+                             skills=catalogue.skills)
     return score_execution(execution, goals, trans=trans, max_trans=max_trans)
 
 
@@ -122,9 +126,10 @@ def run_benchmark(
     store: RunStore | None = None,
     build: str | None = None,
     progress: Callable[["Progress"], None] = lambda step: None,
+    domain: Domain | None = None,
 ) -> list[TaskOutcome]:
-    """Plan (with ``method``; a Planner is SMART-LLM's), execute and score every task; write per-task
-    artifacts and results.jsonl under ``out``.
+    """Plan (with ``method``; a Planner is SMART-LLM's), execute (in AI2-THOR, or on a site ``domain``'s
+    site) and score every task; write per-task artifacts and results.jsonl under ``out``.
 
     With a ``store`` (the run folder), each finished stage is saved at once and each scored task's
     line appended at once; tasks and stages the store already holds are not run again. Any
@@ -133,6 +138,7 @@ def run_benchmark(
     such as a server's slots) plan that many tasks of a stage at once, each task on one worker.
     Returns the outcomes of the tasks run this time.
     """
+    site = domain if domain is not None and not domain.is_household else None
     methods = [SmartLLM(m, catalogue) if isinstance(m, Planner) else m
                for m in (method if isinstance(method, Sequence) else [method])]
     done = store.results() if store is not None else {}
@@ -142,7 +148,7 @@ def run_benchmark(
         task = outcome.task
         outcome.result = PlanResult(instruction=task.instruction, floor_plan=task.floor_plan, robots=list(task.robots))
         if store is not None:
-            _restore(store, catalogue, outcome)
+            _restore(store, catalogue, outcome, site)
         if _goes_on(outcome):
             live.append(outcome)
 
@@ -184,12 +190,12 @@ def run_benchmark(
             started = time.perf_counter()
             if outcome.task.feasible and result.plan is not None and not outcome.error:
                 try:
-                    if controller is None:
+                    if controller is None and site is None:
                         controller = open_controller(outcome.task.floor_plan, len(outcome.task.robots), build=build)
                     scores = execute_and_score(
                         result, outcome.task.goals, catalogue, trans=outcome.task.trans,
-                        max_trans=outcome.task.max_trans, controller=controller)
-                    outcome.scores = scores.with_speed(reference_ticks(outcome.task, catalogue, controller))
+                        max_trans=outcome.task.max_trans, controller=controller, site=site)
+                    outcome.scores = scores.with_speed(reference_ticks(outcome.task, catalogue, controller, site=site))
                 except SmartLLMError as exc:
                     outcome.error = f"execution: {exc}"
                 except Exception as exc:
@@ -251,13 +257,13 @@ def _goes_on(outcome: TaskOutcome) -> bool:
     return not (outcome.error or result is None or result.error or result.refusal is not None)
 
 
-def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome) -> None:
+def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome, site: Domain | None) -> None:
     """Put back the stages an interrupted run finished for this task (a damaged one is run again)."""
     task, result = outcome.task, outcome.result
     assert result is not None
     scene = None
     for record in store.saved_stages(task.id):
-        scene = scene or scene_objects(task.floor_plan)
+        scene = scene or (site_objects(site) if site is not None else scene_objects(task.floor_plan))
         try:
             restore_stage(result, record, catalogue.skills, scene, len(task.robots))
         except SmartLLMError:

@@ -112,7 +112,9 @@ class Reference:
     def allocate(self, task: Task, result: PlanResult) -> None:
         path = self.plans_dir / f"{task.id}.py"
         if not task.feasible:
-            text = f"# INFEASIBLE: the team lacks {', '.join(task.missing_skills) or 'a needed skill'}\n"
+            why = f"the team lacks {', '.join(task.missing_skills)}" if task.missing_skills else \
+                "the team cannot meet a goal condition"
+            text = f"# INFEASIBLE: {why}\n"
         elif path.is_file():
             text = path.read_text(encoding="utf-8")
         else:
@@ -129,10 +131,10 @@ class Reference:
 METHODS = ("smartllm", "decomp-random", "decomp-rule", "reference")
 
 
-def make_method(name: str, catalogue: Catalogue, planner: Planner | None) -> Method:
-    """The method ``name`` (the reference plans need no planner)."""
+def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_dir: Path | None = None) -> Method:
+    """The method ``name`` (the reference plans, from ``plans_dir`` or the benchmark's, need no planner)."""
     if name == "reference":
-        return Reference(catalogue)
+        return Reference(catalogue, plans_dir)
     if name not in METHODS:
         raise UserError(f"--method must be one of {', '.join(METHODS)}, not {name!r}")
     assert planner is not None

@@ -97,7 +97,8 @@ def run_manifest(arguments: Mapping[str, Any], model: Path | None, settings: Map
     ``model`` None: a method that uses no model."""
     described = model_record(model) if model is not None else {"path": None}
     identity = {
-        "arguments": {k: str(v) if isinstance(v, Path) else v for k, v in arguments.items()},
+        # as run.json holds them (a tuple reads back as a list), so that the same arguments compare equal
+        "arguments": json.loads(json.dumps(dict(arguments), default=str)),
         "model": {k: described[k] for k in ("name", "size", "sha256", "files") if k in described},
         "settings": dict(settings),
         "versions": versions(),

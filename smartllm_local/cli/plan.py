@@ -11,6 +11,7 @@ from typing import Optional
 
 import typer
 
+from ..domain import load_domain
 from ..errors import UserError
 from ..evaluation import execute_and_score, run_benchmark
 from ..executor.dispatch import dispatch_plan, load_dispatch
@@ -25,11 +26,11 @@ from ..planner.prefix_cache import open_store
 from ..planner.prompts import PromptOptions
 from ..provenance import run_manifest
 from ..resources import data_dir
-from ..robots import default_catalogue_path, load_catalogue, parse_robot_ids
+from ..robots import load_catalogue, parse_robot_ids
 from ..run_store import RunStore
 from ..tasks import CATEGORIES, check_category, default_task_files, find_task, load_tasks
 from ..world.scenes import floor_plan_name
-from .plans import dispatch_report, dispatch_succeeded, run_record
+from .plans import DOMAIN_HELP, dispatch_report, dispatch_succeeded, run_record
 from .progress import RunProgress
 
 MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
@@ -269,16 +270,21 @@ def benchmark_run(
         "--backend server: plan this many tasks at once, spread over the endpoints and their slots "
         "(llama-server -np N has N). Through a server, plans can differ with it: see the README.")),
     server_timeout: Optional[float] = _SERVER_TIMEOUT,
+    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP + " Other than household, with --method reference only."),
 ) -> None:
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
                            no_world_check, prefix_cache, endpoint, workers, server_timeout)
     check_output_folder(out, "--out")
-    cat = load_catalogue(catalogue)
-    tasks_files = [tasks] if tasks else default_task_files()
+    dom = load_domain(domain, catalogue=catalogue)
+    if not dom.is_household and method != "reference":
+        raise UserError(f"planning with a model is built for the household domain only; in the {dom.name} domain "
+                        "`--method reference` runs and scores its reference plans")
+    cat = dom.catalogue
+    tasks_files = [tasks] if tasks else dom.task_files()
     check_category(category)
-    chosen = load_tasks(tasks_files, catalogue=cat)
+    chosen = load_tasks(tasks_files, catalogue=cat, domain=dom)
     if category is not None:
         chosen = [t for t in chosen if t.category == category]
     if task:
@@ -297,7 +303,7 @@ def benchmark_run(
     for s in chosen_seeds:  # every run folder is checked before the model loads
         folder = out if seeds is None else out / f"seed-{s}"
         manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
-                                catalogue or default_catalogue_path(), data_dir("prompts"))
+                                Path(cat.path), data_dir("prompts"))
         runs.append((s, RunStore(folder, manifest, restart=restart)))
     planners = [] if method == "reference" else options.planners(cat)
     try:
@@ -308,8 +314,9 @@ def benchmark_run(
                       "tasks done", file=sys.stderr)
             seeded = [Planner(p.backend, cat, options.config_for(s)) for p in planners] or [None]
             with RunProgress(f"seed {s}" if seeds is not None else "") as progress:
-                run_benchmark(chosen, [make_method(method, cat, p) for p in seeded], cat, out=store.out, store=store,
-                              build=str(thor_build) if thor_build else None, progress=progress)
+                run_benchmark(chosen, [make_method(method, cat, p, dom.plans_dir()) for p in seeded], cat,
+                              out=store.out, store=store, build=str(thor_build) if thor_build else None,
+                              progress=progress, domain=dom)
     except KeyboardInterrupt:
         scored = sum(t.id in store.results() for _, store in runs for t in chosen)
         print(f"interrupted: {scored} of {len(chosen) * len(runs)} tasks scored; the same command resumes the run",

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterable
 
+from ..domain import ARGUMENT_TYPES, Domain
 from ..skills import has_affordance
 from ..world.object_types import SLICE_RESULTS, TYPE_PROPERTIES
 from ..world.scenes import floor_plan_name, load_scene
@@ -57,3 +58,12 @@ def scene_objects(floor_plan: int | str) -> SceneObjects:
     for affordance in AFFORDANCE_NAMES:
         by_affordance[affordance] = tuple(sorted(t for t, f in flags.items() if affordance in f))
     return SceneObjects(floor_plan=name, masses=masses, by_affordance=by_affordance)
+
+
+def site_objects(domain: Domain) -> SceneObjects:
+    """A site domain's entries, as the planner sees a scene: grouped by the argument type each can fill
+    (``place``: any entry); nothing is lifted, so every mass is 0."""
+    by_type = {kind: tuple(sorted(p.name for p in domain.places.values() if kind in ("place", p.kind)))
+               for kind in ARGUMENT_TYPES}
+    return SceneObjects(floor_plan=domain.site, masses={name: 0.0 for name in domain.places},
+                        by_affordance={"": by_type["place"], **by_type})

@@ -117,3 +117,24 @@ def test_domain_list_shows_the_builtin_domains(tmp_path):
     assert result.returncode == 0
     names = [line.split()[0] for line in result.stdout.splitlines()]
     assert names == ["household", "patrol"]
+
+
+def test_benchmark_run_and_report_on_the_patrol_domain(tmp_path):
+    ran = cli("benchmark", "run", "--domain", "patrol", "--method", "reference", "--out", "run", cwd=tmp_path)
+    assert ran.returncode == 0, ran.stderr
+    lines = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
+    assert len(lines) == 15
+    assert all(line["SR"] == 1.0 and line["Speed"] == 1.0 for line in lines if line["feasible"])
+    assert all(line["refused"] and line["success"] for line in lines if not line["feasible"])
+    assert json.loads((tmp_path / "run" / "run.json").read_text())["identity"]["arguments"]["domain"] == "patrol"
+    again = cli("benchmark", "run", "--domain", "patrol", "--method", "reference", "--out", "run", cwd=tmp_path)
+    assert again.returncode == 0 and "15 of 15 tasks done" in again.stderr  # resumed: nothing to run
+    report = cli("benchmark", "report", "run", cwd=tmp_path)
+    assert report.returncode == 0, report.stderr
+    assert "| reference | - | - | 3 | 3 | 0 | 0 | 3 | 12 | 0 | 0 |" in report.stdout
+
+
+def test_planning_with_a_model_is_refused_outside_household(tmp_path):
+    result = cli("benchmark", "run", "--domain", "patrol", "--out", "run", cwd=tmp_path)
+    assert_one_line_error(result, "planning with a model is built for the household domain only")
+    assert not (tmp_path / "run").exists()
