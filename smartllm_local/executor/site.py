@@ -9,8 +9,10 @@ entry. A skill's effect (declared in the domain file) decides what a call does:
 - ``patrol`` (Patrol): the robots go to the region and sweep it together; the region counts as
   COVERED when their pooled capacity (the skill's ``pools``, e.g. visibility area) reaches its area.
 
-A place with ``reach`` can be entered only by robots of those kinds (a roof, by aerial robots). Each
-call takes one tick, as in AI2-THOR. A robot that cannot do what it was asked stays where it was.
+A team acts with the union of its members' skills; a pooled capacity and a camera count the members
+that have the skill. A place with ``reach`` can be entered only by robots of those kinds (a roof, by
+aerial robots), and a team goes only where every member can. Each call takes one tick, as in AI2-THOR.
+A call that fails changes nothing, and says why.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ class SiteWorld:
         robots = [self.team[m] for m in members]
         problem = why_not(self.domain, effect, skill.name, place, robots, objects[0] if objects else "")
         if not problem and effect == "photograph":
-            problem = self._out_of_range(place, members)  # type: ignore[arg-type]
+            problem = self._out_of_range(place, [m for m in members if skill.name in self.team[m].skills])  # type: ignore[arg-type]
         if problem:
             return Outcome(success=False, error=problem, action=skill.name)
         assert place is not None
@@ -83,8 +85,12 @@ class SiteWorld:
 
 
 def why_not(domain: Domain, effect: str, skill: str, place: Place | None, robots: Sequence[Robot], name: str) -> str:
-    """Why these robots cannot do this call anywhere on the site ("" if they can): the place, its kind,
-    its reach, and for a patrol, whether their pooled capacity covers the region."""
+    """Why these robots cannot do this call anywhere on the site ("" if they can): the skill (some member
+    must have it), the place, its kind, its reach (every member must get there), and for a patrol,
+    whether the pooled capacity of the members with the skill covers the region."""
+    if not any(skill in r.skills for r in robots):
+        return f"{', '.join(r.name for r in robots)} cannot {skill}: no member has that skill"
+    robots_with_skill = [r for r in robots if skill in r.skills]  # a team acts with its members' skills
     if place is None:
         return f"there is no {name!r} on the site {domain.site}"
     wanted = {"photograph": "object", "patrol": "region"}.get(effect)
@@ -94,25 +100,34 @@ def why_not(domain: Domain, effect: str, skill: str, place: Place | None, robots
     if barred:
         kinds = " or ".join(sorted(place.reach or ()))
         return f"{', '.join(barred)} cannot reach {place.name}: only {kinds} robots can"
-    if effect == "photograph" and not any(r.capacity("camera_range") > 0 for r in robots):
-        return f"{', '.join(r.name for r in robots)} has no camera (camera_range 0)"
+    if effect == "photograph" and not any(r.capacity("camera_range") > 0 for r in robots_with_skill):
+        return f"{', '.join(r.name for r in robots_with_skill)} has no camera (camera_range 0)"
     if effect == "patrol":
         capacity = domain.pools[skill]
-        pooled = sum(r.capacity(capacity) for r in robots)
+        pooled = sum(r.capacity(capacity) for r in robots_with_skill)
         if pooled < place.area:
-            return (f"{place.name} has an area of {place.area:g}; {', '.join(r.name for r in robots)} pool "
-                    f"{capacity} {pooled:g}: patrol it with a larger team")
+            return (f"{place.name} has an area of {place.area:g}; {', '.join(r.name for r in robots_with_skill)} "
+                    f"pool {capacity} {pooled:g}: patrol it with a larger team")
     return ""
 
 
 def unattainable(domain: Domain, goals: Sequence[Goal], team: Sequence[Robot]) -> list[str]:
     """The goal conditions no plan for this team can meet, each with why: a region the team cannot reach
     or cannot pool enough capacity to cover, an object no camera of the team can get within range of, a
-    place some robot cannot return to. What an infeasible task must show, and what a planner refuses on."""
-    by_effect = {effect: [r for r in team if any(domain.effects.get(s) == effect for s in r.skills)]
-                 for effect in ("move", "photograph", "patrol")}
-    movers = {r.name for r in by_effect["move"]} | {r.name for r in by_effect["patrol"]}
+    place some robot cannot get to. Sound, not complete: a condition named here is out of reach whatever
+    the plan (a team call moves every member, so a robot goes wherever it and a member that moves can
+    go). What an infeasible task must show, and what a planner may refuse on."""
+    def effect_skills(effect: str) -> list[str]:
+        return [s for s, e in domain.effects.items() if e == effect]
+
+    movers = [(r, effect) for r in team for effect in ("move", "patrol") if set(effect_skills(effect)) & r.skills]
     start = domain.places[domain.start]
+
+    def spots(robot: Robot) -> list[Place]:
+        """Where the robot can be: the start, and every place it and some member that moves can get to."""
+        return [start] + [p for p in domain.places.values() if p.reachable_by(robot) and any(
+            p.reachable_by(m) and (effect == "move" or p.kind == "region") for m, effect in movers)]
+
     problems = []
     for goal in goals:
         place = domain.place(goal.name)
@@ -120,21 +135,18 @@ def unattainable(domain: Domain, goals: Sequence[Goal], team: Sequence[Robot]) -
             problems.append(f"there is no {goal.name!r} on the site {domain.site}")
             continue
         if goal.state == "COVERED":
-            skills = [s for s, e in domain.effects.items() if e == "patrol"]
-            able = [r for r in by_effect["patrol"] if place.reachable_by(r)]
-            best = max((sum(r.capacity(domain.pools[s]) for r in able if s in r.skills) for s in skills), default=0.0)
+            best = max((sum(r.capacity(domain.pools[s]) for r in team if s in r.skills and place.reachable_by(r))
+                        for s in effect_skills("patrol")), default=0.0)
             if best < place.area:
                 problems.append(f"{place.name} COVERED: the team's robots that can patrol it pool {best:g}, "
                                 f"less than its area {place.area:g}")
         elif goal.state == "PHOTOGRAPHED":
-            def sees(r: Robot) -> bool:
-                spots = [start] + ([p for p in domain.places.values() if p.reachable_by(r)] if r.name in movers else [])
-                return any(math.dist(p.at, place.at) <= r.capacity("camera_range") for p in spots)
-            if not any(sees(r) for r in by_effect["photograph"]):
+            cameras = [r for r in team if set(effect_skills("photograph")) & r.skills]
+            if not any(math.dist(p.at, place.at) <= r.capacity("camera_range") for r in cameras for p in spots(r)):
                 problems.append(f"{place.name} PHOTOGRAPHED: no robot of the team with a camera can get within "
                                 "range of it")
         elif goal.state == "RETURNED":
-            stuck = [r.name for r in team if place.at != start.at and (r.name not in movers or not place.reachable_by(r))]
+            stuck = [r.name for r in team if not any(p.at == place.at for p in spots(r))]
             if stuck:
                 problems.append(f"{place.name} RETURNED: {', '.join(stuck)} cannot get there")
     return problems

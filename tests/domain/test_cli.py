@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 from pathlib import Path
 
@@ -138,3 +139,25 @@ def test_planning_with_a_model_is_refused_outside_household(tmp_path):
     result = cli("benchmark", "run", "--domain", "patrol", "--out", "run", cwd=tmp_path)
     assert_one_line_error(result, "planning with a model is built for the household domain only")
     assert not (tmp_path / "run").exists()
+
+
+def test_dispatch_hands_a_patrol_plan_to_the_lab_s_functions(tmp_path):
+    (tmp_path / "lab.toml").write_text('[skills]\nGoToLocation = "tests.executor.lab_robots:site_act"\n'
+                                       'Patrol = "tests.executor.lab_robots:site_act"\n')
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": str(root), "LAB_ROBOTS_LOG": str(tmp_path / "calls.jsonl")}
+
+    def dispatch(plan: str, robots: str) -> subprocess.CompletedProcess:
+        return subprocess.run([SCRIPT, "dispatch", str(PATROL.plans_dir() / plan), "lab.toml", "--domain", "patrol",
+                               "--robots", robots], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+
+    result = dispatch("patrol-12.py", "1,2,3,6")
+    assert result.returncode == 0, result.stderr
+    assert "2/2 actions succeeded" in result.stdout
+    calls = sorted((json.loads(line) for line in (tmp_path / "calls.jsonl").read_text().splitlines()),
+                   key=lambda c: c["robots"])
+    assert calls == [
+        {"robots": [1, 2], "kinds": ["aerial", "aerial"], "visibility": [1500.0, 1500.0], "objects": ["SolarFarm"]},
+        {"robots": [3, 6], "kinds": ["aerial", "ground"], "visibility": [600.0, 800.0], "objects": ["Orchard"]},
+    ]
+    assert_one_line_error(dispatch("patrol-01.py", "4"), "the plan uses ClickPicture, which the dispatch file")

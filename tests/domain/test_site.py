@@ -53,11 +53,12 @@ def test_a_drones_wider_camera_reaches_the_breach_from_the_fields_middle():
     assert act(site, "ClickPicture", "FenceBreach", 0).success  # the drone's 30 m
 
 
-def test_a_robot_without_a_camera_cannot_photograph_even_on_the_spot():
-    site = world(6)
-    act(site, "GoToLocation", "MainGate", 0)
-    outcome = act(site, "ClickPicture", "MainGate", 0)
-    assert not outcome.success and "has no camera" in outcome.error
+def test_a_team_acts_with_its_members_skills_and_pools_only_theirs():
+    site = world(6, 4)  # rover3 has no ClickPicture; rover1 has
+    act(site, "GoToLocation", "MainGate", 0, 1)
+    alone = act(site, "ClickPicture", "MainGate", 0)
+    assert not alone.success and alone.error == "rover3 cannot ClickPicture: no member has that skill"
+    assert act(site, "ClickPicture", "MainGate", 0, 1).success
 
 
 def test_patrol_covers_a_region_only_with_enough_pooled_visibility():

@@ -58,3 +58,14 @@ def hang(robots, target):
 def act(robots, *objects):
     """Any skill (the plan command's test maps them all here)."""
     _record("?", robots, objects)
+
+
+def site_act(robots, *objects):
+    """Any skill of a site domain; records the robots' kinds and visibility areas as well."""
+    entry = {"robots": [r.id for r in robots], "kinds": [r.kind for r in robots],
+             "visibility": [r.capacity("visibility_area") for r in robots], "objects": list(objects)}
+    with _lock:
+        log = os.environ.get("LAB_ROBOTS_LOG")
+        if log:
+            with open(log, "a", encoding="utf-8") as handle:
+                handle.write(json.dumps(entry) + "\n")
