@@ -41,6 +41,8 @@ EFFECTS = {"move": "place", "photograph": "object", "patrol": "region"}
 #: The kinds of entries a site holds; ``place`` is any of them.
 ENTRY_KINDS = ("location", "region", "object")
 ARGUMENT_TYPES = (*ENTRY_KINDS, "place")
+#: The kind of the planner's notional robots, which reach every place (no robot may declare it).
+ANY_KIND = "*"
 
 
 class DomainError(UserError):
@@ -58,7 +60,7 @@ class Place:
     reach: frozenset[str] | None = None  # the robot kinds that can get there; None: every kind
 
     def reachable_by(self, robot: Robot) -> bool:
-        return self.reach is None or robot.kind in self.reach
+        return self.reach is None or robot.kind in self.reach or robot.kind == ANY_KIND
 
 
 @dataclass(frozen=True)
@@ -308,7 +310,9 @@ def _skills(check: _Checker, table: Any, capacities: Mapping[str, str],
             check.fail(where, f"skill {name} patrols, so it needs pools = the capacity a team adds up to cover a "
                               'region\'s area, e.g. pools = "visibility_area"')
         effects[name] = effect
-        skills.append(Skill(name, effect, (argument,), 1))
+        # A move is the planner's go-to (the action "" that AI2-THOR's GoToObject has): other calls act
+        # where it went.
+        skills.append(Skill(name, "" if effect == "move" else effect, (argument,), 1))
     return effects, pools, skills
 
 
@@ -335,6 +339,8 @@ def _robots(check: _Checker, entries: Any, names: set[str], capacities: Mapping[
             at.fail(f"robot {label}: id {rid} is used twice")
             continue
         kind = entry.get("kind", "")
+        if not isinstance(kind, str) or not kind.isidentifier():
+            at.fail(f'robot {label}: kind must be a word such as "aerial" or "ground" (place reach lists kinds)')
         robot_skills = entry.get("skills")
         if not isinstance(robot_skills, list) or not all(isinstance(s, str) for s in robot_skills):
             at.fail(f"robot {label}: skills must list skill names")

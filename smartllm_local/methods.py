@@ -20,7 +20,6 @@ from .plan_language import parse_plan
 from .planner.baselines import allocate_by, random_chooser, rule_chooser
 from .planner.feasibility import function_needs
 from .planner.pipeline import Planner, PlanResult
-from .planner.scene_context import scene_objects
 from .planner.stages import StageRecord
 from .robots import Catalogue
 from .tasks import Task
@@ -55,16 +54,16 @@ class SmartLLM:
         return stages + [Stage("allocation", self.allocate)]
 
     def decompose(self, task: Task, result: PlanResult) -> None:
-        self.planner.decompose(result, scene_objects(task.floor_plan))
+        self.planner.decompose(result, self.planner.scene(task.floor_plan))
 
     def coalition(self, task: Task, result: PlanResult) -> None:
         self.planner.form_coalition(result, result.stages[0].plan, self.catalogue.team(task.robots),  # type: ignore[arg-type]
-                                    scene_objects(task.floor_plan))
+                                    self.planner.scene(task.floor_plan))
 
     def allocate(self, task: Task, result: PlanResult) -> None:
         coalition = result.stages[1].output if len(result.stages) > 1 else None
         self.planner.allocate(result, result.stages[0].plan, coalition, self.catalogue.team(task.robots),  # type: ignore[arg-type]
-                              scene_objects(task.floor_plan))
+                              self.planner.scene(task.floor_plan))
 
 
 class DecompositionThenRule(SmartLLM):
@@ -81,7 +80,7 @@ class DecompositionThenRule(SmartLLM):
     def allocate(self, task: Task, result: PlanResult) -> None:
         started = time.perf_counter()
         team = self.catalogue.team(task.robots)
-        scene = scene_objects(task.floor_plan)
+        scene = self.planner.scene(task.floor_plan)
         decomposed = result.stages[0].plan
         pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
         choose = rule_chooser(team) if self.rule == "rule" else \

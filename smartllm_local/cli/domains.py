@@ -27,7 +27,8 @@ def list_domains() -> None:
 
 @app.command("new")
 def new(folder: Path = typer.Argument(..., help="The folder to create (it must not exist yet).")) -> None:
-    """Write a commented starting domain (domain.toml, a task, its reference plan) to edit into your own."""
+    """Write a commented starting domain (domain.toml, prompt examples, a task and its reference plan) to edit
+    into your own."""
     if folder.exists():
         raise UserError(f"{folder} already exists: `domain new` writes a new folder, so give one that does not exist")
     if not folder.parent.is_dir():
@@ -41,22 +42,27 @@ def new(folder: Path = typer.Argument(..., help="The folder to create (it must n
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
-    typer.echo(f"wrote {folder}/{DOMAIN_FILE}, tasks.jsonl and reference_plans/: edit them, then run "
+    typer.echo(f"wrote {folder}/{DOMAIN_FILE}, examples/, tasks.jsonl and reference_plans/: edit them, then run "
                f"`smartllm-local domain check {folder}`")
 
 
 @app.command("check")
 def check(domain: str = typer.Argument(..., help="A domain folder, or a built-in domain's name.")) -> None:
-    """Check a domain: its file, its tasks and its reference plans (run on its site). Exit 1 if a plan fails."""
+    """Check a domain: its file, its prompt examples (each in its stage's grammar), its tasks and its reference
+    plans (run on its site). Exit 2 for a problem in a file, 1 if a reference plan falls short."""
     from ..benchmark import category_table, check_reference_plans
+    from ..planner.example_check import check_examples
     from ..tasks import load_tasks
 
     loaded = load_domain(domain)
     if loaded.is_household:
         raise UserError("the household domain runs in AI2-THOR: check it with `smartllm-local benchmark check`")
     catalogue = loaded.catalogue
+    count, problems = check_examples(loaded)
+    if problems:
+        raise UserError("\n".join(problems))
     typer.echo(f"{loaded.name}: {len(catalogue.skills)} skills, {len(catalogue.robots)} robots, "
-               f"{len(loaded.places)} site entries on {loaded.site}")
+               f"{len(loaded.places)} site entries on {loaded.site}, {count} prompt examples in their grammars")
     files = [f for f in loaded.task_files() if f.is_file()]
     if not files:
         typer.echo(f"no tasks: add {loaded.folder}/tasks.jsonl to benchmark it")

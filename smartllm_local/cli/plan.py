@@ -11,7 +11,7 @@ from typing import Optional
 
 import typer
 
-from ..domain import load_domain
+from ..domain import Domain, load_domain
 from ..errors import UserError
 from ..evaluation import execute_and_score, run_benchmark
 from ..executor.dispatch import dispatch_plan, load_dispatch
@@ -26,9 +26,9 @@ from ..planner.prefix_cache import open_store
 from ..planner.prompts import PromptOptions
 from ..provenance import run_manifest
 from ..resources import data_dir
-from ..robots import load_catalogue, parse_robot_ids
+from ..robots import parse_robot_ids
 from ..run_store import RunStore
-from ..tasks import CATEGORIES, check_category, default_task_files, find_task, load_tasks
+from ..tasks import CATEGORIES, check_category, find_task, load_tasks
 from ..world.scenes import floor_plan_name
 from .plans import DOMAIN_HELP, dispatch_report, dispatch_succeeded, run_record
 from .progress import RunProgress
@@ -81,12 +81,13 @@ class ModelOptions:
         """The planner's settings with another sampling seed."""
         return replace(self.config, sampling=replace(self.config.sampling, seed=seed))
 
-    def planners(self, catalogue) -> list[Planner]:
-        """One planner per worker (one, but for a server backend with --workers)."""
+    def planners(self, catalogue, domain: Domain | None = None) -> list[Planner]:
+        """One planner per worker (one, but for a server backend with --workers), for ``domain``'s tasks."""
+        site = domain if domain is not None and not domain.is_household else None
         backends = load_backends(self.backend, self.model, workers=self.workers, endpoints=self.endpoints,
                                  server_timeout=self.server_timeout, n_ctx=self.n_ctx, threads=self.threads,
                                  n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=self.prefix_cache)
-        return [Planner(backend, catalogue, self.config) for backend in backends]
+        return [Planner(backend, catalogue, self.config, site=site) for backend in backends]
 
 
 # Options shared by every command that plans (typer option objects can be reused as defaults).
@@ -161,6 +162,7 @@ def plan_command(
     prefix_cache: Optional[str] = _PREFIX_CACHE,
     endpoint: Optional[str] = _ENDPOINT,
     server_timeout: Optional[float] = _SERVER_TIMEOUT,
+    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
@@ -168,21 +170,26 @@ def plan_command(
                            no_world_check, prefix_cache, endpoint, 1, server_timeout)
     if out is not None:
         check_output_folder(out, "--out")
-    cat = load_catalogue(catalogue)
+    dom = load_domain(domain, catalogue=catalogue)
+    cat = dom.catalogue
+    if not dom.is_household and (floor_plan or thor_build):
+        raise UserError(f"--floor-plan and --thor-build are for the household domain; the {dom.name} domain's "
+                        f"plans are for its site {dom.site}")
     goals, trans, max_trans = (), None, None
     if task is not None:
         if instruction or floor_plan or robots:
             raise UserError("give either --task (with --tasks) or an instruction with --floor-plan and --robots")
-        chosen = find_task(load_tasks(tasks or default_task_files(), catalogue=cat), task)
+        chosen = find_task(load_tasks(tasks or dom.task_files(), catalogue=cat, domain=dom), task)
         instruction, scene, team_ids = chosen.instruction, chosen.floor_plan, list(chosen.robots)
         goals, trans, max_trans = chosen.goals, chosen.trans, chosen.max_trans
     else:
         if tasks is not None:
             raise UserError("--tasks needs --task ID")
-        if not (instruction and floor_plan and robots):
+        if not (instruction and (floor_plan or not dom.is_household) and robots):
             raise UserError('plan needs an instruction, --floor-plan and --robots (or --task ID), e.g. '
-                            'smartllm-local plan "Put the apple in the fridge" --floor-plan 6 --robots 1,2')
-        scene, team_ids = floor_plan_name(floor_plan), parse_robot_ids(robots)
+                            'smartllm-local plan "Put the apple in the fridge" --floor-plan 6 --robots 1,2'
+                            if dom.is_household else "plan needs an instruction and --robots (or --task ID)")
+        scene, team_ids = floor_plan_name(floor_plan) if dom.is_household else dom.site, parse_robot_ids(robots)
     team = cat.team(team_ids)
     if execute and dispatch is not None:
         raise UserError("give --execute (in AI2-THOR) or --dispatch (on the lab's robots), not both")
@@ -192,7 +199,7 @@ def plan_command(
         if missing:
             raise UserError(f"the team's robots have skill(s) {', '.join(missing)}, which the dispatch file "
                             f"{dispatch} names no function for; add them under [skills]")
-    planner = options.planners(cat)[0]
+    planner = options.planners(cat, dom)[0]
     try:
         result = planner.plan(instruction, scene, team_ids)
     finally:
@@ -202,7 +209,8 @@ def plan_command(
     scores = None
     if execute and result.plan is not None and not result.error:
         scores = execute_and_score(result, goals, cat, trans=trans, max_trans=max_trans,
-                                   build=str(thor_build) if thor_build else None)
+                                   build=str(thor_build) if thor_build else None,
+                                   site=None if dom.is_household else dom)
     dispatched = None
     if functions is not None and result.plan is not None and not result.plan.is_refusal and not result.error:
         dispatched = dispatch_plan(result.plan, team, functions, skills=cat.skills)
@@ -270,7 +278,7 @@ def benchmark_run(
         "--backend server: plan this many tasks at once, spread over the endpoints and their slots "
         "(llama-server -np N has N). Through a server, plans can differ with it: see the README.")),
     server_timeout: Optional[float] = _SERVER_TIMEOUT,
-    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP + " Other than household, with --method reference only."),
+    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
@@ -278,9 +286,6 @@ def benchmark_run(
                            no_world_check, prefix_cache, endpoint, workers, server_timeout)
     check_output_folder(out, "--out")
     dom = load_domain(domain, catalogue=catalogue)
-    if not dom.is_household and method != "reference":
-        raise UserError(f"planning with a model is built for the household domain only; in the {dom.name} domain "
-                        "`--method reference` runs and scores its reference plans")
     cat = dom.catalogue
     tasks_files = [tasks] if tasks else dom.task_files()
     check_category(category)
@@ -303,16 +308,16 @@ def benchmark_run(
     for s in chosen_seeds:  # every run folder is checked before the model loads
         folder = out if seeds is None else out / f"seed-{s}"
         manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
-                                Path(cat.path), data_dir("prompts"))
+                                Path(cat.path), data_dir("prompts") if dom.folder is None else dom.folder / "examples")
         runs.append((s, RunStore(folder, manifest, restart=restart)))
-    planners = [] if method == "reference" else options.planners(cat)
+    planners = [] if method == "reference" else options.planners(cat, dom)
     try:
         for s, store in runs:
             done = store.results()
             if done:
                 print(f"resuming the run in {store.out}: {sum(t.id in done for t in chosen)} of {len(chosen)} "
                       "tasks done", file=sys.stderr)
-            seeded = [Planner(p.backend, cat, options.config_for(s)) for p in planners] or [None]
+            seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.site) for p in planners] or [None]
             with RunProgress(f"seed {s}" if seeds is not None else "") as progress:
                 run_benchmark(chosen, [make_method(method, cat, p, dom.plans_dir()) for p in seeded], cat,
                               out=store.out, store=store, build=str(thor_build) if thor_build else None,

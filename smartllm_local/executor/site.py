@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from typing import Any, Sequence
 
-from ..domain import Domain, Place
+from ..domain import ANY_KIND, Domain, Place
 from ..robots import Robot
 from ..scoring import SITE_STATES, Goal
 from ..skills import Skill
@@ -82,6 +82,43 @@ class SiteWorld:
 
         return [{"objectType": p.name, "objectId": p.name, "kind": p.kind, **state(p)}
                 for p in self.domain.places.values()]
+
+
+NOTIONAL_CAMERA = 1e-6  # metres: the notional robot photographs only what it stands at
+
+
+def notional_site_robot(domain: Domain) -> Robot:
+    """A robot for the planner's dry runs of a site: every skill, of every kind (it reaches every place),
+    unbounded capacities, and a camera that sees only what it stands at (a real robot's sees farther)."""
+    capacities = {name: (NOTIONAL_CAMERA if name == "camera_range" else math.inf) for name in domain.capacities}
+    return Robot(id=-1, name="notional robot", skills=frozenset(domain.catalogue.skills), mass_capacity=math.inf,
+                 kind=ANY_KIND, capacities=tuple(sorted(capacities.items())))
+
+
+class SiteDryRun:
+    """A site that can branch, for the planner's world check: what :class:`SiteWorld` decides, tried
+    and undone."""
+
+    def __init__(self, domain: Domain, team: Sequence[Robot]):
+        self.world = SiteWorld(domain, team)
+        self.skills = domain.catalogue.skills
+
+    def succeeds(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> Outcome:
+        saved = self.snapshot()
+        try:
+            return self.apply(members, skill, objects)
+        finally:
+            self.restore(saved)
+
+    def apply(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> Outcome:
+        return self.world.perform(self.skills[skill], objects, members)
+
+    def snapshot(self) -> tuple:
+        return list(self.world.positions), set(self.world.covered), set(self.world.photographed)
+
+    def restore(self, saved: tuple) -> None:
+        positions, covered, photographed = saved
+        self.world.positions, self.world.covered, self.world.photographed = list(positions), set(covered), set(photographed)
 
 
 def why_not(domain: Domain, effect: str, skill: str, place: Place | None, robots: Sequence[Robot], name: str) -> str:

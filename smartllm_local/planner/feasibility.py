@@ -1,7 +1,9 @@
 """Which robots can do what: the team knowledge the coalition and allocation grammars build on.
 
 A robot can use only its own skills and lift up to its mass capacity; a team
-pools skills and capacities. The coalition grammar admits, for each sub-task,
+pools skills and capacities. On a site, a call also asks that its robots get
+where it acts (a roof: aerial robots only) and, for a patrol, that the members
+with the skill pool the region's area. The coalition grammar admits, for each sub-task,
 only the teams that have every skill its function uses and can lift the
 heaviest thing it picks up, and admits only a refusal when some sub-task has
 no such team. The allocation grammar admits only robot lists that give every
@@ -21,8 +23,27 @@ from ..robots import Robot
 from .scene_context import SceneObjects
 
 MASS_TOLERANCE = 1e-6  # scene masses are float32
+SOME_CAMERA = 1e-3  # metres: a photograph needs a robot with some camera (how far it sees, the world check asks)
 EXACT_COALITIONS = 6  # teams up to this size are enumerated
 EXACT_ALLOCATIONS = 5  # robot lists (ordered) up to this team size are enumerated
+
+
+@dataclass(frozen=True)
+class Demand:
+    """What one call on a site asks of the robots that make it: to get where it acts (robots of
+    ``kinds``; None: any), and for a pooling skill, ``amount`` of ``capacity`` from the members that
+    have ``skill`` and get there (a camera: some camera_range)."""
+
+    skill: str
+    place: str
+    kinds: frozenset[str] | None = None
+    capacity: str = ""
+    amount: float = 0.0
+
+    def met_by(self, robots: Sequence[Robot]) -> bool:
+        able = [r for r in robots if self.skill in r.skills and (self.kinds is None or r.kind in self.kinds)]
+        return bool(able) and (not self.capacity or sum(r.capacity(self.capacity) for r in able)
+                               + MASS_TOLERANCE >= self.amount)
 
 
 @dataclass(frozen=True)
@@ -31,6 +52,7 @@ class Need:
 
     skills: frozenset[str]
     mass: float  # the heaviest object it picks up (kg)
+    demands: frozenset[Demand] = frozenset()  # a site domain's: where its calls go, what they pool
 
 
 @dataclass(frozen=True)
@@ -40,6 +62,20 @@ class Step:
     slot: int | None
     skill: str
     mass: float  # of the object picked up, else 0
+    demand: Demand | None = None  # on a site: every actor must get there (a team goes together)
+
+
+def call_demand(scene: SceneObjects, skill: str, objects: Sequence[str]) -> Demand | None:
+    """What a call asks on a site (None: nothing beyond the skill, or not a site)."""
+    site = scene.site
+    place = site.place(objects[0]) if site is not None and objects else None
+    if site is None or place is None:
+        return None
+    if site.effects.get(skill) == "patrol":
+        return Demand(skill, place.name, place.reach, site.pools[skill], place.area)
+    if site.effects.get(skill) == "photograph":
+        return Demand(skill, place.name, place.reach, "camera_range", SOME_CAMERA)
+    return Demand(skill, place.name, place.reach) if place.reach is not None else None
 
 
 def function_needs(plan: Plan, scene: SceneObjects, pickup_skills: Iterable[str] = ("PickupObject",)) -> dict[str, Need]:
@@ -51,17 +87,22 @@ def function_needs(plan: Plan, scene: SceneObjects, pickup_skills: Iterable[str]
     def need(name: str) -> Need:
         if name not in memo:
             skills: set[str] = set()
+            demands: set[Demand] = set()
             mass = 0.0
             for step in functions[name].body:
                 if isinstance(step, SkillCall):
                     skills.add(step.skill)
                     if step.skill in pickups and step.objects:
                         mass = max(mass, scene.masses.get(step.objects[0], 0.0))
+                    demand = call_demand(scene, step.skill, step.objects)
+                    if demand is not None:
+                        demands.add(demand)
                 elif isinstance(step, Call):
                     inner = need(step.function)
                     skills |= inner.skills
+                    demands |= inner.demands
                     mass = max(mass, inner.mass)
-            memo[name] = Need(frozenset(skills), mass)
+            memo[name] = Need(frozenset(skills), mass, frozenset(demands))
         return memo[name]
 
     return {name: need(name) for name in functions}
@@ -69,7 +110,8 @@ def function_needs(plan: Plan, scene: SceneObjects, pickup_skills: Iterable[str]
 
 def can_do(robots: Sequence[Robot], need: Need) -> bool:
     skills = frozenset().union(*(r.skills for r in robots))
-    return need.skills <= skills and sum(r.mass_capacity for r in robots) + MASS_TOLERANCE >= need.mass
+    return need.skills <= skills and sum(r.mass_capacity for r in robots) + MASS_TOLERANCE >= need.mass \
+        and all(d.met_by(robots) for d in need.demands)
 
 
 def feasible_teams(team: Sequence[Robot], need: Need) -> list[tuple[int, ...]] | None:
@@ -97,4 +139,7 @@ def feasible_lists(team: Sequence[Robot], steps: Sequence[Step], min_length: int
 
 def _step_ok(listed: Sequence[Robot], step: Step) -> bool:
     actors = listed if step.slot is None else [listed[step.slot]]
-    return can_do(actors, Need(frozenset({step.skill}), step.mass))
+    demand = step.demand
+    if demand is not None and demand.kinds is not None and not all(r.kind in demand.kinds for r in actors):
+        return False
+    return can_do(actors, Need(frozenset({step.skill}), step.mass, frozenset({demand} if demand else ())))

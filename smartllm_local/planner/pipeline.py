@@ -16,6 +16,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..domain import Domain
 from ..errors import PlanError, UserError
 from ..files import json_text, write_atomic
 from ..plan_language import Plan, parse_plan
@@ -39,7 +40,7 @@ from .prompts import (
     examples_for,
     load_examples,
 )
-from .scene_context import SceneObjects, scene_objects
+from .scene_context import SceneObjects, scene_objects, site_objects
 from .stages import StageRecord, check_output, fit_prompt, run_stage
 
 DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 896, "allocation": 1280}
@@ -110,12 +111,19 @@ class Planner:
     """Plans tasks with one backend; keeps nothing between tasks but the backend's cache."""
 
     def __init__(self, backend: Backend, catalogue: Catalogue, config: PlannerConfig = PlannerConfig(),
-                 examples: Sequence[Example] | None = None):
+                 examples: Sequence[Example] | None = None, site: Domain | None = None):
+        """``site``: plan for a site domain (its catalogue, its site, and its examples unless given)."""
         self.backend = backend
         self.catalogue = catalogue
         self.config = config
-        self.examples = list(examples) if examples is not None else load_examples()
+        self.site = site
+        self.examples = list(examples) if examples is not None else load_examples(
+            site.folder / "examples" if site is not None and site.folder is not None else None)
         self.chat, self.chat_status = chat_format(backend, config.chat_template)
+
+    def scene(self, floor_plan: str | int) -> SceneObjects:
+        """What the stages know of where a task happens: a floor plan's objects, or the site's entries."""
+        return site_objects(self.site) if self.site is not None else scene_objects(floor_plan)
 
     def stage_rng(self, result: PlanResult, stage: str) -> np.random.Generator:
         """A stage's sampling randomness, from (seed, task, stage) alone: a task planned by itself
@@ -134,7 +142,7 @@ class Planner:
         skills = self.catalogue.skills
         prompt = fit_prompt(lambda ex: decomposition_prompt(result.instruction, scene, skills, ex, opts), examples,
                             self.backend, budget, self.chat)
-        world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS) if self.config.world_check else None
+        world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site) if self.config.world_check else None
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world) \
             if self.config.grammar else None
         run_stage(record, self.backend, prompt, constraint, output_budget=budget,
@@ -186,7 +194,7 @@ class Planner:
         names = [f.name for f in decomposed.functions]
         constraint = None
         if self.config.grammar and self.config.restate:
-            world = WorldCheck(scene.floor_plan, skills, len(team)) if self.config.world_check else None
+            world = WorldCheck(scene.floor_plan, skills, len(team), site=scene.site) if self.config.world_check else None
             constraint = RestatedAllocation(scene, skills, team=len(team) if self.config.free_teams else team,
                                             function_names=names, bodies=restated_bodies(decomposition, names),
                                             world=world)
@@ -227,7 +235,7 @@ class Planner:
     def plan(self, instruction: str, floor_plan: str | int, robot_ids: Sequence[int]) -> PlanResult:
         """All stages for one task; the allocated plan (or the refusal) is in the result."""
         team = self.catalogue.team(robot_ids)
-        scene = scene_objects(floor_plan)
+        scene = self.scene(floor_plan)
         result = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=list(robot_ids))
         first = self.decompose(result, scene)
         if self.continue_after(result, first):

@@ -42,7 +42,7 @@ from .constraints import (
     SUMMARY_CHARS, SUMMARY_LEN, Choose, Constraint, Forced, comment_text, longest, ordered_subset, refusal_line,
     refusal_text_len, text_run,
 )
-from .feasibility import Step
+from .feasibility import Step, call_demand
 from .grammar import Node, Ref, alt, chars, rep, seq
 from .orchestration import Orchestration
 from .scene_context import SceneObjects
@@ -143,6 +143,8 @@ class PlanConstraint(Orchestration, Constraint):
         self.robot_args = ["robot_list", *(f"robot_list[{i}]" for i in range(self.team_size))] if self.allocated else []
         self.robot_arg_len = max((len(a) + 2 for a in self.robot_args), default=0)  # with its ", "
         self.gotos = goto
+        # On a site, a move is an end in itself (back to base): a function may end with one, or make two.
+        self.goto_acts = scene.site is not None
         self.sleep_len = len(INDENT) + len("time.sleep(9)\n")
         self._candidate_cache: dict[tuple, list[Candidate]] = {}
         self.world = world
@@ -237,6 +239,11 @@ class PlanConstraint(Orchestration, Constraint):
         """The GoToObject lines that leave room for an action after them within ``room`` characters;
         with a world check, only those to a place where one of the function's next calls that fits
         succeeds."""
+        if self.goto_acts:  # a move is a step in itself: anywhere else it gets to
+            here = self._place(fn)
+            members = self._members(fn, None)
+            return self._node([c for c in self._goto_candidates() if c[1][0] != here and self._line_len(c) <= room
+                               and (self.world is None or self.world.succeeds(members, c[0].name, c[1]))])
         if self.world is None:
             cheapest = min(self._line_len(c) for c in self._candidates(fn))
             return self._node([c for c in self._goto_candidates() if self._line_len(c) + cheapest <= room])
@@ -432,11 +439,13 @@ class PlanConstraint(Orchestration, Constraint):
         unchecked = self._candidates(fn)
         actions = self._succeeding(fn)
         room = fn.steps < self.max_steps - 1  # leave a step for the closing action
+        goto_room = fn.steps < self.max_steps if self.goto_acts else room
         # The cheapest way on to an action: one that succeeds now, or else a GoToObject and one after it.
         cheapest = min(self._line_len(c) for c in unchecked)
         to_action = min((self._line_len(c) for c in actions),
                         default=self.goto_max + self.action_max if self.world is not None else cheapest)
-        if room and fn.last_step != "goto":  # going somewhere twice in a row is never useful, comment or not
+        # Going somewhere twice in a row is never useful, comment or not (on a site, a move is a step of its own).
+        if goto_room and (fn.last_step != "goto" or self.goto_acts):
             goto = self._goto_node(fn, remaining - closing)
             if goto is not None:
                 options["goto"] = goto
@@ -452,7 +461,7 @@ class PlanConstraint(Orchestration, Constraint):
         # With a world check a function puts down what it holds before it ends, if there is room to.
         must_release = self.world is not None and not self.allocated and fn.held and "action" in options
         step_follows = self.world is None or bool({"goto", "action"} & set(options))
-        if fn.last == "action" and not must_release:
+        if (fn.last == "action" or (self.goto_acts and fn.last == "goto")) and not must_release:
             options["end"] = "\n"
         elif not step_follows:
             # Nothing checked fits or succeeds (a dead end, counted): the unchecked actions that fit.
@@ -475,7 +484,8 @@ class PlanConstraint(Orchestration, Constraint):
 
     def _steps(self, fn: WrittenFunction) -> list[Step]:
         pickups = {s.name for s in self.skills if s.action == "PickupObject"}
-        return [Step(slot, skill, self.scene.masses.get(objects[0], 0.0) if skill in pickups else 0.0)
+        return [Step(slot, skill, self.scene.masses.get(objects[0], 0.0) if skill in pickups else 0.0,
+                     call_demand(self.scene, skill, objects))
                 for slot, skill, objects in fn.calls]
 
     # --------------------------------------------------------------- feeding

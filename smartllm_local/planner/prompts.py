@@ -37,7 +37,7 @@ _QUOTED = re.compile(r"'([A-Za-z]+)'")
 class Example:
     name: str
     instruction: str
-    floor_plan: int
+    floor_plan: int | str  # an iTHOR floor plan, or a site domain's site
     robots: tuple[int, ...]
     goals: tuple[dict[str, Any], ...]
     trans: int
@@ -151,15 +151,20 @@ def skills_header(skills: SkillSet) -> str:
 
 
 def robots_list(team: Sequence[Robot]) -> str:
-    items = ",\n    ".join(
-        f"{{'name': 'robots[{i}]', 'id': {r.id}, 'skills': {sorted(r.skills)!r}, 'mass_capacity': {r.mass_capacity:g}}}"
-        for i, r in enumerate(team)
-    )
+    def describe(i: int, r: Robot) -> str:
+        head = f"'name': 'robots[{i}]', 'id': {r.id}"
+        if r.kind:  # a site domain's robot: its kind and capacities
+            held = "".join(f", '{name}': {value:g}" for name, value in r.capacities)
+            return f"{{{head}, 'kind': '{r.kind}', 'skills': {sorted(r.skills)!r}{held}}}"
+        return f"{{{head}, 'skills': {sorted(r.skills)!r}, 'mass_capacity': {r.mass_capacity:g}}}"
+
+    items = ",\n    ".join(describe(i, r) for i, r in enumerate(team))
     return f"robots = [\n    {items},\n]\n"
 
 
-def _example_scene(example: Example) -> SceneObjects:
-    return scene_objects(example.floor_plan)
+def _example_scene(example: Example, scene: SceneObjects) -> SceneObjects:
+    """The scene an example was written for: a site domain's examples are on its one site."""
+    return scene if scene.site is not None else scene_objects(example.floor_plan)
 
 
 # --------------------------------------------------------------------- stages
@@ -191,7 +196,7 @@ def decomposition_prompt(instruction: str, scene: SceneObjects, skills: SkillSet
                          examples: Sequence[Example], options: PromptOptions) -> Prompt:
     parts = [skills_header(skills), "\n", DECOMPOSITION_INTRO]
     for k, ex in enumerate(examples, start=1):
-        objects = _example_scene(ex).python_list(ex.object_types())
+        objects = _example_scene(ex, scene).python_list(ex.object_types())
         parts.append(f"\n# Example {k}\nobjects = {objects}\n# Task Description: {ex.instruction}\n")
         parts.append(shape(ex.decomposition, options))
     site = f" task\nobjects = {scene.python_list()}\n# Task"
@@ -202,12 +207,28 @@ def plan_object_types(code: str, scene: SceneObjects) -> list[str]:
     return [t for t in dict.fromkeys(_QUOTED.findall(code)) if t in scene.masses]
 
 
+def coalition_intro(scene: SceneObjects) -> str:
+    """The coalition rules as the prompt states them: household's lifting, or a site's reach and pooling."""
+    if scene.site is None:
+        return COALITION_INTRO
+    pools = ", ".join(f"for {skill} their {capacity}" for skill, capacity in scene.site.pools.items())
+    return f"""\
+# For each sub-task of a plan, choose the robot, or the team of robots, that will do it.
+# A robot can only use its own skills and go only where its kind may (a place's reach); a
+# team pools its members' skills and adds up {pools}. Reason before choosing: say what the
+# sub-task needs (its skills, what it pools, where only some robots go), which robots have
+# that, and what is missing; only then, after "so", name the robot or team. Prefer a single
+# robot when one can do the whole sub-task. If no robot or team can do a sub-task, answer
+# with one line: # INFEASIBLE: <why>.
+"""
+
+
 def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects, catalogue: dict[int, Robot],
                      examples: Sequence[Example], options: PromptOptions) -> Prompt:
-    parts = [COALITION_INTRO]
+    parts = [coalition_intro(scene)]
     for k, ex in enumerate(examples, start=1):
         ex_team = [catalogue[i] for i in ex.robots]
-        objects = _example_scene(ex).python_list(ex.object_types())
+        objects = _example_scene(ex, scene).python_list(ex.object_types())
         parts.append(f"\n# Example {k}\n{shape(ex.decomposition, options)}{robots_list(ex_team)}"
                      f"objects = {objects}\n# Coalition:\n{ex.coalition}")
     objects = scene.python_list(plan_object_types(decomposed, scene))

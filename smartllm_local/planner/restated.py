@@ -24,7 +24,7 @@ from typing import Sequence
 from ..robots import Robot
 from ..skills import Skill, SkillSet
 from .constraints import INDENT, Choose, Forced
-from .feasibility import Step, feasible_lists
+from .feasibility import Step, call_demand, feasible_lists
 from .grammar import alt, seq
 from .plan_constraint import STEP_LINE, PlanConstraint, WrittenFunction
 from .scene_context import SceneObjects
@@ -60,11 +60,11 @@ class RestatedAllocation(PlanConstraint):
         # Refusing is the coalition stage's answer; once teams are formed, the plan is written.
         super().__init__(scene, skills, function_names=function_names, world=world, allow_refusal=False, **known)
         # Robot lists are checked with the team's own robots, in launch order.
-        self.team_world = WorldCheck(world.floor_plan, world.skills, robots=self.team) \
+        self.team_world = WorldCheck(world.floor_plan, world.skills, robots=self.team, site=world.site) \
             if world is not None and self.team is not None else None
         # While bodies are written, the team's own robots run each finished body (with the first robot
         # list under which it succeeds), so a body is checked from the state its predecessors leave.
-        self.body_world = WorldCheck(world.floor_plan, world.skills, robots=self.team) \
+        self.body_world = WorldCheck(world.floor_plan, world.skills, robots=self.team, site=world.site) \
             if self.team_world is not None else None
         self._bodies_run: set[str] = set()
 
@@ -214,7 +214,7 @@ class RestatedAllocation(PlanConstraint):
                     or self._acts_on((skill, tuple(objects))) not in (self._place(fn, slot), None)):
                 continue  # with a world check, robots act on what they went to in this function
             if self.team is not None:
-                steps = self._steps(fn) + [Step(slot, skill.name, mass)]
+                steps = self._steps(fn) + [Step(slot, skill.name, mass, call_demand(self.scene, skill.name, objects))]
                 lists = feasible_lists(self.team, steps, max(1, fn.max_index + 1, (slot or 0) + 1))
                 if lists is not None and not lists:
                     continue

@@ -1,4 +1,4 @@
-"""What the planner knows of a scene: its object types, their masses and affordances.
+"""What the planner knows of a scene: its object types, their masses and affordances (or a site's entries).
 
 Prompts list the types (with the heaviest instance's mass) and grammars only
 admit, for each skill argument, the types that offer what the skill needs.
@@ -24,6 +24,7 @@ class SceneObjects:
     floor_plan: str
     masses: dict[str, float]  # type -> heaviest instance (kg)
     by_affordance: dict[str, tuple[str, ...]]  # affordance ("" = any) -> types, sorted
+    site: Domain | None = None  # a site domain's: its entries are the objects (see site_objects)
 
     @property
     def types(self) -> tuple[str, ...]:
@@ -35,8 +36,16 @@ class SceneObjects:
     def python_list(self, only: Iterable[str] | None = None) -> str:
         """The objects as a Python list of dicts, as the prompts show them."""
         chosen = self.types if only is None else [t for t in self.types if t in set(only)]
-        items = ", ".join(f"{{'name': '{t}', 'mass': {self.masses[t]:g}}}" for t in chosen)
+        items = ", ".join(self._describe(t) for t in chosen)
         return f"[{items}]"
+
+    def _describe(self, name: str) -> str:
+        if self.site is None:
+            return f"{{'name': '{name}', 'mass': {self.masses[name]:g}}}"
+        place = self.site.places[name]
+        area = f", 'area': {place.area:g}" if place.kind == "region" else ""
+        reach = f", 'reach': {sorted(place.reach)!r}" if place.reach is not None else ""
+        return f"{{'name': '{name}', 'kind': '{place.kind}'{area}{reach}}}"
 
 
 def scene_objects(floor_plan: int | str) -> SceneObjects:
@@ -66,4 +75,4 @@ def site_objects(domain: Domain) -> SceneObjects:
     by_type = {kind: tuple(sorted(p.name for p in domain.places.values() if kind in ("place", p.kind)))
                for kind in ARGUMENT_TYPES}
     return SceneObjects(floor_plan=domain.site, masses={name: 0.0 for name in domain.places},
-                        by_affordance={"": by_type["place"], **by_type})
+                        by_affordance={"": by_type["place"], **by_type}, site=domain)

@@ -8,14 +8,17 @@ and no mass limit, one per sub-task (a sub-task's robot holds what it picked up
 and nothing another sub-task's robot holds); an allocation for one notional robot
 per ``robot_list`` slot (whether a robot has the skill and the strength is the
 team feasibility's question). Sub-tasks are checked in the order they are
-written; what runs concurrently may still interleave differently (see README).
+written; what runs concurrently may still interleave differently (see README). A site domain's plan
+is tried on its site simulator the same way (:class:`~smartllm_local.executor.site.SiteDryRun`).
 """
 
 from __future__ import annotations
 
 from typing import Sequence
 
+from ..domain import Domain
 from ..executor.dry_run import DryRun, notional_robot
+from ..executor.site import SiteDryRun, notional_site_robot
 from ..robots import Robot
 from ..skills import SkillSet
 
@@ -27,9 +30,13 @@ class WorldCheck:
     """A dry run of the scene with a team (notional robots unless given), and counts of what it decided."""
 
     def __init__(self, floor_plan: int | str, skills: SkillSet, agents: int = 1,
-                 robots: Sequence[Robot] | None = None):
-        self.floor_plan, self.skills = floor_plan, skills
-        self.run = DryRun(floor_plan, list(robots) if robots else [notional_robot(skills)] * max(1, agents), skills)
+                 robots: Sequence[Robot] | None = None, site: Domain | None = None):
+        self.floor_plan, self.skills, self.site = floor_plan, skills, site
+        if site is not None:
+            team = list(robots) if robots else [notional_site_robot(site)] * max(1, agents)
+            self.run: DryRun | SiteDryRun = SiteDryRun(site, team)
+        else:
+            self.run = DryRun(floor_plan, list(robots) if robots else [notional_robot(skills)] * max(1, agents), skills)
         self.tries = 0
         self.dead_ends = 0  # lines for which nothing that succeeds could be offered
 

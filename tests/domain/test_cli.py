@@ -80,11 +80,13 @@ def test_benchmark_list_and_check_take_the_domain(tmp_path):
 def test_domain_new_writes_a_domain_that_checks_and_runs(tmp_path):
     made = cli("domain", "new", "mine", cwd=tmp_path)
     assert made.returncode == 0, made.stderr
-    assert sorted(p.name for p in (tmp_path / "mine").iterdir()) == ["domain.toml", "reference_plans", "tasks.jsonl"]
+    assert sorted(p.name for p in (tmp_path / "mine").iterdir()) == ["domain.toml", "examples", "reference_plans",
+                                                                     "tasks.jsonl"]
     assert [p.name for p in tmp_path.iterdir()] == ["mine"]  # nothing left of the staging folder
     checked = cli("domain", "check", "mine", cwd=tmp_path)
     assert checked.returncode == 0, checked.stdout + checked.stderr
-    assert checked.stdout.startswith("my_site: 3 skills, 2 robots, 4 site entries on yard")
+    assert checked.stdout.startswith("my_site: 3 skills, 2 robots, 4 site entries on yard, 2 prompt examples in "
+                                     "their grammars")
     assert "1/1" in checked.stdout
     ran = cli("execute", "mine/reference_plans/yard-01.py", "--domain", "mine", "--task", "yard-01", cwd=tmp_path)
     assert ran.returncode == 0 and "SR 1.00" in ran.stdout
@@ -135,12 +137,6 @@ def test_benchmark_run_and_report_on_the_patrol_domain(tmp_path):
     assert "| reference | - | - | 3 | 3 | 0 | 0 | 3 | 12 | 0 | 0 |" in report.stdout
 
 
-def test_planning_with_a_model_is_refused_outside_household(tmp_path):
-    result = cli("benchmark", "run", "--domain", "patrol", "--out", "run", cwd=tmp_path)
-    assert_one_line_error(result, "planning with a model is built for the household domain only")
-    assert not (tmp_path / "run").exists()
-
-
 def test_dispatch_hands_a_patrol_plan_to_the_lab_s_functions(tmp_path):
     (tmp_path / "lab.toml").write_text('[skills]\nGoToLocation = "tests.executor.lab_robots:site_act"\n'
                                        'Patrol = "tests.executor.lab_robots:site_act"\n')
@@ -161,3 +157,15 @@ def test_dispatch_hands_a_patrol_plan_to_the_lab_s_functions(tmp_path):
         {"robots": [3, 6], "kinds": ["aerial", "ground"], "visibility": [600.0, 800.0], "objects": ["Orchard"]},
     ]
     assert_one_line_error(dispatch("patrol-01.py", "4"), "the plan uses ClickPicture, which the dispatch file")
+
+
+def test_domain_check_names_an_example_outside_its_grammar(tmp_path):
+    cli("domain", "new", "mine", cwd=tmp_path)
+    coalition = tmp_path / "mine" / "examples" / "coalition" / "door_and_yard.txt"
+    coalition.write_text(coalition.read_text().replace("pooling 800 visibility_area", "pooling 80 visibility_area"))
+    result = cli("domain", "check", "mine", cwd=tmp_path)
+    assert_one_line_error(result, "mine/examples/coalition/door_and_yard.txt: not in the coalition grammar; each "
+                                  "line states its needs as the planner does")
+    (tmp_path / "mine" / "examples" / "examples.json").unlink()
+    result = cli("domain", "check", "mine", cwd=tmp_path)
+    assert_one_line_error(result, "mine/examples/examples.json: cannot read the prompt examples")

@@ -81,6 +81,8 @@ def line_of(text: str, needle: str) -> int:
     ('site = "yard"', 'sites = "yard"', "sites = ", r"unknown key 'sites'"),
     # the same id twice
     ('id = 2\n', 'id = 1\n', 'name = "rover"', r"robot rover: id 1 is used twice"),
+    # a robot without a kind (what a place's reach names)
+    ('kind = "ground"\n', '', 'name = "rover"', r"robot rover: kind must be a word such as \"aerial\""),
 ])
 def test_a_mistake_is_reported_at_its_line_with_the_fix(tmp_path, old, new, needle, message):
     assert old in STARTER

@@ -1,9 +1,11 @@
 def subtask1_patrol_orchard(robot_list):
-    # sweep the whole orchard
+    # go to the orchard
+    GoToLocation(robot_list[0], 'Orchard')
+    # sweep it all
     Patrol(robot_list[0], 'Orchard')
 
 def subtask2_photograph_mast(robot_list):
-    # a picture needs the camera close: go to the mast first
+    # go close: the camera must reach the mast
     GoToLocation(robot_list[0], 'WeatherMast')
     # take the picture
     ClickPicture(robot_list[0], 'WeatherMast')

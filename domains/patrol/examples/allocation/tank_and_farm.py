@@ -5,11 +5,13 @@ def subtask1_photograph_tank(robot_list):
     ClickPicture(robot_list[0], 'WaterTank')
 
 def subtask2_patrol_solar_farm(robot_list):
-    # the whole team sweeps the farm together
+    # go to the solar farm
+    GoToLocation(robot_list, 'SolarFarm')
+    # sweep it all
     Patrol(robot_list, 'SolarFarm')
 
 t1 = threading.Thread(target=subtask1_photograph_tank, args=([robots[0]],))
-t2 = threading.Thread(target=subtask2_patrol_solar_farm, args=([robots[1], robots[2]],))
+t2 = threading.Thread(target=subtask2_patrol_solar_farm, args=([robots[0], robots[1]],))
 t1.start()
 t2.start()
 t1.join()

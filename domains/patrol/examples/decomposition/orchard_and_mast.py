@@ -1,13 +1,15 @@
-# SubTask 1: sweep the orchard (skills: Patrol)
+# SubTask 1: sweep the orchard (skills: GoToLocation, Patrol)
 # SubTask 2: photograph the weather mast (skills: GoToLocation, ClickPicture)
 # The two do not depend on each other, so they run in parallel.
 
 def subtask1_patrol_orchard():
-    # sweep the whole orchard
+    # go to the orchard
+    GoToLocation('Orchard')
+    # sweep it all
     Patrol('Orchard')
 
 def subtask2_photograph_mast():
-    # a picture needs the camera close: go to the mast first
+    # go close: the camera must reach the mast
     GoToLocation('WeatherMast')
     # take the picture
     ClickPicture('WeatherMast')

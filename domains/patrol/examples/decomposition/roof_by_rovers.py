@@ -1,8 +1,10 @@
-# SubTask 1: sweep the warehouse roof (skills: Patrol)
+# SubTask 1: sweep the warehouse roof (skills: GoToLocation, Patrol)
 # One sub-task.
 
 def subtask1_patrol_roof():
-    # sweep the whole roof
+    # go to the roof
+    GoToLocation('WarehouseRoof')
+    # sweep it all
     Patrol('WarehouseRoof')
 
 subtask1_patrol_roof()

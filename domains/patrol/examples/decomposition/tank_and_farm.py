@@ -1,5 +1,5 @@
 # SubTask 1: photograph the water tank on the roof (skills: GoToLocation, ClickPicture)
-# SubTask 2: sweep the solar farm (skills: Patrol)
+# SubTask 2: sweep the solar farm (skills: GoToLocation, Patrol)
 # The two do not depend on each other, so they run in parallel.
 
 def subtask1_photograph_tank():
@@ -9,7 +9,9 @@ def subtask1_photograph_tank():
     ClickPicture('WaterTank')
 
 def subtask2_patrol_solar_farm():
-    # sweep the whole solar farm
+    # go to the solar farm
+    GoToLocation('SolarFarm')
+    # sweep it all
     Patrol('SolarFarm')
 
 t1 = threading.Thread(target=subtask1_photograph_tank)
