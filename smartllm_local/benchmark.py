@@ -19,7 +19,7 @@ from typing import Any, Iterable, Sequence
 
 from .errors import UserError
 from .domain import Domain
-from .executor import Execution, run_plan, run_site_plan
+from .executor import Execution, run_plan
 from .executor.site import unattainable
 from .plan_language import Plan, read_plan
 from .robots import Catalogue, load_catalogue, team_skills
@@ -84,10 +84,8 @@ def check_reference_plans(
             if controller is None and site is None:
                 controller = open_controller(task.floor_plan, agent_count=len(team), build=build)
             try:
-                if site is not None:
-                    execution = run_site_plan(plan, site, team)
-                else:
-                    execution = run_plan(plan, task.floor_plan, team, controller=controller, skills=catalogue.skills)
+                execution = run_plan(plan, task.floor_plan, team, controller=controller, skills=catalogue.skills,
+                                     site=site)
             except UserError as exc:  # the executor's own checks: the plan does not fit the team
                 results.append(ReferenceResult(task, None, False, f"invalid reference plan: {exc}"))
                 continue
@@ -110,8 +108,7 @@ def reference_ticks(task: Task, catalogue: Catalogue, controller: Any, plans_dir
     if plan is None:
         return None
     team = catalogue.team(task.robots)
-    execution = run_site_plan(plan, site, team) if site is not None else \
-        run_plan(plan, task.floor_plan, team, controller=controller, skills=catalogue.skills)
+    execution = run_plan(plan, task.floor_plan, team, controller=controller, skills=catalogue.skills, site=site)
     scores = score_execution(execution, task.goals)
     return execution.ticks if scores.TCR == 1.0 else None
 

@@ -21,7 +21,7 @@ from typing import Any, Callable, Sequence
 from .benchmark import reference_ticks
 from .errors import SmartLLMError
 from .domain import Domain
-from .executor import run_plan, run_site_plan
+from .executor import run_plan
 from .files import write_atomic
 from .methods import Method, SmartLLM
 from .planner.pipeline import Planner, PlanResult, restore_stage, write_artifacts
@@ -109,11 +109,8 @@ def execute_and_score(result: PlanResult, goals: Sequence[Goal], catalogue: Cata
     if result.plan is None:
         raise SmartLLMError(result.error or "there is no valid plan to execute")
     team = catalogue.team(result.robots)
-    if site is not None:
-        execution = run_site_plan(result.plan, site, team)
-    else:
-        execution = run_plan(result.plan, result.floor_plan, team, controller=controller, build=build,
-                             skills=catalogue.skills)
+    execution = run_plan(result.plan, result.floor_plan, team, controller=controller, build=build,
+                         skills=catalogue.skills, site=site)
     return score_execution(execution, goals, trans=trans, max_trans=max_trans)
 
 

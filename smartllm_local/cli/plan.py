@@ -30,7 +30,7 @@ from ..robots import parse_robot_ids
 from ..run_store import RunStore
 from ..tasks import CATEGORIES, check_category, find_task, load_tasks
 from ..world.scenes import floor_plan_name
-from .plans import DOMAIN_HELP, dispatch_report, dispatch_succeeded, run_record
+from .plans import DOMAIN_HELP, dispatch_report, dispatch_succeeded, refuse_household_options, run_record
 from .progress import RunProgress
 
 MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
@@ -172,9 +172,7 @@ def plan_command(
         check_output_folder(out, "--out")
     dom = load_domain(domain, catalogue=catalogue)
     cat = dom.catalogue
-    if not dom.is_household and (floor_plan or thor_build):
-        raise UserError(f"--floor-plan and --thor-build are for the household domain; the {dom.name} domain's "
-                        f"plans are for its site {dom.site}")
+    refuse_household_options(dom, floor_plan, thor_build)
     goals, trans, max_trans = (), None, None
     if task is not None:
         if instruction or floor_plan or robots:

@@ -10,8 +10,8 @@ from typing import Any, Optional
 import typer
 
 from ..errors import UserError
-from ..domain import load_domain
-from ..executor import Execution, run_plan, run_site_plan
+from ..domain import Domain, load_domain
+from ..executor import Execution, run_plan
 from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..files import check_output_file, read_json, write_json
 from ..plan_language import read_plan
@@ -56,6 +56,13 @@ def validate(
     )
 
 
+def refuse_household_options(dom: Domain, floor_plan: str | None, thor_build: Path | None) -> None:
+    """A site domain's plans run on its site: AI2-THOR's floor plan and build options do not apply."""
+    if not dom.is_household and (floor_plan or thor_build):
+        raise UserError(f"--floor-plan and --thor-build are for the household domain; the {dom.name} domain's "
+                        f"plans run on its site {dom.site}")
+
+
 def check_transitions(trans: int | None, max_trans: int | None) -> None:
     """RU (and so SR) needs both the ground-truth and the maximum transitions, 0 <= trans <= max_trans."""
     for name, value in (("--trans", trans), ("--max-trans", max_trans)):
@@ -89,9 +96,7 @@ def execute(
         check_output_file(trace, "--trace")
     dom = load_domain(domain, catalogue=catalogue)
     cat = dom.catalogue
-    if not dom.is_household and (floor_plan or thor_build):
-        raise UserError(f"--floor-plan and --thor-build are for the household domain; the {dom.name} domain's "
-                        f"plans run on its site {dom.site}")
+    refuse_household_options(dom, floor_plan, thor_build)
     if task is not None:
         if floor_plan or robots or goal:
             raise UserError("give either --task (with --tasks) or --floor-plan/--robots/--goal, not both")
@@ -116,10 +121,8 @@ def execute(
     team = cat.team(team_ids)
     parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team),
                        scene_types=None if dom.is_household else set(dom.places))
-    if dom.is_household:
-        execution = run_plan(parsed, scene, team, build=str(thor_build) if thor_build else None, skills=cat.skills)
-    else:
-        execution = run_site_plan(parsed, dom, team)
+    execution = run_plan(parsed, scene, team, build=str(thor_build) if thor_build else None, skills=cat.skills,
+                         site=None if dom.is_household else dom)
     scores = score_execution(execution, goals, trans=trans, max_trans=max_trans)
     if trace is not None:
         write_json(trace, {"plan": str(plan), "floor_plan": scene, "robots": team_ids, **run_record(execution)})
