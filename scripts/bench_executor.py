@@ -28,7 +28,7 @@ import time
 
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.world.controller import open_controller
 
 FLOOR_PLAN = 6
@@ -150,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--top", type=int, default=25, help="functions to list with --profile")
     args = parser.parse_args(argv)
 
-    team = load_catalogue().team(TEAM)
+    team = load_domain().catalogue.team(TEAM)
     plan = parse_plan(PLAN, team_size=len(team))
     actions = len(plan.skill_calls())
 

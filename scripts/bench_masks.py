@@ -29,7 +29,7 @@ from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
 from smartllm_local.planner.models import resolve_gguf
 from smartllm_local.planner.pipeline import Planner, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.tasks import find_task, load_tasks
 
 
@@ -108,7 +108,7 @@ class Measured(LlamaCppBackend):
 
 
 def measure(model: str, task_ids: list[str]) -> dict:
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     backend = Measured(resolve_gguf(model), n_ctx=4096)
     try:
         planner = Planner(backend, catalogue)

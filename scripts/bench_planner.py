@@ -31,7 +31,7 @@ from smartllm_local.planner.backends import BACKENDS, Sampling, load_backend
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.tasks import Task, find_task, load_tasks
 
 
@@ -110,7 +110,7 @@ def main() -> None:
     parser.add_argument("--n-gpu-layers", type=int, default=0,
                         help="llama.cpp: layers on the GPU (-1 all); transformers: all-or-nothing")
     args = parser.parse_args()
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     task = find_task(load_tasks(), args.task)
     print(f"task {task.id}: {task.instruction!r} on {task.floor_plan} with robots {list(task.robots)}")
 

@@ -1,6 +1,6 @@
 """Checking the benchmark: run every reference plan and sum up per category.
 
-A feasible task's reference plan (``benchmark/reference_plans/<id>.py``) is the
+A feasible task's reference plan (``domains/<domain>/reference_plans/<id>.py``) is the
 proof that the task can be done as written, by that team, in the world the
 planners are scored in: it must reach SR = 1 with every action succeeding
 (Exe = 1). An infeasible task has no plan; what can be checked without running
@@ -18,13 +18,13 @@ from statistics import mean
 from typing import Any, Iterable, Sequence
 
 from .errors import UserError
-from .domain import Domain
+from .domain import Domain, load_domain
 from .executor import Execution, run_plan
 from .executor.site import unattainable
 from .plan_language import Plan, read_plan
-from .robots import Catalogue, load_catalogue, team_skills
+from .robots import Catalogue, team_skills
 from .scoring import Scores, score_execution
-from .tasks import CATEGORIES, Task, benchmark_dir
+from .tasks import CATEGORIES, Task
 from .world.controller import open_controller
 from .world.scenes import load_scene
 
@@ -47,7 +47,8 @@ class ReferenceResult:
 
 
 def default_plans_dir() -> Path:
-    return benchmark_dir() / "reference_plans"
+    """The household domain's reference plans."""
+    return load_domain().plans_dir()
 
 
 def check_reference_plans(
@@ -66,8 +67,8 @@ def check_reference_plans(
     Raises:
         WorldError: the AI2-THOR process failed (no later run could be trusted).
     """
-    site = domain if domain is not None and not domain.is_household else None
-    catalogue = catalogue or (domain.catalogue if domain is not None else load_catalogue())
+    site = domain if domain is not None and not domain.is_ai2thor else None
+    catalogue = catalogue or (domain or load_domain()).catalogue
     folder = Path(plans_dir) if plans_dir is not None else (domain.plans_dir() if domain else default_plans_dir())
     results: list[ReferenceResult] = []
     controller = None

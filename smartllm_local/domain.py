@@ -1,24 +1,29 @@
 """Domains: which robots exist, what they can do, the world they work in and how goals are judged.
 
-``household`` is SMART-LLM's AI2-THOR kitchen domain (its robots in ``benchmark/robots.json``, its
-worlds the iTHOR floor plans). Any other domain is a folder::
+A domain is a folder::
 
-    DIR/domain.toml          the skills, robots, capacities, site and goal states (schema-checked)
-    DIR/tasks.jsonl          its benchmark tasks (optional)
+    DIR/domain.toml          the skills, robots and world (schema-checked)
+    DIR/examples/            the prompts' worked examples (laid out as household's)
+    DIR/tasks.jsonl          its benchmark tasks, then any other *.jsonl (optional)
     DIR/reference_plans/     a plan per feasible task that scores SR = 1 (optional)
 
-A domain file's skills name the *effect* each has in the site simulator (``move``, ``photograph``,
-``patrol``), so a lab may call them what its robots call them; its robots carry the numeric
-capacities the domain declares, and a skill that ``pools`` a capacity is done by a team whose
-members' capacities add up (as household lifts pool mass). Every problem in a file is reported as
+Its world is AI2-THOR (``world = "ai2thor"``: tasks name iTHOR floor plans, each skill performs an
+AI2-THOR action on objects with the affordances its arguments name, a team pools mass to lift) or a
+2-D site (``[world.locations|regions|objects.NAME]`` tables): there a skill names the *effect* it has
+in the site simulator (``move``, ``photograph``, ``patrol``), so a lab may call it what its robots call
+it; robots carry the numeric capacities the domain declares, and a skill that ``pools`` a capacity is
+done by a team whose members' capacities add up. ``household`` (SMART-LLM's) and ``patrol`` (its
+real-robot experiment) ship in ``domains/``. Every problem in a file is reported as
 ``file:line: what is wrong; what to do``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import re
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
@@ -31,10 +36,11 @@ from .errors import UserError
 from .resources import data_dir
 from .robots import Catalogue, Robot, load_catalogue
 from .scoring import SITE_STATES, STATES
-from .skills import Skill, SkillSet
+from .skills import Skill, SkillSet, thor_skill
 
 HOUSEHOLD = "household"
 DOMAIN_FILE = "domain.toml"
+AI2THOR = "ai2thor"
 
 #: What a skill does in the site simulator, and the argument type it takes.
 EFFECTS = {"move": "place", "photograph": "object", "patrol": "region"}
@@ -70,7 +76,8 @@ class Domain:
     name: str
     description: str
     catalogue: Catalogue
-    folder: Path | None = None
+    folder: Path
+    world: str = "site"  # or AI2THOR
     site: str = ""
     start: str = ""
     places: Mapping[str, Place] = field(default_factory=dict)
@@ -79,25 +86,24 @@ class Domain:
     capacities: Mapping[str, str] = field(default_factory=dict)  # capacity -> what it measures
 
     @property
-    def is_household(self) -> bool:
-        return self.folder is None
+    def is_ai2thor(self) -> bool:
+        return self.world == AI2THOR
 
     @property
     def states(self) -> tuple[str, ...]:
-        """The goal states its tasks may ask for (household: the scorer's AI2-THOR states)."""
-        return STATES if self.is_household else tuple(SITE_STATES)
+        """The goal states its tasks may ask for (AI2-THOR: the scorer's AI2-THOR states)."""
+        return STATES if self.is_ai2thor else tuple(SITE_STATES)
 
     def task_files(self) -> list[Path]:
-        if self.folder is None:
-            from .tasks import default_task_files
-
-            return default_task_files()
-        return [self.folder / "tasks.jsonl"]
+        """Its benchmark's task files: tasks.jsonl, then any other ``*.jsonl`` (household: its infeasible tasks)."""
+        others = sorted(p for p in self.folder.glob("*.jsonl") if p.name != "tasks.jsonl")
+        return [self.folder / "tasks.jsonl", *others]
 
     def plans_dir(self) -> Path:
-        if self.folder is None:
-            return data_dir("benchmark") / "reference_plans"
         return self.folder / "reference_plans"
+
+    def examples_dir(self) -> Path:
+        return self.folder / "examples"
 
     def place(self, name: str) -> Place | None:
         """The site entry a plan names (case-insensitively), or None."""
@@ -106,9 +112,8 @@ class Domain:
 
 def builtin_domains() -> list[str]:
     """The domains that ship with the project, household first."""
-    folder = data_dir("domains")
-    return [HOUSEHOLD, *sorted(p.name for p in folder.iterdir()
-                               if (p / DOMAIN_FILE).is_file() and not p.name.startswith("_"))]
+    names = [p.name for p in data_dir("domains").iterdir() if (p / DOMAIN_FILE).is_file() and not p.name.startswith("_")]
+    return sorted(names, key=lambda n: (n != HOUSEHOLD, n))
 
 
 def starter_domain() -> Path:
@@ -117,25 +122,31 @@ def starter_domain() -> Path:
 
 
 def load_domain(name_or_dir: str | Path | None = None, *, catalogue: str | Path | None = None) -> Domain:
-    """A built-in domain by name (default household) or a domain folder; ``catalogue`` replaces
-    household's robot catalogue (another domain's robots are in its domain file)."""
+    """A built-in domain by name (default household) or a domain folder; ``catalogue`` (a JSON robot
+    catalogue) replaces an AI2-THOR domain's robots (a site domain's are in its domain file)."""
     name = str(name_or_dir) if name_or_dir is not None else HOUSEHOLD
-    if name == HOUSEHOLD:
-        cat = load_catalogue(catalogue)
-        return Domain(HOUSEHOLD, "SMART-LLM's household tasks in AI2-THOR's iTHOR floor plans.", cat)
-    if catalogue is not None:
-        raise DomainError(f"--catalogue applies to the household domain; the {name} domain's robots are in its "
-                          f"{DOMAIN_FILE}")
     folder = Path(name)
-    if not (folder / DOMAIN_FILE).is_file() and name in builtin_domains():
-        folder = data_dir("domains") / name
-    if not (folder / DOMAIN_FILE).is_file():
+    if (folder / DOMAIN_FILE).is_file():
+        domain = read_domain_file(folder / DOMAIN_FILE)
+    elif name in builtin_domains():
+        domain = _builtin(name)
+    else:
         known = builtin_domains()
         close = difflib.get_close_matches(name, known, n=1)
         hint = f"; did you mean {close[0]}?" if close else ""
         raise DomainError(f"no domain {name!r}: give a built-in domain ({', '.join(known)}) or a folder holding "
                           f"{DOMAIN_FILE}{hint}")
-    return read_domain_file(folder / DOMAIN_FILE)
+    if catalogue is None:
+        return domain
+    if not domain.is_ai2thor:
+        raise DomainError(f"--catalogue gives an AI2-THOR domain other robots; the {domain.name} domain's robots "
+                          f"are in its {DOMAIN_FILE}")
+    return dataclasses.replace(domain, catalogue=load_catalogue(catalogue))
+
+
+@lru_cache(maxsize=None)
+def _builtin(name: str) -> Domain:
+    return read_domain_file(data_dir("domains") / name / DOMAIN_FILE)
 
 
 class _Checker:
@@ -185,13 +196,15 @@ def read_domain_file(path: Path) -> Domain:
     except tomllib.TOMLDecodeError as exc:
         raise DomainError(f"{path}: not valid TOML: {exc}") from None
     check = _Checker(path, text)
-    known = {"name", "description", "start", "site", "capacities", "skills", "robots", "world"}
-    for key in sorted(set(data) - known):
-        check.fail([key], f"unknown key {key!r}; a domain file has {', '.join(sorted(known))}")
     name = data.get("name")
     if not isinstance(name, str) or not name.isidentifier():
         check.fail(["name"], 'needs name = "..." (letters, digits and underscores)')
         name = path.parent.name
+    if data.get("world") == AI2THOR:
+        return _read_ai2thor(check, data, name)
+    known = {"name", "description", "start", "site", "capacities", "skills", "robots", "world"}
+    for key in sorted(set(data) - known):
+        check.fail([key], f"unknown key {key!r}; a domain file has {', '.join(sorted(known))}")
     site = data.get("site", "site")
     if not isinstance(site, str) or not site.strip():
         check.fail(["site"], 'site must name the site, e.g. site = "campus"')
@@ -209,10 +222,38 @@ def read_domain_file(path: Path) -> Domain:
                               f"got {start!r}")
     if check.problems:
         raise DomainError("\n".join(check.problems))
-    catalogue = Catalogue(robots={r.id: r for r in robots}, skills=SkillSet(skills), path=str(path))
+    catalogue = Catalogue(robots={r.id: r for r in robots}, skills=SkillSet(skills), path=str(check.path))
     return Domain(name=name, description=str(data.get("description", "")), catalogue=catalogue,
-                  folder=path.parent, site=str(site), start=str(start), places=places, effects=effects, pools=pools,
-                  capacities=capacities)
+                  folder=check.path.parent, site=str(site), start=str(start), places=places, effects=effects,
+                  pools=pools, capacities=capacities)
+
+
+def _read_ai2thor(check: _Checker, data: dict[str, Any], name: str) -> Domain:
+    """An AI2-THOR domain: skills that perform AI2-THOR actions, robots that lift up to a mass; its world
+    is the iTHOR floor plans its tasks name."""
+    known = {"name", "description", "world", "skills", "robots"}
+    for key in sorted(set(data) - known):
+        check.fail([key], f"unknown key {key!r}; an AI2-THOR domain file has {', '.join(sorted(known))}")
+    table = data.get("skills")
+    skills: list[Skill] = []
+    if not isinstance(table, dict) or not table:
+        check.fail(["skills"], 'needs skills: [skills.NAME] tables with action = "<AI2-THOR action>" (or '
+                               'effect = "move") and arguments = [affordances]')
+        table = {}
+    for skill_name, entry in table.items():
+        skill = thor_skill(skill_name, entry) if isinstance(entry, dict) else [f"skills.{skill_name} must be a table"]
+        if isinstance(skill, list):
+            for problem in skill:
+                check.fail(["skills", skill_name], problem)
+        else:
+            skills.append(skill)
+    capacities = {"mass_capacity": "kilograms it lifts (robots lifting together add theirs)"}
+    robots = _robots(check, data.get("robots"), set(table), capacities, kinds=False)
+    if check.problems:
+        raise DomainError("\n".join(check.problems))
+    catalogue = Catalogue(robots={r.id: r for r in robots}, skills=SkillSet(skills), path=str(check.path))
+    return Domain(name=name, description=str(data.get("description", "")), catalogue=catalogue,
+                  folder=check.path.parent, world=AI2THOR)
 
 
 def _capacities(check: _Checker, table: Any) -> dict[str, str]:
@@ -231,8 +272,8 @@ def _capacities(check: _Checker, table: Any) -> dict[str, str]:
 
 def _places(check: _Checker, world: Any) -> dict[str, Place]:
     if not isinstance(world, dict):
-        check.fail(["world"], "needs the site: [world.locations.NAME], [world.regions.NAME], "
-                              "[world.objects.NAME] tables, each with at = [x, y]")
+        check.fail(["world"], 'needs world = "ai2thor" (AI2-THOR\'s floor plans) or a site: [world.locations.NAME], '
+                              "[world.regions.NAME], [world.objects.NAME] tables, each with at = [x, y]")
         return {}
     places: dict[str, Place] = {}
     for plural in sorted(set(world) - {f"{k}s" for k in ENTRY_KINDS}):
@@ -316,9 +357,12 @@ def _skills(check: _Checker, table: Any, capacities: Mapping[str, str],
     return effects, pools, skills
 
 
-def _robots(check: _Checker, entries: Any, names: set[str], capacities: Mapping[str, str]) -> list[Robot]:
+def _robots(check: _Checker, entries: Any, names: set[str], capacities: Mapping[str, str], *,
+            kinds: bool = True) -> list[Robot]:
+    """The ``[[robots]]`` entries; a site's robots have a kind, and AI2-THOR's a mass_capacity alone."""
+    fields = "id, name, kind, skills" if kinds else "id, name, skills"
     if not isinstance(entries, list) or not entries:
-        check.fail(["robots"], "needs robots: [[robots]] tables with id, name, kind, skills and each capacity")
+        check.fail(["robots"], f"needs robots: [[robots]] tables with {fields} and each capacity")
         return []
     robots: list[Robot] = []
     for k, entry in enumerate(entries):
@@ -327,9 +371,9 @@ def _robots(check: _Checker, entries: Any, names: set[str], capacities: Mapping[
         if not isinstance(entry, dict):
             check.fail(["robots"], f"robots[{k}] must be a [[robots]] table")
             continue
-        allowed = {"id", "name", "kind", "skills", *capacities}
+        allowed = {"id", "name", *(["kind"] if kinds else []), "skills", *capacities}
         for key in sorted(set(entry) - allowed):
-            at.fail(f"robot {label}: unknown key {key!r}; a robot has id, name, kind, skills"
+            at.fail(f"robot {label}: unknown key {key!r}; a robot has {fields}"
                     + (f" and the capacities {', '.join(capacities)}" if capacities else ""))
         rid = entry.get("id")
         if not isinstance(rid, int) or isinstance(rid, bool) or rid < 0:
@@ -339,7 +383,7 @@ def _robots(check: _Checker, entries: Any, names: set[str], capacities: Mapping[
             at.fail(f"robot {label}: id {rid} is used twice")
             continue
         kind = entry.get("kind", "")
-        if not isinstance(kind, str) or not kind.isidentifier():
+        if kinds and (not isinstance(kind, str) or not kind.isidentifier()):
             at.fail(f'robot {label}: kind must be a word such as "aerial" or "ground" (place reach lists kinds)')
         robot_skills = entry.get("skills")
         if not isinstance(robot_skills, list) or not all(isinstance(s, str) for s in robot_skills):
@@ -356,8 +400,13 @@ def _robots(check: _Checker, entries: Any, names: set[str], capacities: Mapping[
                 at.fail(f"robot {label}: needs {capacity} = a number of 0 or more ({capacities[capacity]})")
                 continue
             values[capacity] = float(value)
-        robots.append(Robot(id=rid, name=str(entry.get("name") or f"robot{rid}"), skills=frozenset(robot_skills),
-                            mass_capacity=0.0, kind=str(kind), capacities=tuple(sorted(values.items()))))
+        name = str(entry.get("name") or f"robot{rid}")
+        if kinds:
+            robots.append(Robot(id=rid, name=name, skills=frozenset(robot_skills), mass_capacity=0.0, kind=str(kind),
+                                capacities=tuple(sorted(values.items()))))
+        else:
+            robots.append(Robot(id=rid, name=name, skills=frozenset(robot_skills),
+                                mass_capacity=values.get("mass_capacity", 0.0)))
     return robots
 
 

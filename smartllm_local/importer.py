@@ -37,7 +37,8 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from .errors import UnknownFloorPlanError, UserError
-from .robots import Catalogue, load_catalogue
+from .domain import load_domain
+from .robots import Catalogue
 from .scoring import STATES
 from .tasks import check_task
 from .world.object_types import SLICE_RESULTS
@@ -138,7 +139,7 @@ def import_smartllm(source: str | Path, *, catalogue: Catalogue | None = None) -
         UserError: ``source`` is missing or holds no such files (bad lines and files only get notes).
     """
     folder = find_final_test(Path(source))
-    catalogue = catalogue or load_catalogue()
+    catalogue = catalogue or load_domain().catalogue
     report = ImportReport()
     for path in sorted(folder.glob("*.json"), key=_file_order):
         if path.is_file():

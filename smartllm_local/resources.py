@@ -1,7 +1,7 @@
-"""Where the project's data folders (benchmark/, domains/, prompts/) live.
+"""Where the project's data folder (domains/) lives.
 
-In a source checkout or an editable install they sit beside the package; a
-wheel carries them inside the package as ``_data/``.
+In a source checkout or an editable install it sits beside the package; a
+wheel carries it inside the package as ``_data/``.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ _PACKAGE_DIR = Path(__file__).resolve().parent
 
 
 def data_dir(name: str) -> Path:
-    """Return the folder ``name`` ("benchmark", "domains" or "prompts"), wherever it was installed."""
+    """Return the data folder ``name`` ("domains"), wherever it was installed."""
     for candidate in (_PACKAGE_DIR / "_data" / name, _PACKAGE_DIR.parent / name):
         if candidate.is_dir():
             return candidate

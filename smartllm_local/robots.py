@@ -1,8 +1,8 @@
 """The robot catalogue: which robots exist, what each can do and how much it can lift.
 
-A catalogue is a JSON file (``benchmark/robots.json`` by default) of robots,
-each with an ``id``, a ``name``, its ``skills`` and its ``mass_capacity`` in
-kg, and optionally extra ``skills`` mapped onto AI2-THOR actions. A team is an
+A domain's robots are its catalogue (see :mod:`.domain`). ``--catalogue`` gives an AI2-THOR domain
+other robots as a JSON file: robots, each with an ``id``, a ``name``, its ``skills`` and its
+``mass_capacity`` in kg, and optionally extra ``skills`` mapped onto AI2-THOR actions. A team is an
 ordered list of catalogue robots; inside a plan, ``robots[i]`` is the i-th.
 """
 
@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 from .errors import CatalogueError
-from .resources import data_dir
 from .skills import AFFORDANCES, DEFAULT_SKILLS, THOR_ACTIONS, Skill, SkillSet
 
 
@@ -70,13 +69,9 @@ def parse_robot_ids(text: str) -> list[int]:
     return ids
 
 
-def default_catalogue_path() -> Path:
-    return data_dir("benchmark") / "robots.json"
-
-
-def load_catalogue(path: str | Path | None = None) -> Catalogue:
-    """Read and check a catalogue file; every problem is reported with its place in the file."""
-    path = Path(path) if path else default_catalogue_path()
+def load_catalogue(path: str | Path) -> Catalogue:
+    """Read and check a JSON catalogue file; every problem is reported with its place in the file."""
+    path = Path(path)
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:

@@ -1,17 +1,23 @@
-"""The robots' skill vocabulary: SMART-LLM's fourteen skills and what each needs.
+"""The robots' skill vocabulary: what a skill is, and the AI2-THOR actions and affordances skills map onto.
 
-A skill is what a plan calls (``PickupObject(robot, 'Apple')``); it maps to an
-AI2-THOR action (``PickupObject``) or, for ``GoToObject``, to navigation. Each
-object argument must have an affordance (a metadata flag such as
-``pickupable``): the planner's grammars admit only such objects, and the
-executor picks instances that have it. Catalogue files may add skills that
-map onto the same AI2-THOR actions.
+A skill is what a plan calls (``PickupObject(robot, 'Apple')``). In an AI2-THOR domain it performs an
+AI2-THOR action (``PickupObject``) or navigates (``GoToObject``), and each object argument needs an
+affordance (a metadata flag such as ``pickupable``): the planner's grammars admit only such objects, and
+the executor picks instances that have it. SMART-LLM's fourteen skills are the household domain's, read
+from ``domains/household/domain.toml``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Mapping
+from typing import Any, Iterable, Mapping
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+from .resources import data_dir
 
 
 @dataclass(frozen=True)
@@ -36,36 +42,61 @@ class Skill:
         return len(self.arguments)
 
 
-def _skill(name: str, action: str, *arguments: str, required: int | None = None) -> Skill:
-    return Skill(name, action, tuple(arguments), len(arguments) if required is None else required)
-
-
-#: SMART-LLM's skills, in the order its prompts list them.
-DEFAULT_SKILLS: tuple[Skill, ...] = (
-    _skill("GoToObject", "", ""),
-    _skill("OpenObject", "OpenObject", "openable"),
-    _skill("CloseObject", "CloseObject", "openable"),
-    _skill("BreakObject", "BreakObject", "breakable"),
-    _skill("SliceObject", "SliceObject", "sliceable"),
-    _skill("SwitchOn", "ToggleObjectOn", "toggleable"),
-    _skill("SwitchOff", "ToggleObjectOff", "toggleable"),
-    _skill("CleanObject", "CleanObject", "dirtyable"),
-    _skill("PickupObject", "PickupObject", "pickupable"),
-    _skill("PutObject", "PutObject", "pickupable", "receptacle"),
-    _skill("DropHandObject", "DropHandObject", "pickupable"),
-    # LLM plans also write ThrowObject(robot, 'Fork', 'GarbageCan'): the target is optional.
-    _skill("ThrowObject", "ThrowObject", "pickupable", "receptacle", required=1),
-    _skill("PushObject", "PushObject", "movable"),
-    _skill("PullObject", "PullObject", "movable"),
-)
-
-#: AI2-THOR actions a skill may be mapped onto by a catalogue.
-THOR_ACTIONS = frozenset(s.action for s in DEFAULT_SKILLS if s.action) | {""}
+#: The AI2-THOR actions the executor performs ("" is navigation: a skill with ``effect = "move"``).
+THOR_ACTIONS = frozenset({"", "OpenObject", "CloseObject", "BreakObject", "SliceObject", "ToggleObjectOn",
+                          "ToggleObjectOff", "CleanObject", "PickupObject", "PutObject", "DropHandObject",
+                          "ThrowObject", "PushObject", "PullObject"})
 
 #: Affordances a skill argument may require ("movable": moveable or pickupable).
 AFFORDANCES = frozenset(
     {"", "pickupable", "receptacle", "openable", "toggleable", "sliceable", "breakable", "dirtyable", "movable"}
 )
+
+
+def thor_skill(name: str, entry: Mapping[str, Any]) -> Skill | list[str]:
+    """An AI2-THOR domain's ``[skills.NAME]`` table as a skill, or what is wrong with it (each problem
+    with its fix), so the domain reader and :data:`DEFAULT_SKILLS` read skills one way."""
+    problems = [f"skill {name}: unknown key {key!r}; an AI2-THOR skill has action (or effect = \"move\"), "
+                "arguments, required and description" for key in sorted(set(entry) - _THOR_SKILL_KEYS)]
+    if not name.isidentifier():
+        problems.append(f"skill {name!r} must be a Python identifier (plans call it)")
+    if entry.get("effect") == "move" and "action" not in entry:
+        action = ""
+    elif "effect" in entry:
+        return problems + [f'skill {name}: in AI2-THOR a skill moves (effect = "move") or names an action, '
+                           f"not effect = {entry['effect']!r}"]
+    else:
+        action = entry.get("action")
+        if action not in THOR_ACTIONS - {""}:
+            return problems + [f"skill {name}: action must be one of the AI2-THOR actions "
+                               f"{', '.join(sorted(THOR_ACTIONS - {''}))}, got {action!r}"]
+    arguments = entry.get("arguments", [""])
+    if not (isinstance(arguments, list) and 1 <= len(arguments) <= 2 and all(a in AFFORDANCES for a in arguments)):
+        return problems + [f"skill {name}: arguments must list 1 or 2 affordances (\"\" for any object) from "
+                           f"{', '.join(repr(a) for a in sorted(AFFORDANCES))}"]
+    required = entry.get("required", len(arguments))
+    if not isinstance(required, int) or isinstance(required, bool) or not 1 <= required <= len(arguments):
+        problems.append(f"skill {name}: required is how many arguments every call gives, 1 to {len(arguments)}")
+    return problems or Skill(name, action, tuple(arguments), required)
+
+
+_THOR_SKILL_KEYS = {"action", "effect", "arguments", "required", "description"}
+
+
+def _household_skills() -> tuple[Skill, ...]:
+    """The household domain file's skills (SMART-LLM's fourteen), read where the domain ships."""
+    path = data_dir("domains") / "household" / "domain.toml"
+    skills = []
+    for name, entry in tomllib.loads(path.read_text(encoding="utf-8"))["skills"].items():
+        skill = thor_skill(name, entry)
+        if isinstance(skill, list):
+            raise RuntimeError(f"{path}: {'; '.join(skill)}: run `smartllm-local domain check household`")
+        skills.append(skill)
+    return tuple(skills)
+
+
+#: SMART-LLM's skills, in the order its prompts list them: the household domain's.
+DEFAULT_SKILLS: tuple[Skill, ...] = _household_skills()
 
 
 class SkillSet(Mapping[str, Skill]):

@@ -1,4 +1,4 @@
-"""Benchmark tasks: one JSON object per line, checked against ``benchmark/task.schema.json``.
+"""Benchmark tasks: one JSON object per line, checked against ``domains/task.schema.json``.
 
 A task file is read whole and checked line by line; every bad line is
 reported as ``file:line: what is wrong`` and no line is skipped silently (blank
@@ -21,8 +21,8 @@ import jsonschema
 
 from .errors import TaskFileError, UnknownFloorPlanError, UserError
 from .resources import data_dir
-from .domain import Domain
-from .robots import Catalogue, load_catalogue
+from .domain import Domain, load_domain
+from .robots import Catalogue
 from .scoring import STATES, Goal, parse_goals
 from .world.object_types import SLICE_RESULTS
 from .world.scenes import floor_plan_name, load_scene
@@ -73,18 +73,10 @@ class Task:
         return data
 
 
-def benchmark_dir() -> Path:
-    return data_dir("benchmark")
-
-
-def default_task_files() -> list[Path]:
-    """The project's benchmark: feasible tasks, then the infeasible ones."""
-    return [benchmark_dir() / "tasks.jsonl", benchmark_dir() / "infeasible.jsonl"]
-
-
 @lru_cache(maxsize=1)
 def task_schema() -> dict[str, Any]:
-    return json.loads((benchmark_dir() / "task.schema.json").read_text(encoding="utf-8"))
+    """The schema of an AI2-THOR domain's task lines (a site domain's is derived from it)."""
+    return json.loads((data_dir("domains") / "task.schema.json").read_text(encoding="utf-8"))
 
 
 def site_task_schema(domain: Domain) -> dict[str, Any]:
@@ -107,7 +99,7 @@ def _scene_types(floor_plan: str) -> frozenset[str]:
 def check_task(data: Any, catalogue: Catalogue, where: str, domain: Domain | None = None) -> tuple[Task | None, list[str]]:
     """Check one decoded line (of ``domain``'s tasks, default household); return the task and the problems found."""
     problems = []
-    site = domain is not None and not domain.is_household
+    site = domain is not None and not domain.is_ai2thor
     validator = jsonschema.Draft202012Validator(site_task_schema(domain) if site else task_schema())  # type: ignore[arg-type]
     for error in sorted(validator.iter_errors(data), key=lambda e: list(e.absolute_path)):
         field = "/".join(str(p) for p in error.absolute_path) or "(line)"
@@ -150,11 +142,12 @@ def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
     Raises:
         TaskFileError: listing every bad line as ``file:line: problem``.
     """
+    domain = domain or load_domain()
     if paths is None:
-        paths = domain.task_files() if domain is not None else default_task_files()
+        paths = domain.task_files()
     elif isinstance(paths, (str, Path)):
         paths = [paths]
-    catalogue = catalogue or (domain.catalogue if domain is not None else load_catalogue())
+    catalogue = catalogue or domain.catalogue
     tasks: list[Task] = []
     problems: list[str] = []
     seen: dict[str, str] = {}

@@ -55,11 +55,11 @@ def test_a_reference_plan_runs_at_speed_1_and_a_padded_one_slower(tmp_path):
     from smartllm_local.evaluation import execute_and_score
     from smartllm_local.plan_language import parse_plan
     from smartllm_local.planner.pipeline import PlanResult
-    from smartllm_local.robots import load_catalogue
+    from smartllm_local.domain import load_domain
     from smartllm_local.tasks import load_tasks
     from smartllm_local.world.controller import open_controller
 
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     task = next(t for t in load_tasks() if t.id == "kitchen-01")
     source = (default_plans_dir() / f"{task.id}.py").read_text()
     controller = open_controller(task.floor_plan, len(task.robots))

@@ -1,4 +1,4 @@
-"""The wheel carries the data folders (benchmark/, domains/, prompts/) and both console scripts."""
+"""The wheel carries the domains (household's and patrol's files, the starter) and both console scripts."""
 
 from __future__ import annotations
 
@@ -10,19 +10,18 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def test_the_wheel_holds_the_benchmark_and_the_prompts(tmp_path):
+def test_the_wheel_holds_the_domains(tmp_path):
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
                     "-w", str(tmp_path), str(ROOT)], check=True, timeout=300)
     wheel = next(tmp_path.glob("smartllm_local-*.whl"))
     names = set(zipfile.ZipFile(wheel).namelist())
-    for required in ("smartllm_local/_data/benchmark/tasks.jsonl", "smartllm_local/_data/benchmark/infeasible.jsonl",
-                     "smartllm_local/_data/benchmark/robots.json", "smartllm_local/_data/benchmark/task.schema.json",
-                     "smartllm_local/_data/benchmark/reference_plans/kitchen-01.py",
-                     "smartllm_local/_data/prompts/examples.json",
+    household = "smartllm_local/_data/domains/household"
+    for required in (f"{household}/domain.toml", f"{household}/tasks.jsonl", f"{household}/infeasible.jsonl",
+                     f"{household}/reference_plans/kitchen-01.py", f"{household}/examples/examples.json",
+                     f"{household}/examples/decomposition/toast.py", "smartllm_local/_data/domains/task.schema.json",
                      "smartllm_local/_data/domains/patrol/domain.toml",
                      "smartllm_local/_data/domains/patrol/reference_plans/patrol-01.py",
                      "smartllm_local/_data/domains/_starter/domain.toml",
-                     "smartllm_local/_data/prompts/decomposition/toast.py",
                      "smartllm_local/world/thor_server.py"):
         assert required in names, required
     entry_points = next(n for n in names if n.endswith("entry_points.txt"))

@@ -12,8 +12,8 @@ from ..errors import UserError
 from ..files import check_output_file, check_output_folder, json_text, write_atomic
 from ..planner.backends import model_location
 from ..planner.models import EMBEDDED
-from ..robots import load_catalogue
-from ..tasks import default_task_files, load_tasks
+from ..domain import load_domain
+from ..tasks import load_tasks
 
 
 def bench_command(
@@ -42,8 +42,8 @@ def bench_command(
         raise UserError(f"--benchmark-out {benchmark_out} exists: give a new folder")
     for model in chosen:  # every model is found before the first is measured
         model_location("llamacpp", model)
-    catalogue = load_catalogue()
-    report = run_bench(chosen, catalogue, load_tasks(default_task_files(), catalogue=catalogue), sample=sample,
+    household = load_domain()
+    report = run_bench(chosen, household.catalogue, load_tasks(domain=household), sample=sample,
                        whole_benchmark=whole_benchmark, threads=threads, benchmark_out=benchmark_out)
     write_atomic(out, json_text(report))
     typer.echo(summary(report))

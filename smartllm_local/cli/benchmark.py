@@ -10,7 +10,6 @@ import typer
 
 from ..files import check_output_file, write_atomic
 from ..domain import load_domain
-from ..robots import load_catalogue
 from ..tasks import CATEGORIES, check_category, load_tasks
 from .plans import DOMAIN_HELP
 
@@ -86,7 +85,7 @@ def import_smartllm(
     from ..importer import import_smartllm as run_import
 
     check_output_file(out, "--out")
-    report = run_import(source, catalogue=load_catalogue())
+    report = run_import(source)
     for note in report.notes:
         typer.echo(str(note))
     write_atomic(out, "".join(json.dumps(task) + "\n" for task in report.tasks))

@@ -49,20 +49,19 @@ def new(folder: Path = typer.Argument(..., help="The folder to create (it must n
 @app.command("check")
 def check(domain: str = typer.Argument(..., help="A domain folder, or a built-in domain's name.")) -> None:
     """Check a domain: its file, its prompt examples (each in its stage's grammar), its tasks and its reference
-    plans (run on its site). Exit 2 for a problem in a file, 1 if a reference plan falls short."""
+    plans (run in its world). Exit 2 for a problem in a file, 1 if a reference plan falls short."""
     from ..benchmark import category_table, check_reference_plans
     from ..planner.example_check import check_examples
     from ..tasks import load_tasks
 
     loaded = load_domain(domain)
-    if loaded.is_household:
-        raise UserError("the household domain runs in AI2-THOR: check it with `smartllm-local benchmark check`")
     catalogue = loaded.catalogue
     count, problems = check_examples(loaded)
     if problems:
         raise UserError("\n".join(problems))
-    typer.echo(f"{loaded.name}: {len(catalogue.skills)} skills, {len(catalogue.robots)} robots, "
-               f"{len(loaded.places)} site entries on {loaded.site}, {count} prompt examples in their grammars")
+    world = "AI2-THOR's floor plans" if loaded.is_ai2thor else f"{len(loaded.places)} site entries on {loaded.site}"
+    typer.echo(f"{loaded.name}: {len(catalogue.skills)} skills, {len(catalogue.robots)} robots, {world}, "
+               f"{count} prompt examples in their grammars")
     files = [f for f in loaded.task_files() if f.is_file()]
     if not files:
         typer.echo(f"no tasks: add {loaded.folder}/tasks.jsonl to benchmark it")

@@ -25,7 +25,6 @@ from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
 from ..planner.prefix_cache import open_store
 from ..planner.prompts import PromptOptions
 from ..provenance import run_manifest
-from ..resources import data_dir
 from ..robots import parse_robot_ids
 from ..run_store import RunStore
 from ..tasks import CATEGORIES, check_category, find_task, load_tasks
@@ -83,7 +82,7 @@ class ModelOptions:
 
     def planners(self, catalogue, domain: Domain | None = None) -> list[Planner]:
         """One planner per worker (one, but for a server backend with --workers), for ``domain``'s tasks."""
-        site = domain if domain is not None and not domain.is_household else None
+        site = domain if domain is not None and not domain.is_ai2thor else None
         backends = load_backends(self.backend, self.model, workers=self.workers, endpoints=self.endpoints,
                                  server_timeout=self.server_timeout, n_ctx=self.n_ctx, threads=self.threads,
                                  n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=self.prefix_cache)
@@ -125,7 +124,7 @@ _PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
     "Where the examples' key/value states are kept between runs, so a later run on the same model starts "
     "from them (default: the user's cache, $XDG_CACHE_HOME/smartllm-local/prefix-states, at most 4 GiB); "
     "off keeps them for this run only. llama.cpp only."))
-_CATALOGUE = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json).")
+_CATALOGUE = typer.Option(None, help="A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own).")
 _THOR_BUILD = typer.Option(None, help="A Unity AI2-THOR executable (default: the headless stand-in).")
 _TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
 
@@ -183,11 +182,11 @@ def plan_command(
     else:
         if tasks is not None:
             raise UserError("--tasks needs --task ID")
-        if not (instruction and (floor_plan or not dom.is_household) and robots):
+        if not (instruction and (floor_plan or not dom.is_ai2thor) and robots):
             raise UserError('plan needs an instruction, --floor-plan and --robots (or --task ID), e.g. '
                             'smartllm-local plan "Put the apple in the fridge" --floor-plan 6 --robots 1,2'
-                            if dom.is_household else "plan needs an instruction and --robots (or --task ID)")
-        scene, team_ids = floor_plan_name(floor_plan) if dom.is_household else dom.site, parse_robot_ids(robots)
+                            if dom.is_ai2thor else "plan needs an instruction and --robots (or --task ID)")
+        scene, team_ids = floor_plan_name(floor_plan) if dom.is_ai2thor else dom.site, parse_robot_ids(robots)
     team = cat.team(team_ids)
     if execute and dispatch is not None:
         raise UserError("give --execute (in AI2-THOR) or --dispatch (on the lab's robots), not both")
@@ -208,7 +207,7 @@ def plan_command(
     if execute and result.plan is not None and not result.error:
         scores = execute_and_score(result, goals, cat, trans=trans, max_trans=max_trans,
                                    build=str(thor_build) if thor_build else None,
-                                   site=None if dom.is_household else dom)
+                                   site=None if dom.is_ai2thor else dom)
     dispatched = None
     if functions is not None and result.plan is not None and not result.plan.is_refusal and not result.error:
         dispatched = dispatch_plan(result.plan, team, functions, skills=cat.skills)
@@ -306,7 +305,7 @@ def benchmark_run(
     for s in chosen_seeds:  # every run folder is checked before the model loads
         folder = out if seeds is None else out / f"seed-{s}"
         manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
-                                Path(cat.path), data_dir("prompts") if dom.folder is None else dom.folder / "examples")
+                                Path(cat.path), dom.examples_dir())
         runs.append((s, RunStore(folder, manifest, restart=restart)))
     planners = [] if method == "reference" else options.planners(cat, dom)
     try:

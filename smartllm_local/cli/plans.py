@@ -29,7 +29,7 @@ def validate(
     stage: str = typer.Option("allocated", help="decomposed (no robot arguments) or allocated."),
     floor_plan: Optional[str] = typer.Option(None, help="Also check object names against this floor plan."),
     robots: Optional[str] = typer.Option(None, help="Also check robots[i] against this team (catalogue ids, e.g. 1,2,3)."),
-    catalogue: Optional[Path] = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json)."),
+    catalogue: Optional[Path] = typer.Option(None, help="A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."),
     domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Parse and validate a plan without running it."""
@@ -38,7 +38,7 @@ def validate(
     dom = load_domain(domain, catalogue=catalogue)
     cat = dom.catalogue
     team_size = len(cat.team(parse_robot_ids(robots))) if robots else None
-    if not dom.is_household:
+    if not dom.is_ai2thor:
         if floor_plan:
             raise UserError(f"--floor-plan is for the household domain; the {dom.name} domain's plans are checked "
                             f"against its site {dom.site}")
@@ -58,7 +58,7 @@ def validate(
 
 def refuse_household_options(dom: Domain, floor_plan: str | None, thor_build: Path | None) -> None:
     """A site domain's plans run on its site: AI2-THOR's floor plan and build options do not apply."""
-    if not dom.is_household and (floor_plan or thor_build):
+    if not dom.is_ai2thor and (floor_plan or thor_build):
         raise UserError(f"--floor-plan and --thor-build are for the household domain; the {dom.name} domain's "
                         f"plans run on its site {dom.site}")
 
@@ -86,7 +86,7 @@ def execute(
     task: Optional[str] = typer.Option(None, help="The task id in --tasks (default: the project's benchmark)."),
     as_json: bool = typer.Option(False, "--json", help="Print the metrics as one JSON object."),
     trace: Optional[Path] = typer.Option(None, help="Write every primitive action to this JSON file."),
-    catalogue: Optional[Path] = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json)."),
+    catalogue: Optional[Path] = typer.Option(None, help="A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."),
     thor_build: Optional[Path] = typer.Option(None, help=THOR_BUILD_HELP),
     domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
@@ -107,10 +107,10 @@ def execute(
     else:
         if tasks is not None:
             raise UserError("--tasks needs --task ID")
-        if not ((floor_plan or not dom.is_household) and robots and goal):
-            raise UserError("execute needs --floor-plan, --robots and --goal (or --task ID)" if dom.is_household
+        if not ((floor_plan or not dom.is_ai2thor) and robots and goal):
+            raise UserError("execute needs --floor-plan, --robots and --goal (or --task ID)" if dom.is_ai2thor
                             else "execute needs --robots and --goal (or --task ID)")
-        scene = floor_plan_name(floor_plan) if dom.is_household else dom.site
+        scene = floor_plan_name(floor_plan) if dom.is_ai2thor else dom.site
         team_ids = parse_robot_ids(robots)
         goals = list(parse_goals(read_json(goal, "goal file"), where=str(goal), states=dom.states))
         if not goals:
@@ -120,9 +120,9 @@ def execute(
         check_transitions(trans, max_trans)
     team = cat.team(team_ids)
     parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team),
-                       scene_types=None if dom.is_household else set(dom.places))
+                       scene_types=None if dom.is_ai2thor else set(dom.places))
     execution = run_plan(parsed, scene, team, build=str(thor_build) if thor_build else None, skills=cat.skills,
-                         site=None if dom.is_household else dom)
+                         site=None if dom.is_ai2thor else dom)
     scores = score_execution(execution, goals, trans=trans, max_trans=max_trans)
     if trace is not None:
         write_json(trace, {"plan": str(plan), "floor_plan": scene, "robots": team_ids, **run_record(execution)})
@@ -145,7 +145,7 @@ def dispatch(
     functions: Path = typer.Argument(..., help="The dispatch file (TOML): the module:function carrying out each skill."),
     robots: str = typer.Option(..., help="The team as catalogue ids, e.g. 1,2,3; robots[i] is the i-th."),
     trace: Optional[Path] = typer.Option(None, help="Write every action to this JSON file."),
-    catalogue: Optional[Path] = typer.Option(None, help="Robot catalogue (default: benchmark/robots.json)."),
+    catalogue: Optional[Path] = typer.Option(None, help="A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."),
     domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Run a plan on real robots: each skill call goes to the lab's own function for that skill.

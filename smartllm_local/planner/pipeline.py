@@ -118,7 +118,7 @@ class Planner:
         self.config = config
         self.site = site
         self.examples = list(examples) if examples is not None else load_examples(
-            site.folder / "examples" if site is not None and site.folder is not None else None)
+            site.examples_dir() if site is not None else None)
         self.chat, self.chat_status = chat_format(backend, config.chat_template)
 
     def scene(self, floor_plan: str | int) -> SceneObjects:

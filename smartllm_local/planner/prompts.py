@@ -1,4 +1,4 @@
-"""The three stages' prompts, assembled from the worked examples under prompts/.
+"""The three stages' prompts, assembled from the worked examples under a domain's examples/ folder.
 
 Prompts are Python source, as in SMART-LLM: the skills as an import line,
 worked examples (each a task description followed by its plan), then the new
@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ..errors import UserError
-from ..resources import data_dir
+from ..domain import load_domain
 from ..robots import Robot
 from ..skills import SkillSet
 from .coalition import LINE as COALITION_LINE
@@ -62,8 +62,8 @@ class PromptOptions:
 
 
 def load_examples(folder: Path | None = None) -> list[Example]:
-    """The worked examples, in the order examples.json lists them."""
-    folder = folder or data_dir("prompts")
+    """The worked examples in ``folder`` (default: the household domain's), in the order examples.json lists them."""
+    folder = folder or load_domain().examples_dir()
     try:
         meta = json.loads((folder / "examples.json").read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:

@@ -7,13 +7,13 @@ import sys
 
 import pytest
 
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.tasks import load_tasks
 
 
 @pytest.fixture(scope="session")
 def catalogue():
-    return load_catalogue()
+    return load_domain().catalogue
 
 
 @pytest.fixture(scope="session")

@@ -10,10 +10,10 @@ from collections import Counter
 from smartllm_local.plan_language import read_plan
 from smartllm_local.plan_language.ir import Call, NewThread, ParamList, RobotGroup, SkillCall, Start, WholeTeam, bind
 from smartllm_local.scoring import condition_holds
-from smartllm_local.tasks import benchmark_dir, default_task_files
+from smartllm_local.domain import load_domain
 from smartllm_local.world.scenes import load_scene, scene_info
 
-PLANS = benchmark_dir() / "reference_plans"
+PLANS = load_domain().plans_dir()
 MINIMUM = {"elemental": 6, "simple": 8, "compound": 14, "complex": 8}
 RESERVED_FLOOR_PLANS = {"FloorPlan2", "FloorPlan9", "FloorPlan204", "FloorPlan308", "FloorPlan409"}
 ROOM_PREFIX = {"kitchen": "kitchen", "living room": "living", "bedroom": "bedroom", "bathroom": "bathroom"}
@@ -66,7 +66,7 @@ def team_calls(plan) -> list:
 
 def test_the_benchmark_files_load_with_the_default_loader(all_tasks):
     files = {t.source.rsplit(":", 1)[0] for t in all_tasks}
-    assert files == {str(p) for p in default_task_files()}
+    assert files == {str(p) for p in load_domain().task_files()}
 
 
 def test_category_counts(feasible):

@@ -12,9 +12,9 @@ from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.baselines import allocate_by, random_chooser, rule_chooser
 from smartllm_local.planner.feasibility import function_needs
 from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 
-CATALOGUE = load_catalogue()
+CATALOGUE = load_domain().catalogue
 PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObject"]
 
 # FloorPlan6: a light to switch off and a bread to slice, launched together; then the fridge moved.

@@ -20,7 +20,7 @@ from smartllm_local.evaluation import run_benchmark
 from smartllm_local.planner.pipeline import Planner, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.run_store import RunStore
 from smartllm_local.tasks import find_task, load_tasks
 
@@ -123,7 +123,7 @@ class _Exploding(Planner):
 
 
 def test_any_exception_in_a_task_is_that_tasks_error_and_the_run_goes_on(smollm2, tmp_path):
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     tasks = [t for t in load_tasks() if t.id in ("kitchen-01", "kitchen-02")]
     store = RunStore(tmp_path, {"identity": {"test": 1}, "started": "now"})
     outcomes = run_benchmark(tasks, _Exploding(smollm2, catalogue), catalogue, out=tmp_path, store=store)
@@ -138,7 +138,7 @@ def test_a_task_planned_alone_samples_what_it_samples_after_others(smollm2):
     from smartllm_local.planner.backends import Sampling
     from smartllm_local.planner.pipeline import PlannerConfig
 
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     budgets = {"decomposition": 300, "coalition": 896, "allocation": 1280}
     config = PlannerConfig(sampling=Sampling(temperature=1.0, seed=11), world_check=False, budgets=budgets)
     tasks = load_tasks()
@@ -179,7 +179,7 @@ def test_a_damaged_stage_record_is_run_again_not_trusted(tmp_path):
 
 
 def test_a_saved_plan_that_does_not_parse_is_forgotten(smollm2, tmp_path):
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     task = find_task(load_tasks(), "kitchen-01")
     store = RunStore(tmp_path, {"identity": {}, "started": "now"})
     store.save_stage(task.id, StageRecord("decomposition", output="def broken(:\n"))

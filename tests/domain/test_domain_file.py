@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -33,7 +34,7 @@ def test_patrol_holds_the_papers_skills_and_a_mixed_team():
 
 def test_household_is_the_default_and_keeps_its_catalogue():
     household = load_domain()
-    assert household.is_household and household.name == "household"
+    assert household.is_ai2thor and household.name == "household"
     assert "PickupObject" in household.catalogue.skills and 1 in household.catalogue.robots
 
 
@@ -44,7 +45,7 @@ def test_an_unknown_domain_names_the_known_ones():
 
 def test_catalogue_is_refused_for_a_site_domain():
     with pytest.raises(DomainError, match="robots are in its domain.toml"):
-        load_domain("patrol", catalogue="benchmark/robots.json")
+        load_domain("patrol", catalogue="robots.json")
 
 
 def write(tmp_path: Path, text: str) -> Path:
@@ -114,3 +115,66 @@ def test_invalid_toml_is_one_error_naming_the_file(tmp_path):
 def test_a_team_from_a_domain_checks_its_ids():
     with pytest.raises(CatalogueError, match="unknown robot id"):
         PATROL.catalogue.team([1, 99])
+
+
+# ------------------------------------------------------------------- AI2-THOR domains (household's form)
+
+HOUSEHOLD_FILE = (load_domain().folder / "domain.toml").read_text(encoding="utf-8")
+
+
+def test_household_is_a_domain_folder_with_smartllms_skills_and_robots():
+    household = load_domain("household")
+    assert household.folder.name == "household" and household.world == "ai2thor"
+    assert [p.name for p in household.task_files()] == ["tasks.jsonl", "infeasible.jsonl"]
+    skills = household.catalogue.skills
+    assert len(skills) == 14 and skills["SwitchOn"].action == "ToggleObjectOn" and skills["GoToObject"].action == ""
+    assert skills["PutObject"].arguments == ("pickupable", "receptacle") and skills["ThrowObject"].required == 1
+    robots = household.catalogue.robots
+    assert len(robots) == 30 and robots[7].mass_capacity == 0.08 and "CleanObject" in robots[29].skills
+    assert robots[24].describe() == "robot24 (skills: GoToObject, SwitchOff, SwitchOn; carries up to 100 kg)"
+
+
+@pytest.mark.parametrize("old, new, needle, message", [
+    ('action = "PickupObject"', 'action = "Grab"', "[skills.PickupObject]",
+     r"skill PickupObject: action must be one of the AI2-THOR actions .*PickupObject"),
+    ('arguments = ["openable"]\ndescription = "open', 'arguments = ["opennable"]\ndescription = "open',
+     "[skills.OpenObject]", r"skill OpenObject: arguments must list 1 or 2 affordances"),
+    ('effect = "move"\narguments', 'effect = "patrol"\narguments', "[skills.GoToObject]", r'moves \(effect = "move"\) or names an action'),
+    ('required = 1\n', 'required = 3\n', "[skills.ThrowObject]", r"required is how many arguments every call gives"),
+    ('mass_capacity = 0.08\n', '', 'name = "robot7"', r"robot robot7: needs mass_capacity = a number"),
+    ('name = "robot3"\n', 'name = "robot3"\nkind = "ground"\n', 'name = "robot3"', r"robot robot3: unknown key 'kind'"),
+    ('world = "ai2thor"\n', 'world = "ai2thor"\nstart = "Kitchen"\n', "start = ",
+     r"unknown key 'start'; an AI2-THOR domain file has"),
+    ('skills = ["GoToObject", "CleanObject", "PickupObject"', 'skills = ["GoToObject", "CleanObjekt", "PickupObject"',
+     'name = "robot30"', r"robot robot30 has skill 'CleanObjekt'.*did you mean CleanObject"),
+])
+def test_a_mistake_in_an_ai2thor_domain_is_reported_at_its_line(tmp_path, old, new, needle, message):
+    assert old in HOUSEHOLD_FILE, old
+    text = HOUSEHOLD_FILE.replace(old, new, 1)
+    folder = write(tmp_path, text)
+    with pytest.raises(DomainError) as caught:
+        load_domain(folder)
+    problems = str(caught.value).splitlines()
+    assert len(problems) == 1, problems
+    match = re.match(rf"^{re.escape(str(folder / 'domain.toml'))}:(\d+): (.+)$", problems[0])
+    assert match and int(match.group(1)) == line_of(text, needle), (problems[0], needle)
+    assert re.search(message, match.group(2)), match.group(2)
+
+
+def test_a_world_that_is_neither_ai2thor_nor_a_site_says_what_it_may_be(tmp_path):
+    with pytest.raises(DomainError, match=r'needs world = "ai2thor" .* or a site'):
+        load_domain(write(tmp_path, HOUSEHOLD_FILE.replace('world = "ai2thor"', 'world = "thor"')))
+
+
+def test_a_json_catalogue_gives_an_ai2thor_domain_other_robots(tmp_path):
+    path = tmp_path / "robots.json"
+    path.write_text(json.dumps({
+        "robots": [{"id": 1, "name": "arm", "skills": ["GoToObject", "Grab", "PutObject"], "mass_capacity": 2}],
+        "skills": [{"name": "Grab", "action": "PickupObject", "arguments": ["pickupable"]}]}))
+    domain = load_domain("household", catalogue=path)
+    assert list(domain.catalogue.robots) == [1] and domain.catalogue.robots[1].mass_capacity == 2
+    assert domain.catalogue.skills["Grab"].action == "PickupObject" and "SwitchOn" in domain.catalogue.skills
+    assert domain.task_files() == load_domain().task_files()  # the rest of the domain is household's
+    path.write_text(json.dumps({"robots": [{"id": 1, "skills": ["Fly"], "mass_capacity": 1}]}))
+    with pytest.raises(CatalogueError, match=r"robots\[0\]: unknown skill\(s\) \['Fly'\]"):
+        load_domain("household", catalogue=path)

@@ -7,10 +7,10 @@ from typing import Any, Sequence
 
 from smartllm_local.executor import Execution, run_plan
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.scoring import Scores, parse_goals, score_execution
 
-CATALOGUE = load_catalogue()
+CATALOGUE = load_domain().catalogue
 
 
 def run(source: str, robots: Sequence[int], controller: Any, floor_plan: int | str = 6, **kwargs) -> Execution:

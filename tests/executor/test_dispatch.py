@@ -14,7 +14,7 @@ import pytest
 from smartllm_local.errors import UserError
 from smartllm_local.executor.dispatch import dispatch_plan, load_dispatch
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 
 from . import lab_robots
 from .test_cli import SCRIPT
@@ -56,7 +56,7 @@ OpenObject = "tests.executor.lab_robots:{open}"
 
 @pytest.fixture
 def catalogue():
-    return load_catalogue()
+    return load_domain().catalogue
 
 
 @pytest.fixture(autouse=True)

@@ -10,7 +10,7 @@ import pytest
 
 from smartllm_local.errors import UserError
 from smartllm_local.importer import MAX_LINE_CHARS, import_smartllm
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.tasks import check_task, load_tasks
 
 FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "smartllm_final_test"
@@ -65,7 +65,7 @@ def run_dir(tmp_path_factory) -> Path:
 def report(run_dir):
     with pytest.MonkeyPatch.context() as patch:
         patch.chdir(run_dir)
-        return import_smartllm(FIXTURE, catalogue=load_catalogue())
+        return import_smartllm(FIXTURE, catalogue=load_domain().catalogue)
 
 
 def by_id(report, task_id: str) -> dict:
@@ -125,7 +125,7 @@ def test_missing_parts_become_empty_goals_or_null_transitions(report):
 
 
 def test_every_task_is_uncategorized_feasible_and_passes_check_task(report):
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     for task in report.tasks:
         assert task["category"] == "uncategorized" and task["feasible"] is True
         checked, problems = check_task(task, catalogue, task["id"])

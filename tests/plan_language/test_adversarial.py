@@ -23,7 +23,7 @@ from smartllm_local.errors import PlanError
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan, read_plan
 from smartllm_local.plan_language.parse import MAX_CALL_DEPTH, MAX_NESTING, MAX_SOURCE_CHARS
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 
 # (id, plan with MARKER for the marker file's path, line, col, part of the reason)
 REJECTED = [
@@ -224,7 +224,7 @@ def marker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 @pytest.fixture(scope="module")
 def team():
-    return load_catalogue().team([1, 2, 3])
+    return load_domain().catalogue.team([1, 2, 3])
 
 
 def _assert_positions(problems: list[tuple[int, int, str]], source: str) -> None:

@@ -18,7 +18,7 @@ from smartllm_local.planner.prompts import Prompt
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner import pipeline
 from smartllm_local.planner.stages import StageRecord, fit_prompt
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.tasks import find_task, load_tasks
 from tests.test_cli_errors import cli, one_line_error
 
@@ -82,7 +82,7 @@ def test_with_none_the_prompt_goes_in_raw_as_before(smollm2):
 
 def test_the_context_budget_counts_the_template(smollm2):
     chat, _ = chat_format(smollm2, "auto")
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     planner = Planner(smollm2, catalogue)
     examples = planner.examples
     build = lambda ex: Prompt(("# Examples\n\n", "# Your task\n"))  # noqa: E731
@@ -100,7 +100,7 @@ def test_a_real_decomposition_in_the_chat_template_is_a_valid_plan(smollm2, tmp_
     """kitchen-01 (SmolLM2 refuses kitchen-09 outright in its chat template: a refusal is valid but shows little)."""
     task = find_task(load_tasks(), "kitchen-01")
     recording = Recording(smollm2)
-    planner = Planner(recording, load_catalogue())
+    planner = Planner(recording, load_domain().catalogue)
     assert planner.chat_status == APPLIED
     result = _result(task)
     record = planner.decompose(result, scene_objects(task.floor_plan))
@@ -138,7 +138,7 @@ def first_prompt(backend, config: PlannerConfig, task, monkeypatch) -> tuple[Pla
 
     recording = Stop(backend)
     monkeypatch.setattr(pipeline, "fit_prompt", fit)
-    planner = Planner(recording, load_catalogue(), config)
+    planner = Planner(recording, load_domain().catalogue, config)
     with pytest.raises(_Seen):
         planner.decompose(_result(task), scene_objects(task.floor_plan))
     return planner, fitted[0].text, fitted[0].tokens, recording.contexts[0]

@@ -215,9 +215,9 @@ def test_a_budget_too_small_for_any_plan_is_refused_up_front():
 
 
 def _robots(*ids):
-    from smartllm_local.robots import load_catalogue
+    from smartllm_local.domain import load_domain
 
-    return load_catalogue().team(ids)
+    return load_domain().catalogue.team(ids)
 
 
 def _line(name, team, need, k=1):

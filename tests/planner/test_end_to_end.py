@@ -16,12 +16,12 @@ from smartllm_local.evaluation import run_benchmark
 from smartllm_local.results import summary_table
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.pipeline import Planner
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.tasks import load_tasks
 
 
 def test_every_benchmark_task_goes_through_all_stages_and_executes(smollm2, tmp_path):
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     tasks = load_tasks()
     started = time.perf_counter()
     outcomes = run_benchmark(tasks, Planner(smollm2, catalogue), catalogue, out=tmp_path)
@@ -75,7 +75,7 @@ def test_a_refusal_the_grammar_forces_is_told_from_one_the_model_chose(smollm2):
     from smartllm_local.planner.scene_context import scene_objects
     from smartllm_local.planner.stages import StageRecord
 
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     task = next(t for t in load_tasks() if t.id == "kitchen-inf-02")
     decomposed = ("# SubTask 1: slice the potato (skills: GoToObject, PickupObject, SliceObject, PutObject)\n"
                   "# Alone.\n\ndef subtask1_slice():\n    GoToObject('Knife')\n    PickupObject('Knife')\n"

@@ -16,7 +16,7 @@ from smartllm_local.planner.generation import accepts
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
 from smartllm_local.planner.prompts import PromptOptions, load_examples, shape
 from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.scoring import parse_goals, score_execution
 from smartllm_local.skills import DEFAULT_SKILL_SET
 from smartllm_local.world.controller import open_controller
@@ -53,7 +53,7 @@ def test_every_step_has_its_comment_in_decompositions_and_allocations(ex):
 def test_every_coalition_example_is_in_the_grammar_the_planner_uses(ex):
     """With the catalogue's needs, as the planner runs stage 2: the constraint writes each needs
     clause itself, so an example must state them exactly so, reason, and only then name its team."""
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     scene = scene_objects(ex.floor_plan)
     plan = parse_plan(ex.decomposition, form="decomposed")
     names = [f.name for f in plan.functions]
@@ -84,7 +84,7 @@ def controller():
 
 @pytest.mark.parametrize("ex", [e for e in EXAMPLES if e.allocation], ids=lambda e: e.name)
 def test_every_allocated_example_reaches_sr_1(ex, controller):
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     team = catalogue.team(ex.robots)
     plan = parse_plan(ex.allocation, form="allocated", team_size=len(team), skills=catalogue.skills)
     execution = run_plan(plan, ex.floor_plan, team, controller=controller, skills=catalogue.skills)

@@ -23,14 +23,14 @@ from smartllm_local.planner.generation import BudgetError, GuaranteeError, accep
 from smartllm_local.planner.plan_constraint import PlanConstraint
 from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.skills import DEFAULT_SKILL_SET, SkillSet
 from smartllm_local.tasks import check_task, load_tasks
 
 from .writers import WRITERS, writer
 
 FIXTURE = Path(__file__).parent.parent / "fixtures" / "smartllm_final_test"
-CATALOGUE = load_catalogue()
+CATALOGUE = load_domain().catalogue
 PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObject"]
 
 

@@ -16,7 +16,7 @@ from smartllm_local.errors import UserError
 from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.pipeline import Planner
 from smartllm_local.planner.prefix_cache import PrefixStore, default_store_folder, open_store, state_key
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.tasks import find_task, load_tasks
 from tests.test_cli_errors import cli, one_line_error
 
@@ -98,7 +98,7 @@ def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone(
     were saved from: a task planned after another on the same floor plan (its examples' and scene's
     states loaded from memory) writes exactly what it writes alone (evaluated, saved and loaded back),
     and its decomposition evaluates only its instruction."""
-    catalogue = load_catalogue()
+    catalogue = load_domain().catalogue
     first, second = (find_task(load_tasks(), t) for t in ("living-01", "living-02"))
     assert first.floor_plan == second.floor_plan
     shared = load_backend("llamacpp", "gemma3-270m", prefix_cache="off")

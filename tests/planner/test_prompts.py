@@ -14,7 +14,7 @@ from smartllm_local.planner.prompts import (
     strip_comments,
     strip_summary,
 )
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 
 from .fakes import FakeBackend
 
@@ -23,7 +23,7 @@ INSTRUCTION = "Put the apple in the fridge and turn off the light."
 
 @pytest.fixture
 def catalogue():
-    return load_catalogue()
+    return load_domain().catalogue
 
 
 def plan_with(backend, catalogue, **options):

@@ -21,7 +21,7 @@ import pytest
 
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.models import resolve_gguf
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from tests.test_cli_errors import cli, one_line_error
 
 TASKS = ("kitchen-01", "living-01")
@@ -91,7 +91,7 @@ def test_two_workers_plan_over_two_servers_and_every_stage_validates(tmp_path):
     finally:
         for s in servers:
             s.stop()
-    catalogue = load_catalogue(None)
+    catalogue = load_domain().catalogue
     for task, line in lines(out).items():
         assert not line.get("error"), line
         result = json.loads((out / task / "result.json").read_text())

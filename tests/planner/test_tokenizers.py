@@ -28,7 +28,7 @@ from smartllm_local.planner.prompts import (PromptOptions, allocation_prompt, co
                                             examples_for, load_examples)
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.tasks import load_tasks
 
 from .fakes import Script
@@ -179,7 +179,7 @@ def test_a_prompt_tokenized_in_its_parts_is_tokenized_as_a_whole(vocab):
     their own and each later part as the continuation give the tokens of the whole prompt, and the
     shared tokens are the same for every task, a decomposition's scene part for every task on its
     floor plan (what a kept prefix state is keyed by)."""
-    catalogue, examples, options = load_catalogue(), load_examples(), PromptOptions()
+    catalogue, examples, options = load_domain().catalogue, load_examples(), PromptOptions()
     decomposition, coalition = examples[0].decomposition, examples[0].coalition
     shared_tokens: dict[str, set[tuple[int, ...]]] = {}
     site_tokens: dict[int, set[tuple[int, ...]]] = {}

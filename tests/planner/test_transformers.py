@@ -19,7 +19,7 @@ from smartllm_local.planner.grammar import Grammar, alt
 from smartllm_local.planner.models import embedded_model_path
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 
 LOAD_STDERR: dict[str, str] = {}
 
@@ -66,7 +66,7 @@ def test_constraints_bite_through_llguidance(hf_smollm2):
 
 def test_a_task_planned_through_all_stages(hf_smollm2):
     config = PlannerConfig(budgets={"decomposition": 600, "coalition": 300, "allocation": 700})
-    planner = Planner(hf_smollm2, load_catalogue(), config)
+    planner = Planner(hf_smollm2, load_domain().catalogue, config)
     result = planner.plan("Turn off the light.", 6, [1])
     assert not result.error, result.error
     assert result.plan is not None
@@ -175,7 +175,7 @@ def test_runs_on_the_gpu_when_asked():
             forced = backend.generate(context, grammar=grammar, max_tokens=8, sampling=sampling)
             assert forced.text in (" London.\n", " Rome.\n")
         config = PlannerConfig(budgets={"decomposition": 600, "coalition": 300, "allocation": 700})
-        result = Planner(backend, load_catalogue(), config).plan("Turn off the light.", 6, [1])
+        result = Planner(backend, load_domain().catalogue, config).plan("Turn off the light.", 6, [1])
         assert not result.error, result.error
     finally:
         backend.close()

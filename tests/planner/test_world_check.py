@@ -17,13 +17,13 @@ from smartllm_local.planner.plan_constraint import PlanConstraint
 from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner.world_check import WorldCheck
-from smartllm_local.robots import load_catalogue
+from smartllm_local.domain import load_domain
 from smartllm_local.tasks import load_tasks
 from smartllm_local.world.controller import open_controller
 
 from .writers import writer
 
-CATALOGUE = load_catalogue()
+CATALOGUE = load_domain().catalogue
 PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObject"]
 
 
