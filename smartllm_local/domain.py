@@ -110,9 +110,17 @@ class Domain:
         return self.places.get(name) or next((p for p in self.places.values() if p.name.lower() == name.lower()), None)
 
 
+def pooled(robots: Iterable[Robot], skill: str, capacity: str, place: Place | None = None) -> float:
+    """What the robots that have ``skill`` (and, given a place, get there) add up of ``capacity``: a team
+    acts with its members' skills, so only they count toward what a call pools (a patrol's area, a camera).
+    The executor's site, its infeasibility proof and the planner's team rules all ask this."""
+    return sum(r.capacity(capacity) for r in robots if skill in r.skills and (place is None or place.reachable_by(r)))
+
+
 def builtin_domains() -> list[str]:
     """The domains that ship with the project, household first."""
-    names = [p.name for p in data_dir("domains").iterdir() if (p / DOMAIN_FILE).is_file() and not p.name.startswith("_")]
+    names = [p.name for p in data_dir("domains").iterdir()
+             if (p / DOMAIN_FILE).is_file() and not p.name.startswith("_")]
     return sorted(names, key=lambda n: (n != HOUSEHOLD, n))
 
 
@@ -178,6 +186,12 @@ class _Checker:
 
     def fail(self, keys: Iterable[str], message: str) -> None:
         self.problems.append(f"{self.path}:{self.line_of(*keys)}: {message}")
+
+    def fail_robot(self, label: str, message: str) -> None:
+        """A problem of one ``[[robots]]`` entry, reported at its ``name =`` line."""
+        line = next((k + 1 for k, text in enumerate(self.lines)
+                     if re.match(rf'^\s*name\s*=\s*"{re.escape(str(label))}"', text)), self.line_of("robots"))
+        self.problems.append(f"{self.path}:{line}: {message}")
 
 
 def _number(value: Any) -> bool:
@@ -367,37 +381,39 @@ def _robots(check: _Checker, entries: Any, names: set[str], capacities: Mapping[
     robots: list[Robot] = []
     for k, entry in enumerate(entries):
         label = entry.get("name", f"robots[{k}]") if isinstance(entry, dict) else f"robots[{k}]"
-        at = _RobotPlace(check, label)
         if not isinstance(entry, dict):
             check.fail(["robots"], f"robots[{k}] must be a [[robots]] table")
             continue
         allowed = {"id", "name", *(["kind"] if kinds else []), "skills", *capacities}
         for key in sorted(set(entry) - allowed):
-            at.fail(f"robot {label}: unknown key {key!r}; a robot has {fields}"
-                    + (f" and the capacities {', '.join(capacities)}" if capacities else ""))
+            check.fail_robot(label, f"robot {label}: unknown key {key!r}; a robot has {fields}"
+                             + (f" and the capacities {', '.join(capacities)}" if capacities else ""))
         rid = entry.get("id")
         if not isinstance(rid, int) or isinstance(rid, bool) or rid < 0:
-            at.fail(f"robot {label}: id must be a non-negative integer (teams are given as ids, e.g. --robots 1,2)")
+            check.fail_robot(label, f"robot {label}: id must be a non-negative integer (teams are given as ids, "
+                                    "e.g. --robots 1,2)")
             continue
         if rid in {r.id for r in robots}:
-            at.fail(f"robot {label}: id {rid} is used twice")
+            check.fail_robot(label, f"robot {label}: id {rid} is used twice")
             continue
         kind = entry.get("kind", "")
         if kinds and (not isinstance(kind, str) or not kind.isidentifier()):
-            at.fail(f'robot {label}: kind must be a word such as "aerial" or "ground" (place reach lists kinds)')
+            check.fail_robot(label, f'robot {label}: kind must be a word such as "aerial" or "ground" '
+                                    "(place reach lists kinds)")
         robot_skills = entry.get("skills")
         if not isinstance(robot_skills, list) or not all(isinstance(s, str) for s in robot_skills):
-            at.fail(f"robot {label}: skills must list skill names")
+            check.fail_robot(label, f"robot {label}: skills must list skill names")
             continue
         for unknown in [s for s in robot_skills if s not in names]:
             close = difflib.get_close_matches(unknown, names, n=1)
-            at.fail(f"robot {label} has skill {unknown!r}, which the domain does not define"
-                    + (f"; did you mean {close[0]}?" if close else f"; define it as [skills.{unknown}]"))
+            check.fail_robot(label, f"robot {label} has skill {unknown!r}, which the domain does not define"
+                             + (f"; did you mean {close[0]}?" if close else f"; define it as [skills.{unknown}]"))
         values = {}
         for capacity in capacities:
             value = entry.get(capacity)
             if not _number(value) or value < 0:
-                at.fail(f"robot {label}: needs {capacity} = a number of 0 or more ({capacities[capacity]})")
+                check.fail_robot(label, f"robot {label}: needs {capacity} = a number of 0 or more "
+                                        f"({capacities[capacity]})")
                 continue
             values[capacity] = float(value)
         name = str(entry.get("name") or f"robot{rid}")
@@ -408,15 +424,3 @@ def _robots(check: _Checker, entries: Any, names: set[str], capacities: Mapping[
             robots.append(Robot(id=rid, name=name, skills=frozenset(robot_skills),
                                 mass_capacity=values.get("mass_capacity", 0.0)))
     return robots
-
-
-class _RobotPlace:
-    """Problems of one ``[[robots]]`` entry, reported at its ``name =`` line."""
-
-    def __init__(self, check: _Checker, label: str):
-        self.check, self.label = check, label
-
-    def fail(self, message: str) -> None:
-        line = next((k + 1 for k, text in enumerate(self.check.lines)
-                     if re.match(rf'^\s*name\s*=\s*"{re.escape(str(self.label))}"', text)), self.check.line_of("robots"))
-        self.check.problems.append(f"{self.check.path}:{line}: {message}")

@@ -6,6 +6,7 @@ import os
 import shutil
 import tempfile
 from pathlib import Path
+from typing import Optional
 
 import typer
 
@@ -26,9 +27,14 @@ def list_domains() -> None:
 
 
 @app.command("new")
-def new(folder: Path = typer.Argument(..., help="The folder to create (it must not exist yet).")) -> None:
+def new(folder: Path = typer.Argument(..., help="The folder to create (it must not exist yet)."),
+        source: Optional[str] = typer.Option(None, "--from", help=(
+            "Copy a built-in domain instead of the starter site: household, for your own robots or skills in "
+            "AI2-THOR; patrol."))) -> None:
     """Write a commented starting domain (domain.toml, prompt examples, a task and its reference plan) to edit
-    into your own."""
+    into your own, or a copy of a built-in domain."""
+    if source is not None and source not in builtin_domains():
+        raise UserError(f"--from takes a built-in domain ({', '.join(builtin_domains())}), not {source!r}")
     if folder.exists():
         raise UserError(f"{folder} already exists: `domain new` writes a new folder, so give one that does not exist")
     if not folder.parent.is_dir():
@@ -37,12 +43,13 @@ def new(folder: Path = typer.Argument(..., help="The folder to create (it must n
     staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
     staging.chmod(0o755)  # mkdtemp's folder is private; a domain folder is not
     try:
-        shutil.copytree(starter_domain(), staging, dirs_exist_ok=True)
+        origin = starter_domain() if source is None else load_domain(source).folder
+        shutil.copytree(origin, staging, dirs_exist_ok=True, ignore=shutil.ignore_patterns("__pycache__"))
         os.replace(staging, folder)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
-    typer.echo(f"wrote {folder}/{DOMAIN_FILE}, examples/, tasks.jsonl and reference_plans/: edit them, then run "
+    typer.echo(f"wrote {folder}/{DOMAIN_FILE}, examples/, its tasks and reference_plans/: edit them, then run "
                f"`smartllm-local domain check {folder}`")
 
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from typing import Any, Sequence
 
-from ..domain import ANY_KIND, Domain, Place
+from ..domain import ANY_KIND, Domain, Place, pooled
 from ..robots import Robot
 from ..scoring import SITE_STATES, Goal
 from ..skills import Skill
@@ -137,14 +137,14 @@ def why_not(domain: Domain, effect: str, skill: str, place: Place | None, robots
     if barred:
         kinds = " or ".join(sorted(place.reach or ()))
         return f"{', '.join(barred)} cannot reach {place.name}: only {kinds} robots can"
-    if effect == "photograph" and not any(r.capacity("camera_range") > 0 for r in robots_with_skill):
+    if effect == "photograph" and pooled(robots, skill, "camera_range") <= 0:
         return f"{', '.join(r.name for r in robots_with_skill)} has no camera (camera_range 0)"
     if effect == "patrol":
         capacity = domain.pools[skill]
-        pooled = sum(r.capacity(capacity) for r in robots_with_skill)
-        if pooled < place.area:
+        total = pooled(robots, skill, capacity)
+        if total < place.area:
             return (f"{place.name} has an area of {place.area:g}; {', '.join(r.name for r in robots_with_skill)} "
-                    f"pool {capacity} {pooled:g}: patrol it with a larger team")
+                    f"pool {capacity} {total:g}: patrol it with a larger team")
     return ""
 
 
@@ -172,8 +172,7 @@ def unattainable(domain: Domain, goals: Sequence[Goal], team: Sequence[Robot]) -
             problems.append(f"there is no {goal.name!r} on the site {domain.site}")
             continue
         if goal.state == "COVERED":
-            best = max((sum(r.capacity(domain.pools[s]) for r in team if s in r.skills and place.reachable_by(r))
-                        for s in effect_skills("patrol")), default=0.0)
+            best = max((pooled(team, s, domain.pools[s], place) for s in effect_skills("patrol")), default=0.0)
             if best < place.area:
                 problems.append(f"{place.name} COVERED: the team's robots that can patrol it pool {best:g}, "
                                 f"less than its area {place.area:g}")

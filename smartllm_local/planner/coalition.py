@@ -31,10 +31,10 @@ def needs_clause(need: Need) -> str:
     """What a sub-task needs, as the line states it (the examples' coalitions follow it): its skills, the
     mass it lifts, and on a site what it pools and the places only some robot kinds reach."""
     mass = f", lifting {need.mass:g} kg" if need.mass > 0 else ""
-    demands = sorted(need.demands, key=lambda d: (d.place, d.skill))
+    demands = sorted(need.demands, key=lambda d: (d.place.name, d.skill))
     pooled = [f", pooling {d.amount:g} {d.capacity}" for d in demands if d.capacity and d.capacity != "camera_range"]
-    reach = dict.fromkeys(f", reaching {d.place} ({' or '.join(sorted(d.kinds))} robots only)"
-                          for d in demands if d.kinds is not None)
+    reach = dict.fromkeys(f", reaching {d.place.name} ({' or '.join(sorted(d.place.reach))} robots only)"
+                          for d in demands if d.place.reach is not None)
     return f"needs {', '.join(sorted(need.skills))}{mass}{''.join(pooled)}{''.join(reach)};"
 
 

@@ -19,6 +19,7 @@ from typing import Iterable, Sequence
 
 from ..plan_language import Plan
 from ..plan_language.ir import Call, SkillCall
+from ..domain import Place, pooled
 from ..robots import Robot
 from .scene_context import SceneObjects
 
@@ -30,19 +31,18 @@ EXACT_ALLOCATIONS = 5  # robot lists (ordered) up to this team size are enumerat
 
 @dataclass(frozen=True)
 class Demand:
-    """What one call on a site asks of the robots that make it: to get where it acts (robots of
-    ``kinds``; None: any), and for a pooling skill, ``amount`` of ``capacity`` from the members that
-    have ``skill`` and get there (a camera: some camera_range)."""
+    """What one call on a site asks of the robots that make it: to get to ``place`` (its reach), and for
+    a pooling skill, ``amount`` of ``capacity`` from the members that have ``skill`` and get there (a
+    camera: some camera_range)."""
 
     skill: str
-    place: str
-    kinds: frozenset[str] | None = None
+    place: Place
     capacity: str = ""
     amount: float = 0.0
 
     def met_by(self, robots: Sequence[Robot]) -> bool:
-        able = [r for r in robots if self.skill in r.skills and (self.kinds is None or r.kind in self.kinds)]
-        return bool(able) and (not self.capacity or sum(r.capacity(self.capacity) for r in able)
+        able = [r for r in robots if self.skill in r.skills and self.place.reachable_by(r)]
+        return bool(able) and (not self.capacity or pooled(able, self.skill, self.capacity)
                                + MASS_TOLERANCE >= self.amount)
 
 
@@ -72,10 +72,10 @@ def call_demand(scene: SceneObjects, skill: str, objects: Sequence[str]) -> Dema
     if site is None or place is None:
         return None
     if site.effects.get(skill) == "patrol":
-        return Demand(skill, place.name, place.reach, site.pools[skill], place.area)
+        return Demand(skill, place, site.pools[skill], place.area)
     if site.effects.get(skill) == "photograph":
-        return Demand(skill, place.name, place.reach, "camera_range", SOME_CAMERA)
-    return Demand(skill, place.name, place.reach) if place.reach is not None else None
+        return Demand(skill, place, "camera_range", SOME_CAMERA)
+    return Demand(skill, place) if place.reach is not None else None
 
 
 def function_needs(plan: Plan, scene: SceneObjects, pickup_skills: Iterable[str] = ("PickupObject",)) -> dict[str, Need]:
@@ -122,6 +122,14 @@ def feasible_teams(team: Sequence[Robot], need: Need) -> list[tuple[int, ...]] |
             if can_do([team[i] for i in c], need)]
 
 
+def shortest_list(whole: bool, max_index: int, team_size: int, *, notional: bool) -> int:
+    """How many robots a function's list needs: enough for its highest ``robot_list[i]``. A function
+    that names the whole ``robot_list`` may be run by part of the team when each list is dry-run with
+    the team's own robots (a restated allocation); a notional dry run moves every slot for such a
+    step, so there it takes them all."""
+    return team_size if whole and notional else max(1, max_index + 1)
+
+
 def feasible_lists(team: Sequence[Robot], steps: Sequence[Step], min_length: int) -> list[tuple[int, ...]] | None:
     """Ordered robot lists (robot_list[i] is the i-th) under which every step has a capable actor.
 
@@ -140,6 +148,6 @@ def feasible_lists(team: Sequence[Robot], steps: Sequence[Step], min_length: int
 def _step_ok(listed: Sequence[Robot], step: Step) -> bool:
     actors = listed if step.slot is None else [listed[step.slot]]
     demand = step.demand
-    if demand is not None and demand.kinds is not None and not all(r.kind in demand.kinds for r in actors):
+    if demand is not None and not all(demand.place.reachable_by(r) for r in actors):
         return False
     return can_do(actors, Need(frozenset({step.skill}), step.mass, frozenset({demand} if demand else ())))

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Sequence
 
 from .constraints import Choose, robot_list
-from .feasibility import feasible_lists
+from .feasibility import feasible_lists, shortest_list
 from .grammar import Node, Ref, alt, seq
 
 if TYPE_CHECKING:
@@ -74,7 +74,8 @@ class Orchestration(_Base):
     def _robot_lists(self, fn: WrittenFunction) -> Node:
         """The robot lists a function may be run with: long enough for its robot_list[i], and, when
         the team is known, such that every step has an actor with the skill and the strength."""
-        need = self.team_size if self.world is not None and fn.whole else max(1, fn.max_index + 1)
+        need = shortest_list(fn.whole, fn.max_index, self.team_size,
+                             notional=self.world is not None and not self._team_checks_lists())
         if self.team is not None:
             lists = self._checked_lists(fn, need)
             if lists:
@@ -92,6 +93,10 @@ class Orchestration(_Base):
     def _working_lists(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
         """Of the capable robot lists, those the world allows (all, without a team world check)."""
         return lists
+
+    def _team_checks_lists(self) -> bool:
+        """Whether each robot list is dry-run with the team's own robots (see :func:`.feasibility.shortest_list`)."""
+        return False
 
     def _orch_options(self, remaining: int) -> dict[str, Node]:
         rules = self._orch_rules(remaining)

@@ -77,7 +77,7 @@ class WrittenFunction:
     went: bool = False  # whether it has gone somewhere (with a world check, it acts only after that)
     slots_went: set[int] = field(default_factory=set)  # robot_list slots that went somewhere in it
     together: bool = False  # the last GoToObject took the whole robot_list
-    whole: bool = False  # a step named the whole robot_list (with a world check: then the whole team)
+    whole: bool = False  # a step named the whole robot_list (see feasibility.shortest_list)
 
     def track(self, line: str, actions: dict[str, str]) -> None:
         match = _CALL.match(line.rstrip("\n"))

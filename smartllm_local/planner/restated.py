@@ -24,7 +24,7 @@ from typing import Sequence
 from ..robots import Robot
 from ..skills import Skill, SkillSet
 from .constraints import INDENT, Choose, Forced
-from .feasibility import Step, call_demand, feasible_lists
+from .feasibility import Step, call_demand, feasible_lists, shortest_list
 from .grammar import alt, seq
 from .plan_constraint import STEP_LINE, PlanConstraint, WrittenFunction
 from .scene_context import SceneObjects
@@ -177,7 +177,11 @@ class RestatedAllocation(PlanConstraint):
         return working
 
     def _need(self, fn: WrittenFunction) -> int:
-        return self.team_size if fn.whole else max(1, fn.max_index + 1)
+        return shortest_list(fn.whole, fn.max_index, self.team_size,
+                             notional=self.world is not None and not self._team_checks_lists())
+
+    def _team_checks_lists(self) -> bool:
+        return self.team_world is not None
 
     def _run_body(self, fn: WrittenFunction) -> None:
         """Once a body is written, let the team run it (with its first working list) for the next body."""

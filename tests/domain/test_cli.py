@@ -169,3 +169,29 @@ def test_domain_check_names_an_example_outside_its_grammar(tmp_path):
     (tmp_path / "mine" / "examples" / "examples.json").unlink()
     result = cli("domain", "check", "mine", cwd=tmp_path)
     assert_one_line_error(result, "mine/examples/examples.json: cannot read the prompt examples")
+
+
+def test_an_ai2thor_domain_of_your_own_runs_its_own_skill_names(tmp_path):
+    """`domain new --from household` copies household; a skill of the lab's own name that performs an
+    AI2-THOR action, given to one robot, is checked, validated and executed as that action."""
+    made = cli("domain", "new", "lab", "--from", "household", cwd=tmp_path)
+    assert made.returncode == 0, made.stderr
+    assert (tmp_path / "lab" / "reference_plans" / "kitchen-01.py").is_file()
+    toml = tmp_path / "lab" / "domain.toml"
+    text = toml.read_text().replace('world = "ai2thor"\n', 'world = "ai2thor"\n\n[skills.Grab]\naction = "PickupObject"\n'
+                                    'arguments = ["pickupable"]\n', 1)
+    toml.write_text(text.replace('name = "robot1"\nskills = ["GoToObject", ', 'name = "robot1"\nskills = ["GoToObject", '
+                                 '"Grab", ', 1))
+    (tmp_path / "grab.py").write_text("GoToObject(robots[0], 'Apple')\nGrab(robots[0], 'Apple')\n")
+    (tmp_path / "apple.json").write_text('[{"name": "Apple", "state": "PICKED"}]')
+    valid = cli("validate", "grab.py", "--domain", "lab", "--floor-plan", "6", "--robots", "1", cwd=tmp_path)
+    assert valid.returncode == 0, valid.stdout + valid.stderr
+    ran = cli("execute", "grab.py", "--domain", "lab", "--floor-plan", "6", "--robots", "1", "--goal", "apple.json",
+              "--json", cwd=tmp_path)
+    assert ran.returncode == 0, ran.stderr
+    assert json.loads(ran.stdout)["GCR"] == 1.0
+    without = cli("execute", "grab.py", "--domain", "lab", "--floor-plan", "6", "--robots", "2", "--goal",
+                  "apple.json", cwd=tmp_path)  # robot2 was not given Grab
+    assert "robot2 cannot Grab: no member has that skill" in without.stdout and "GCR 0.00" in without.stdout
+    unknown = cli("domain", "new", "other", "--from", "kitchen", cwd=tmp_path)
+    assert_one_line_error(unknown, "--from takes a built-in domain (household, patrol), not 'kitchen'")

@@ -1,4 +1,5 @@
-"""The worked examples under prompts/: written as the paper's stages write, and correct plans."""
+"""Household's worked examples (domains/household/examples/): written as the paper's stages write, in the
+grammars the planner uses, and correct plans."""
 
 from __future__ import annotations
 
@@ -12,10 +13,13 @@ from smartllm_local.planner.plan_constraint import PlanConstraint
 from smartllm_local.planner.coalition import LINE as COALITION_LINE
 from smartllm_local.planner.coalition import CoalitionConstraint
 from smartllm_local.planner.feasibility import function_needs
+from smartllm_local.planner.example_check import check_examples
 from smartllm_local.planner.generation import accepts
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
 from smartllm_local.planner.prompts import PromptOptions, load_examples, shape
+from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.world_check import WorldCheck
 from smartllm_local.domain import load_domain
 from smartllm_local.scoring import parse_goals, score_execution
 from smartllm_local.skills import DEFAULT_SKILL_SET
@@ -103,3 +107,29 @@ def test_the_order_line_cannot_pass_for_another_sub_task():
     plain = rinse.decomposition.replace(order, "# SubTask 2 - the egg goes in after the tomato\n")
     assert not accepts(PlanConstraint(scene, DEFAULT_SKILL_SET), posing)
     assert accepts(PlanConstraint(scene, DEFAULT_SKILL_SET), plain)
+
+
+def test_every_example_is_what_the_planner_writes_and_runs():
+    """As `domain check household` checks them: each decomposition in the grammar with the world check
+    (a robot acts where it went and puts down what it holds), each allocation the restated one with
+    its own team's robot lists, and each allocated example at SR 1."""
+    count, problems = check_examples(load_domain())
+    assert (count, problems) == (len(EXAMPLES), [])
+
+
+def test_a_function_naming_the_whole_list_may_run_with_part_of_the_team():
+    """laptop_and_tv lifts the laptop with robot_list (robots 5 and 6 pool 3.1 kg) while robots[2] switches
+    the television on in parallel: the two lifters are a list of their own; one of them alone is not."""
+    ex = next(e for e in EXAMPLES if e.name == "laptop_and_tv")
+    catalogue = load_domain().catalogue
+    scene, team = scene_objects(ex.floor_plan), catalogue.team(ex.robots)
+    names = [f.name for f in parse_plan(ex.decomposition, form="decomposed").functions]
+
+    def restated():
+        return RestatedAllocation(scene, catalogue.skills, team=team, function_names=names,
+                                  bodies=restated_bodies(ex.decomposition, names),
+                                  world=WorldCheck(scene.floor_plan, catalogue.skills, len(team)))
+
+    pair = "args=([robots[0], robots[1]],)"
+    assert pair in ex.allocation and accepts(restated(), ex.allocation)
+    assert not accepts(restated(), ex.allocation.replace(pair, "args=([robots[1]],)"))  # 2.1 kg lifts no laptop

@@ -1,7 +1,7 @@
 def subtask1_laptop_to_sofa(robot_list):
-    # the laptop is too heavy for one of them: the whole team goes to it
+    # go to the laptop
     GoToObject(robot_list, 'Laptop')
-    # and lifts it together
+    # lift it
     PickupObject(robot_list, 'Laptop')
     # bring it across the room
     GoToObject(robot_list, 'Sofa')

@@ -7,6 +7,8 @@ def subtask1_rinse_tomato(robot_list):
     GoToObject(robot_list[0], 'SinkBasin')
     # set it down in the basin
     PutObject(robot_list[0], 'Tomato', 'SinkBasin')
+    # step over to the faucet
+    GoToObject(robot_list[0], 'Faucet')
     # run the water over it
     SwitchOn(robot_list[0], 'Faucet')
     # give the water a moment

@@ -11,6 +11,8 @@ def subtask1_rinse_tomato():
     GoToObject('SinkBasin')
     # set it down in the basin
     PutObject('Tomato', 'SinkBasin')
+    # step over to the faucet
+    GoToObject('Faucet')
     # run the water over it
     SwitchOn('Faucet')
     # give the water a moment

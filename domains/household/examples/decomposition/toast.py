@@ -1,4 +1,4 @@
-# SubTask 1: cut the bread into slices (skills: GoToObject, SliceObject, PickupObject)
+# SubTask 1: cut the bread into slices (skills: GoToObject, SliceObject, PickupObject, DropHandObject)
 # SubTask 2: toast one slice (skills: GoToObject, SwitchOn, PickupObject, PutObject)
 # SubTask 2 needs the slices SubTask 1 makes, so they run one after the other.
 
@@ -11,6 +11,8 @@ def subtask1_slice_bread():
     GoToObject('Bread')
     # cut it into slices
     SliceObject('Bread')
+    # lay the knife down where it stands
+    DropHandObject('Knife')
 
 def subtask2_toast_slice():
     # go to one of the new slices
