@@ -101,6 +101,32 @@ def test_the_reference_method_is_the_ceiling_and_needs_no_model(runs):
     assert json.loads((out / "run.json").read_text())["identity"]["model"] == {}
 
 
+def test_every_benchmark_task_goes_through_all_stages_and_executes(runs, all_tasks):
+    """Gemma-3 over all 47 tasks (`benchmark run`, the real model, llama.cpp and Controller): every stage's
+    output is a valid plan or a refusal, every plan that is not a refusal executes and is scored, and the
+    run records each task's stages, artifacts and own time."""
+    out, proc = runs["gemma"]
+    lines = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
+    assert [line["id"] for line in lines] == [t.id for t in all_tasks] and len(lines) >= 42
+    for task, line in zip(all_tasks, lines):
+        assert not line.get("error"), (task.id, line.get("error"))
+        folder = out / task.id
+        parse_plan((folder / "allocated.py").read_text(), form="allocated", team_size=len(task.robots))
+        parse_plan((folder / "decomposed.py").read_text(), form="decomposed")
+        stages = line["tokens"]
+        own = sum(s["seconds"] for s in stages.values())  # each rounded to 0.01 s
+        assert line["seconds"] >= own - 0.01 * len(stages) and own > 0, task.id
+        if line["refused"]:
+            assert line["refused_by"] in ("model", "grammar") and "allocation" not in stages, task.id
+            continue
+        assert list(stages) == ["decomposition", "coalition", "allocation"], task.id
+        assert all(text.startswith("# SubTask ") for text in (folder / "coalition.txt").read_text().splitlines())
+        if task.feasible:
+            assert 0.0 <= line["Exe"] <= 1.0 and line["SR"] in (0.0, 1.0), task.id
+    summary = (out / "summary.txt").read_text()
+    assert "all feasible      40      0" in summary and "infeasible" in summary
+
+
 def test_a_baseline_over_seeds_with_the_real_model(runs):
     """decomp-random with SmolLM2 over two seeds: the model decomposes, robots are drawn per seed, the
     plans execute, and summary.txt gives mean ± standard deviation over the seeds."""
