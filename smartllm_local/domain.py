@@ -348,7 +348,7 @@ def _skills(check: _Checker, table: Any, capacities: Mapping[str, str],
         for key in sorted(set(entry) - {"effect", "pools", "description"}):
             check.fail([*where, key], f"skill {name}: unknown key {key!r}; a skill has effect, pools and description")
         effect = entry.get("effect")
-        if effect not in EFFECTS:
+        if not isinstance(effect, str) or effect not in EFFECTS:
             check.fail(where, f"skill {name}: effect must be one of {', '.join(EFFECTS)}, got {effect!r}")
             continue
         argument = EFFECTS[effect]
@@ -357,7 +357,7 @@ def _skills(check: _Checker, table: Any, capacities: Mapping[str, str],
                               f"[world.{argument}s.NAME] table")
         pool = entry.get("pools")
         if pool is not None:
-            if pool not in capacities:
+            if not isinstance(pool, str) or pool not in capacities:
                 check.fail([*where, "pools"], f"skill {name} pools {pool!r}, which is not under [capacities]")
             else:
                 pools[name] = pool

@@ -103,10 +103,11 @@ def _extra_skills(path: Path, entries: Any) -> SkillSet:
         if entry["name"] in names:
             raise CatalogueError(f"{where}: skill {entry['name']} is already defined")
         action = entry.get("action")
-        if action not in THOR_ACTIONS:
+        if not isinstance(action, str) or action not in THOR_ACTIONS:
             raise CatalogueError(f"{where}: action must be one of {sorted(THOR_ACTIONS)}, got {action!r}")
         arguments = entry.get("arguments", [""])
-        if not isinstance(arguments, list) or not 1 <= len(arguments) <= 2 or any(a not in AFFORDANCES for a in arguments):
+        if not isinstance(arguments, list) or not 1 <= len(arguments) <= 2 \
+                or any(not isinstance(a, str) or a not in AFFORDANCES for a in arguments):
             raise CatalogueError(f"{where}: arguments must list 1 or 2 affordances from {sorted(AFFORDANCES)}")
         skills.append(Skill(entry["name"], action, tuple(arguments), len(arguments)))
         names.add(entry["name"])

@@ -67,11 +67,12 @@ def thor_skill(name: str, entry: Mapping[str, Any]) -> Skill | list[str]:
                            f"not effect = {entry['effect']!r}"]
     else:
         action = entry.get("action")
-        if action not in THOR_ACTIONS - {""}:
+        if not isinstance(action, str) or action not in THOR_ACTIONS - {""}:
             return problems + [f"skill {name}: action must be one of the AI2-THOR actions "
                                f"{', '.join(sorted(THOR_ACTIONS - {''}))}, got {action!r}"]
     arguments = entry.get("arguments", [""])
-    if not (isinstance(arguments, list) and 1 <= len(arguments) <= 2 and all(a in AFFORDANCES for a in arguments)):
+    if not (isinstance(arguments, list) and 1 <= len(arguments) <= 2
+            and all(isinstance(a, str) and a in AFFORDANCES for a in arguments)):
         return problems + [f"skill {name}: arguments must list 1 or 2 affordances (\"\" for any object) from "
                            f"{', '.join(repr(a) for a in sorted(AFFORDANCES))}"]
     required = entry.get("required", len(arguments))

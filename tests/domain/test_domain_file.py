@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import json
+import math
 import re
 from pathlib import Path
+from typing import Any
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from smartllm_local.domain import DomainError, builtin_domains, load_domain, starter_domain
-from smartllm_local.errors import CatalogueError
+from smartllm_local.errors import CatalogueError, UserError
 
 PATROL = load_domain("patrol")
 STARTER = (starter_domain() / "domain.toml").read_text(encoding="utf-8")
@@ -139,6 +143,10 @@ def test_household_is_a_domain_folder_with_smartllms_skills_and_robots():
      r"skill PickupObject: action must be one of the AI2-THOR actions .*PickupObject"),
     ('arguments = ["openable"]\ndescription = "open', 'arguments = ["opennable"]\ndescription = "open',
      "[skills.OpenObject]", r"skill OpenObject: arguments must list 1 or 2 affordances"),
+    ('arguments = ["toggleable"]\ndescription = "switch on', 'arguments = [["toggleable"]]\ndescription = "switch on',
+     "[skills.SwitchOn]", r"skill SwitchOn: arguments must list 1 or 2 affordances"),
+    ('action = "BreakObject"', 'action = ["BreakObject"]', "[skills.BreakObject]",
+     r"skill BreakObject: action must be one of the AI2-THOR actions"),
     ('effect = "move"\narguments', 'effect = "patrol"\narguments', "[skills.GoToObject]", r'moves \(effect = "move"\) or names an action'),
     ('required = 1\n', 'required = 3\n', "[skills.ThrowObject]", r"required is how many arguments every call gives"),
     ('mass_capacity = 0.08\n', '', 'name = "robot7"', r"robot robot7: needs mass_capacity = a number"),
@@ -178,3 +186,52 @@ def test_a_json_catalogue_gives_an_ai2thor_domain_other_robots(tmp_path):
     path.write_text(json.dumps({"robots": [{"id": 1, "skills": ["Fly"], "mass_capacity": 1}]}))
     with pytest.raises(CatalogueError, match=r"robots\[0\]: unknown skill\(s\) \['Fly'\]"):
         load_domain("household", catalogue=path)
+    for skill in ({"name": "Grab", "action": ["PickupObject"]}, {"name": "Grab", "action": "PickupObject",
+                                                                 "arguments": [["pickupable"]]}):
+        path.write_text(json.dumps({"robots": [], "skills": [skill]}))
+        with pytest.raises(CatalogueError, match=r"skills\[0\]: (action|arguments) must"):
+            load_domain("household", catalogue=path)
+
+
+# ------------------------------------------------------------------- any value in any key: an error, never a crash
+
+
+def _toml(value: Any) -> str:
+    """A value as TOML text (JSON's string escapes are TOML's basic-string escapes)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if value != value else ("inf" if value > 0 else "-inf")
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, list):
+        return "[" + ", ".join(map(_toml, value)) + "]"
+    return "{" + ", ".join(f"{key} = {_toml(item)}" for key, item in value.items()) + "}"
+
+
+_VALUES = st.recursive(
+    st.one_of(st.integers(-3, 5000), st.floats(), st.booleans(), st.text(max_size=8),
+              st.sampled_from(["move", "patrol", "ai2thor", "PickupObject", "pickupable", "Dock", "GoToLocation"])),
+    lambda inner: st.one_of(st.lists(inner, max_size=3),
+                            st.dictionaries(st.from_regex(r"[a-z]{1,6}", fullmatch=True), inner, max_size=3)),
+    max_leaves=6)
+
+
+@pytest.mark.parametrize("text", [STARTER, HOUSEHOLD_FILE], ids=["site", "ai2thor"])
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_any_value_in_any_key_is_a_clear_error_or_a_domain(tmp_path, text, data):
+    """Whatever value a key is given (a list for a word, a table for a number, NaN ...), reading the file
+    gives a domain or a DomainError naming the problem: never another exception."""
+    lines = text.splitlines()
+    keyed = [k for k, line in enumerate(lines) if re.match(r"^\w+ = ", line)]
+    k = data.draw(st.sampled_from(keyed))
+    key = lines[k].split(" = ")[0]
+    lines[k] = f"{key} = {_toml(data.draw(_VALUES))}"
+    (tmp_path / "domain.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    try:
+        load_domain(tmp_path)
+    except UserError as exc:
+        assert str(exc).startswith(str(tmp_path)) or "domain file" in str(exc), str(exc)
