@@ -62,6 +62,8 @@ def load_dispatch(path: str | Path, skills: SkillSet) -> Dispatch:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
         raise UserError(f"cannot read the dispatch file {path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise UserError(f"dispatch file {path} is not UTF-8 text ({exc.reason})") from None
     except tomllib.TOMLDecodeError as exc:
         raise UserError(f"dispatch file {path}: not valid TOML: {exc}") from None
     unknown = sorted(set(data) - {"timeout", "skills"})

@@ -122,6 +122,13 @@ def test_a_bad_dispatch_file_is_a_clear_error(tmp_path, catalogue, text, message
     assert message in str(info.value) and str(path) in str(info.value)
 
 
+def test_a_dispatch_file_that_is_not_text_is_a_clear_error(tmp_path, catalogue):
+    path = tmp_path / "lab.toml"
+    path.write_bytes(b"\xff\xfe[skills]\n")
+    with pytest.raises(UserError, match=r"dispatch file .*lab.toml is not UTF-8 text"):
+        load_dispatch(path, catalogue.skills)
+
+
 def test_a_plan_using_a_skill_the_file_does_not_name_is_refused_before_anything_runs(tmp_path, catalogue):
     path = tmp_path / "lab.toml"
     path.write_text("[skills]\nGoToObject = 'tests.executor.lab_robots:go_to'\n", encoding="utf-8")
