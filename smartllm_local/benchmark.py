@@ -67,7 +67,7 @@ def check_reference_plans(
     Raises:
         WorldError: the AI2-THOR process failed (no later run could be trusted).
     """
-    site = domain if domain is not None and not domain.is_ai2thor else None
+    site = domain.as_site if domain is not None else None
     catalogue = catalogue or (domain or load_domain()).catalogue
     folder = Path(plans_dir) if plans_dir is not None else (domain.plans_dir() if domain else default_plans_dir())
     results: list[ReferenceResult] = []

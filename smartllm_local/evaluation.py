@@ -135,7 +135,7 @@ def run_benchmark(
     such as a server's slots) plan that many tasks of a stage at once, each task on one worker.
     Returns the outcomes of the tasks run this time.
     """
-    site = domain if domain is not None and not domain.is_ai2thor else None
+    site = domain.as_site if domain is not None else None
     methods = [SmartLLM(m, catalogue) if isinstance(m, Planner) else m
                for m in (method if isinstance(method, Sequence) else [method])]
     done = store.results() if store is not None else {}

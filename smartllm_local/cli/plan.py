@@ -29,7 +29,8 @@ from ..robots import parse_robot_ids
 from ..run_store import RunStore
 from ..tasks import CATEGORIES, check_category, find_task, load_tasks
 from ..world.scenes import floor_plan_name
-from .plans import DOMAIN_HELP, dispatch_report, dispatch_succeeded, refuse_household_options, run_record
+from .plans import (CATALOGUE_HELP, DOMAIN_HELP, dispatch_report, dispatch_succeeded, refuse_household_options,
+                    run_record)
 from .progress import RunProgress
 
 MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
@@ -82,7 +83,7 @@ class ModelOptions:
 
     def planners(self, catalogue, domain: Domain | None = None) -> list[Planner]:
         """One planner per worker (one, but for a server backend with --workers), for ``domain``'s tasks."""
-        site = domain if domain is not None and not domain.is_ai2thor else None
+        site = domain.as_site if domain is not None else None
         backends = load_backends(self.backend, self.model, workers=self.workers, endpoints=self.endpoints,
                                  server_timeout=self.server_timeout, n_ctx=self.n_ctx, threads=self.threads,
                                  n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=self.prefix_cache)
@@ -124,7 +125,7 @@ _PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
     "Where the examples' key/value states are kept between runs, so a later run on the same model starts "
     "from them (default: the user's cache, $XDG_CACHE_HOME/smartllm-local/prefix-states, at most 4 GiB); "
     "off keeps them for this run only. llama.cpp only."))
-_CATALOGUE = typer.Option(None, help="A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own).")
+_CATALOGUE = typer.Option(None, help=CATALOGUE_HELP)
 _THOR_BUILD = typer.Option(None, help="A Unity AI2-THOR executable (default: the headless stand-in).")
 _TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
 
@@ -207,7 +208,7 @@ def plan_command(
     if execute and result.plan is not None and not result.error:
         scores = execute_and_score(result, goals, cat, trans=trans, max_trans=max_trans,
                                    build=str(thor_build) if thor_build else None,
-                                   site=None if dom.is_ai2thor else dom)
+                                   site=dom.as_site)
     dispatched = None
     if functions is not None and result.plan is not None and not result.plan.is_refusal and not result.error:
         dispatched = dispatch_plan(result.plan, team, functions, skills=cat.skills)

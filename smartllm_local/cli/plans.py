@@ -21,6 +21,7 @@ from ..tasks import find_task, load_tasks
 from ..world.scenes import floor_plan_name, load_scene
 
 DOMAIN_HELP = "The domain: household (the default), patrol, or a domain folder (see `smartllm-local domain`)."
+CATALOGUE_HELP = "A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."
 THOR_BUILD_HELP = "A Unity AI2-THOR executable to run in (default: $SMARTLLM_THOR_BUILD, else the headless stand-in)."
 
 
@@ -29,7 +30,7 @@ def validate(
     stage: str = typer.Option("allocated", help="decomposed (no robot arguments) or allocated."),
     floor_plan: Optional[str] = typer.Option(None, help="Also check object names against this floor plan."),
     robots: Optional[str] = typer.Option(None, help="Also check robots[i] against this team (catalogue ids, e.g. 1,2,3)."),
-    catalogue: Optional[Path] = typer.Option(None, help="A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."),
+    catalogue: Optional[Path] = typer.Option(None, help=CATALOGUE_HELP),
     domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Parse and validate a plan without running it."""
@@ -86,7 +87,7 @@ def execute(
     task: Optional[str] = typer.Option(None, help="The task id in --tasks (default: the project's benchmark)."),
     as_json: bool = typer.Option(False, "--json", help="Print the metrics as one JSON object."),
     trace: Optional[Path] = typer.Option(None, help="Write every primitive action to this JSON file."),
-    catalogue: Optional[Path] = typer.Option(None, help="A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."),
+    catalogue: Optional[Path] = typer.Option(None, help=CATALOGUE_HELP),
     thor_build: Optional[Path] = typer.Option(None, help=THOR_BUILD_HELP),
     domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
@@ -122,7 +123,7 @@ def execute(
     parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team),
                        scene_types=None if dom.is_ai2thor else set(dom.places))
     execution = run_plan(parsed, scene, team, build=str(thor_build) if thor_build else None, skills=cat.skills,
-                         site=None if dom.is_ai2thor else dom)
+                         site=dom.as_site)
     scores = score_execution(execution, goals, trans=trans, max_trans=max_trans)
     if trace is not None:
         write_json(trace, {"plan": str(plan), "floor_plan": scene, "robots": team_ids, **run_record(execution)})
@@ -145,7 +146,7 @@ def dispatch(
     functions: Path = typer.Argument(..., help="The dispatch file (TOML): the module:function carrying out each skill."),
     robots: str = typer.Option(..., help="The team as catalogue ids, e.g. 1,2,3; robots[i] is the i-th."),
     trace: Optional[Path] = typer.Option(None, help="Write every action to this JSON file."),
-    catalogue: Optional[Path] = typer.Option(None, help="A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."),
+    catalogue: Optional[Path] = typer.Option(None, help=CATALOGUE_HELP),
     domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Run a plan on real robots: each skill call goes to the lab's own function for that skill.

@@ -90,8 +90,13 @@ def line_of(text: str, needle: str) -> int:
     ('kind = "ground"\n', '', 'name = "rover"', r"robot rover: kind must be a word such as \"aerial\""),
 ])
 def test_a_mistake_is_reported_at_its_line_with_the_fix(tmp_path, old, new, needle, message):
-    assert old in STARTER
-    text = STARTER.replace(old, new, 1)
+    assert_one_problem_at(tmp_path, STARTER, old, new, needle, message)
+
+
+def assert_one_problem_at(tmp_path: Path, original: str, old: str, new: str, needle: str, message: str) -> None:
+    """``original`` with ``old`` made ``new`` is one problem, at the line holding ``needle``, matching ``message``."""
+    assert old in original, old
+    text = original.replace(old, new, 1)
     folder = write(tmp_path, text)
     with pytest.raises(DomainError) as caught:
         load_domain(folder)
@@ -157,16 +162,7 @@ def test_household_is_a_domain_folder_with_smartllms_skills_and_robots():
      'name = "robot30"', r"robot robot30 has skill 'CleanObjekt'.*did you mean CleanObject"),
 ])
 def test_a_mistake_in_an_ai2thor_domain_is_reported_at_its_line(tmp_path, old, new, needle, message):
-    assert old in HOUSEHOLD_FILE, old
-    text = HOUSEHOLD_FILE.replace(old, new, 1)
-    folder = write(tmp_path, text)
-    with pytest.raises(DomainError) as caught:
-        load_domain(folder)
-    problems = str(caught.value).splitlines()
-    assert len(problems) == 1, problems
-    match = re.match(rf"^{re.escape(str(folder / 'domain.toml'))}:(\d+): (.+)$", problems[0])
-    assert match and int(match.group(1)) == line_of(text, needle), (problems[0], needle)
-    assert re.search(message, match.group(2)), match.group(2)
+    assert_one_problem_at(tmp_path, HOUSEHOLD_FILE, old, new, needle, message)
 
 
 def test_a_world_that_is_neither_ai2thor_nor_a_site_says_what_it_may_be(tmp_path):
