@@ -31,6 +31,7 @@ from .scene_context import SceneObjects, scene_objects
 STAGES = ("decomposition", "coalition", "allocation")
 DEFAULT_EXAMPLE_COUNTS = {"decomposition": 5, "coalition": 3, "allocation": 4}
 _QUOTED = re.compile(r"'([A-Za-z]+)'")
+_CALLED = re.compile(r"\b([A-Z]\w*)\(")
 
 
 @dataclass(frozen=True)
@@ -150,13 +151,24 @@ def skills_header(skills: SkillSet) -> str:
     return f"from skills import {', '.join(skills)}\nimport threading\nimport time\n"
 
 
-def robots_list(team: Sequence[Robot]) -> str:
+def called_skills(code: str) -> frozenset[str]:
+    """The names a plan's code calls: its skills, and such names as ``Thread`` that no robot has."""
+    return frozenset(_CALLED.findall(code))
+
+
+def robots_list(team: Sequence[Robot], plan: str) -> str:
+    """The team, each robot with those of its skills that ``plan`` calls: all a coalition or an
+    allocation weighs, where a robot's whole skill list (13 names for most household robots) would
+    cost every task of the stage some 40 tokens per robot."""
+    called = called_skills(plan)
+
     def describe(i: int, r: Robot) -> str:
         head = f"'name': 'robots[{i}]', 'id': {r.id}"
+        skills = sorted(r.skills & called)
         if r.kind:  # a site domain's robot: its kind and capacities
             held = "".join(f", '{name}': {value:g}" for name, value in r.capacities)
-            return f"{{{head}, 'kind': '{r.kind}', 'skills': {sorted(r.skills)!r}{held}}}"
-        return f"{{{head}, 'skills': {sorted(r.skills)!r}, 'mass_capacity': {r.mass_capacity:g}}}"
+            return f"{{{head}, 'kind': '{r.kind}', 'skills': {skills!r}{held}}}"
+        return f"{{{head}, 'skills': {skills!r}, 'mass_capacity': {r.mass_capacity:g}}}"
 
     items = ",\n    ".join(describe(i, r) for i, r in enumerate(team))
     return f"robots = [\n    {items},\n]\n"
@@ -225,14 +237,17 @@ def coalition_intro(scene: SceneObjects) -> str:
 
 def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects, catalogue: dict[int, Robot],
                      examples: Sequence[Example], options: PromptOptions) -> Prompt:
+    """Decompositions appear here without their line comments: a coalition weighs what each sub-task
+    calls and lifts, not why each step is taken."""
+    bare = PromptOptions(comments=False, summary=options.summary)
     parts = [coalition_intro(scene)]
     for k, ex in enumerate(examples, start=1):
         ex_team = [catalogue[i] for i in ex.robots]
         objects = _example_scene(ex, scene).python_list(ex.object_types())
-        parts.append(f"\n# Example {k}\n{shape(ex.decomposition, options)}{robots_list(ex_team)}"
+        parts.append(f"\n# Example {k}\n{shape(ex.decomposition, bare)}{robots_list(ex_team, ex.decomposition)}"
                      f"objects = {objects}\n# Coalition:\n{ex.coalition}")
     objects = scene.python_list(plan_object_types(decomposed, scene))
-    own = f" plan\n{shape(decomposed, options)}{robots_list(team)}objects = {objects}\n# Coalition:\n"
+    own = f" plan\n{shape(decomposed, bare)}{robots_list(team, decomposed)}objects = {objects}\n# Coalition:\n"
     return Prompt(("".join(parts) + "\n# Your", own))
 
 
@@ -254,8 +269,8 @@ def allocation_prompt(decomposed: str, coalition: str | None, team: Sequence[Rob
         ex_team = [catalogue[i] for i in ex.robots]
         coalition_part = f"# Coalition:\n{coalition_decisions(ex.coalition or '')}" if options.coalition else ""
         allocated = shape(ex.allocation or "", PromptOptions(comments=options.comments, summary=True))
-        parts.append(f"\n# Example {k}\n{shape(ex.decomposition, bare)}{robots_list(ex_team)}"
+        parts.append(f"\n# Example {k}\n{shape(ex.decomposition, bare)}{robots_list(ex_team, ex.decomposition)}"
                      f"{coalition_part}# Allocated plan:\n{allocated}")
     coalition_part = f"# Coalition:\n{coalition_decisions(coalition)}" if options.coalition and coalition else ""
-    own = f" plan\n{shape(decomposed, bare)}{robots_list(team)}{coalition_part}# Allocated plan:\n"
+    own = f" plan\n{shape(decomposed, bare)}{robots_list(team, decomposed)}{coalition_part}# Allocated plan:\n"
     return Prompt(("".join(parts) + "\n# Your", own))

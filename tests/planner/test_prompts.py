@@ -39,12 +39,20 @@ def test_the_three_prompts_have_their_parts(catalogue):
     assert "{'name': 'Apple', 'mass': 0.2}" in decomposition and "{'name': 'Fridge'" in decomposition
     assert decomposition.endswith(f"# Task Description: {INSTRUCTION}\n")
     assert len(re.findall(r"^# Example \d$", coalition, re.M)) == 3
-    assert "'name': 'robots[1]', 'id': 24, 'skills': ['GoToObject', 'SwitchOff', 'SwitchOn'], 'mass_capacity': 100" in coalition
+    own = coalition.split("# Your plan")[1]
+    called = set(re.findall(r"^    (\w+)\(", result.stages[0].output, re.M))
+    for i, robot in enumerate(catalogue.robots[r] for r in (29, 24, 25)):
+        skills = sorted(robot.skills & called)
+        assert f"'name': 'robots[{i}]', 'id': {robot.id}, 'skills': {skills!r}, 'mass_capacity': 100}}" in own, \
+            "each robot with the skills the plan calls"
+    assert "'id': 24, 'skills': ['GoToObject'], 'mass_capacity'" in own  # of GoToObject, SwitchOff, SwitchOn
+    assert "'id': 24, 'skills': ['GoToObject', 'SwitchOn']" in coalition, "an example's robots, by its own plan"
     assert coalition.endswith("# Coalition:\n")
     assert len(re.findall(r"^# Example \d$", allocation, re.M)) == 4
     assert "# Allocated plan:\ndef subtask1_" in allocation
     assert allocation.endswith("# Allocated plan:\n")
-    assert result.stages[0].output in coalition and coalition_decisions(result.stages[1].output) in allocation
+    assert strip_comments(result.stages[0].output) in coalition and "    # " not in own
+    assert coalition_decisions(result.stages[1].output) in allocation
     assert "# Coalition:\n# SubTask 1 (subtask1_slice_bread): robots[0]\n# SubTask 2 (subtask2_toast_slice): " \
         "robots[1] and robots[2]\n# Allocated plan:" in allocation, "the examples' coalitions without their reasoning"
 
