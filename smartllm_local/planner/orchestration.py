@@ -74,8 +74,7 @@ class Orchestration(_Base):
     def _robot_lists(self, fn: WrittenFunction) -> Node:
         """The robot lists a function may be run with: long enough for its robot_list[i], and, when
         the team is known, such that every step has an actor with the skill and the strength."""
-        need = shortest_list(fn.whole, fn.max_index, self.team_size,
-                             notional=self.world is not None and not self._team_checks_lists())
+        need = self._need(fn)
         if self.team is not None:
             lists = self._checked_lists(fn, need)
             if lists:
@@ -93,6 +92,11 @@ class Orchestration(_Base):
     def _working_lists(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
         """Of the capable robot lists, those the world allows (all, without a team world check)."""
         return lists
+
+    def _need(self, fn: WrittenFunction) -> int:
+        """How many robots the function's list needs (see :func:`.feasibility.shortest_list`)."""
+        return shortest_list(fn.whole, fn.max_index, self.team_size,
+                             notional=self.world is not None and not self._team_checks_lists())
 
     def _team_checks_lists(self) -> bool:
         """Whether each robot list is dry-run with the team's own robots (see :func:`.feasibility.shortest_list`)."""

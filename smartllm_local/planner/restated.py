@@ -24,7 +24,7 @@ from typing import Sequence
 from ..robots import Robot
 from ..skills import Skill, SkillSet
 from .constraints import INDENT, Choose, Forced
-from .feasibility import Step, call_demand, feasible_lists, shortest_list
+from .feasibility import Step, call_demand, feasible_lists
 from .grammar import alt, seq
 from .plan_constraint import STEP_LINE, PlanConstraint, WrittenFunction
 from .scene_context import SceneObjects
@@ -175,10 +175,6 @@ class RestatedAllocation(PlanConstraint):
                 if budget is not None:
                     break
         return working
-
-    def _need(self, fn: WrittenFunction) -> int:
-        return shortest_list(fn.whole, fn.max_index, self.team_size,
-                             notional=self.world is not None and not self._team_checks_lists())
 
     def _team_checks_lists(self) -> bool:
         return self.team_world is not None
