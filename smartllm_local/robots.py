@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 from .errors import CatalogueError
-from .skills import AFFORDANCES, DEFAULT_SKILLS, THOR_ACTIONS, Skill, SkillSet
+from .skills import DEFAULT_SKILLS, Skill, SkillSet, thor_skill
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,7 @@ def load_catalogue(path: str | Path) -> Catalogue:
 
 
 def _extra_skills(path: Path, entries: Any) -> SkillSet:
+    """SMART-LLM's skills and the catalogue's own, each read as a domain file reads its ``[skills.NAME]``."""
     if not isinstance(entries, list):
         raise CatalogueError(f'{path}: "skills" must be a list of {{"name", "action", "arguments"}}')
     skills: list[Skill] = list(DEFAULT_SKILLS)
@@ -102,15 +103,11 @@ def _extra_skills(path: Path, entries: Any) -> SkillSet:
             raise CatalogueError(f'{where}: needs a "name" that is a Python identifier')
         if entry["name"] in names:
             raise CatalogueError(f"{where}: skill {entry['name']} is already defined")
-        action = entry.get("action")
-        if not isinstance(action, str) or action not in THOR_ACTIONS:
-            raise CatalogueError(f"{where}: action must be one of {sorted(THOR_ACTIONS)}, got {action!r}")
-        arguments = entry.get("arguments", [""])
-        if not isinstance(arguments, list) or not 1 <= len(arguments) <= 2 \
-                or any(not isinstance(a, str) or a not in AFFORDANCES for a in arguments):
-            raise CatalogueError(f"{where}: arguments must list 1 or 2 affordances from {sorted(AFFORDANCES)}")
-        skills.append(Skill(entry["name"], action, tuple(arguments), len(arguments)))
-        names.add(entry["name"])
+        skill = thor_skill(entry["name"], {key: value for key, value in entry.items() if key != "name"})
+        if isinstance(skill, list):
+            raise CatalogueError(f"{where}: {'; '.join(skill)}")
+        skills.append(skill)
+        names.add(skill.name)
     return SkillSet(skills)
 
 

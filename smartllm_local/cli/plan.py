@@ -18,7 +18,7 @@ from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..results import summary_table, variability_table
 from ..files import check_output_folder, write_atomic
 from ..methods import METHODS, make_method
-from ..planner.backends import BACKENDS, Sampling, check_server_options, load_backends, model_location
+from ..planner.backends import BACKENDS, LoopGuard, Sampling, check_server_options, load_backends, model_location
 from ..planner.chat import CHAT_TEMPLATE_MODES, check_mode
 from ..planner.models import DEFAULT_MODEL, EMBEDDED
 from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
@@ -46,7 +46,8 @@ class ModelOptions:
                  seed: int, temperature: float, no_comments: bool, no_summary: bool, no_coalition: bool,
                  no_grammar: bool, free_teams: bool = False, chat_template: str = "auto",
                  free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None,
-                 endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None):
+                 endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None,
+                 no_loop_guard: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -67,7 +68,7 @@ class ModelOptions:
         if backend == "llamacpp":  # a cache folder that can never be one fails before the model loads
             open_store(prefix_cache)
         self.config = PlannerConfig(
-            sampling=Sampling(temperature=temperature, seed=seed),
+            sampling=Sampling(temperature=temperature, seed=seed, loop_guard=None if no_loop_guard else LoopGuard()),
             grammar=not no_grammar,
             free_teams=free_teams,
             prompts=PromptOptions(comments=not no_comments, summary=not no_summary, coalition=not no_coalition),
@@ -121,6 +122,9 @@ _FREE_ALLOCATION = typer.Option(False, "--free-allocation", help=(
 _NO_WORLD_CHECK = typer.Option(False, "--no-world-check", help=(
     "Offer steps whatever the scene's state, rather than only steps that succeed from the state the "
     "steps so far produce (for measuring the check's effect)."))
+_NO_LOOP_GUARD = typer.Option(False, "--no-loop-guard", help=(
+    "Let free text (summaries, comments, a coalition's reasoning) repeat itself to its length limit, rather "
+    "than end it where it starts saying one thing a third time over (see the README's \"Loops in free text\")."))
 _PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
     "Where the examples' key/value states are kept between runs, so a later run on the same model starts "
     "from them (default: the user's cache, $XDG_CACHE_HOME/smartllm-local/prefix-states, at most 4 GiB); "
@@ -159,6 +163,7 @@ def plan_command(
     chat_template: str = _CHAT_TEMPLATE,
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
+    no_loop_guard: bool = _NO_LOOP_GUARD,
     prefix_cache: Optional[str] = _PREFIX_CACHE,
     endpoint: Optional[str] = _ENDPOINT,
     server_timeout: Optional[float] = _SERVER_TIMEOUT,
@@ -167,7 +172,7 @@ def plan_command(
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check, prefix_cache, endpoint, 1, server_timeout)
+                           no_world_check, prefix_cache, endpoint, 1, server_timeout, no_loop_guard)
     if out is not None:
         check_output_folder(out, "--out")
     dom = load_domain(domain, catalogue=catalogue)
@@ -270,6 +275,7 @@ def benchmark_run(
     chat_template: str = _CHAT_TEMPLATE,
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
+    no_loop_guard: bool = _NO_LOOP_GUARD,
     prefix_cache: Optional[str] = _PREFIX_CACHE,
     endpoint: Optional[str] = _ENDPOINT,
     workers: int = typer.Option(1, "--workers", help=(
@@ -281,7 +287,7 @@ def benchmark_run(
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check, prefix_cache, endpoint, workers, server_timeout)
+                           no_world_check, prefix_cache, endpoint, workers, server_timeout, no_loop_guard)
     check_output_folder(out, "--out")
     dom = load_domain(domain, catalogue=catalogue)
     cat = dom.catalogue

@@ -12,6 +12,7 @@ the grammar rather than by running out of tokens.
 from __future__ import annotations
 
 import random
+from collections import deque
 import re
 import string
 from dataclasses import dataclass
@@ -235,6 +236,9 @@ class Grammar:
         return "\n".join(lines) + "\n"
 
 
+FREE_TEXT_CHARS = 20  # a run of more kinds of character than this is free text (not digits, not a name's first letter)
+
+
 class Matcher:
     """Follows text through a grammar, character by character, and says what must come next.
 
@@ -245,7 +249,9 @@ class Matcher:
 
     def __init__(self, grammar: Grammar):
         self._edges: list[list[tuple[frozenset[str] | None, int]]] = []  # state -> (chars or epsilon, target)
+        self._free: set[int] = set()  # the states of free text (a run of any of many characters)
         start, self._accept = self._build(grammar.rules["root"], grammar.rules)
+        self._distance: list[float] | None = None
         self._states = self._closure({start})
 
     def _state(self) -> int:
@@ -281,6 +287,7 @@ class Matcher:
                 self._edges[start].append((None, s))
                 self._edges[e].append((None, end))
             return start, end
+        first = start
         end = self._state()
         current = start
         for k in range(node.max):
@@ -290,6 +297,8 @@ class Matcher:
             self._edges[current].append((None, s))
             current = e
         self._edges[current].append((None, end))
+        if isinstance(node.item, Chars) and len(node.item.chars) > FREE_TEXT_CHARS:
+            self._free.update(range(first, len(self._edges)))
         return start, end
 
     def _closure(self, states: set[int]) -> frozenset[int]:
@@ -314,6 +323,44 @@ class Matcher:
     @property
     def accepting(self) -> bool:
         return self._accept in self._states
+
+    def shortest_way(self) -> str:
+        """How free text that has run on long enough ends soonest: the characters every shortest way from
+        here to the end of the text begins with, until they leave the free text or come to a choice."""
+        distance = self._distances()
+        out: list[str] = []
+        states = self._states
+        while states & self._free:
+            nearest = min(distance[s] for s in states)
+            if nearest == 0:
+                break
+            labels = {label for s in states if distance[s] == nearest
+                      for label, t in self._edges[s] if label is not None and distance[t] == nearest - 1}
+            if len(labels) != 1 or len(next(iter(labels))) != 1:
+                break
+            c = next(iter(next(iter(labels))))
+            out.append(c)
+            states = self._closure({t for s in states for label, t in self._edges[s] if label is not None and c in label})
+        return "".join(out)
+
+    def _distances(self) -> list[float]:
+        """Each state's fewest characters to the end of the text (0-1 breadth-first, backwards)."""
+        if self._distance is None:
+            into: list[list[tuple[bool, int]]] = [[] for _ in self._edges]
+            for s, edges in enumerate(self._edges):
+                for label, t in edges:
+                    into[t].append((label is not None, s))
+            distance = [float("inf")] * len(self._edges)
+            distance[self._accept] = 0
+            queue = deque([self._accept])
+            while queue:
+                t = queue.popleft()
+                for step, s in into[t]:
+                    if distance[t] + step < distance[s]:
+                        distance[s] = distance[t] + step
+                        queue.append(s) if step else queue.appendleft(s)
+            self._distance = distance
+        return self._distance
 
     def forced(self) -> str:
         """The characters that must come next, up to the first choice (or the end)."""

@@ -54,6 +54,7 @@ class StageRecord:
     capped: list[str] = field(default_factory=list)  # what the output budget kept the grammar from offering
     world_tries: int = 0  # calls the world check tried
     dead_ends: int = 0  # lines for which it found nothing that succeeds
+    loops_ended: int = 0  # loops in free text the loop guard ended (see backends.repetition)
     error: str = ""
     plan: object = None  # the parsed plan of a plan stage
     chat_template: str = ""  # "applied", "none (base model)" or "off" (--chat-template none)
@@ -84,6 +85,7 @@ class StageRecord:
             "tokens_per_second": round(self.tokens_per_second, 2),
             "examples": self.examples, "dropped_examples": self.dropped, "capped_by_budget": self.capped,
             "world_check": {"tries": self.world_tries, "dead_ends": self.dead_ends},
+            "loops_ended": self.loops_ended,
         }
 
 
@@ -146,6 +148,7 @@ def run_stage(
         result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,
                                   stop=STOP_STRINGS[record.stage], rng=rng)  # type: ignore[call-arg]
         record.generated_tokens = len(result.tokens)
+        record.loops_ended = result.loops
         record.raw = record.output = result.text.rstrip() + "\n"
         record.seconds = time.perf_counter() - started
         return
@@ -161,6 +164,7 @@ def run_stage(
                                        "allow it", record.stage)
         context.extend(result.tokens)
         record.generated_tokens += len(result.tokens) + (result.stop == "eos")
+        record.loops_ended += result.loops
         return result.text, len(result.tokens) + (result.stop == "eos")
 
     def force(text: str) -> int:

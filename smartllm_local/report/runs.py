@@ -19,7 +19,7 @@ from ..run_store import RESULTS, RUN_FILE
 _VARIANTS = (
     ("no_comments", "no comments"), ("no_summary", "no summary"), ("no_coalition", "no coalition"),
     ("free_allocation", "free allocation"), ("no_world_check", "no world check"), ("no_grammar", "no grammar"),
-    ("free_teams", "free teams"),
+    ("free_teams", "free teams"), ("no_loop_guard", "no loop guard"),
 )
 ABLATIONS = ("no_comments", "no_summary", "no_coalition")
 

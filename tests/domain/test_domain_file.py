@@ -185,7 +185,7 @@ def test_a_json_catalogue_gives_an_ai2thor_domain_other_robots(tmp_path):
     for skill in ({"name": "Grab", "action": ["PickupObject"]}, {"name": "Grab", "action": "PickupObject",
                                                                  "arguments": [["pickupable"]]}):
         path.write_text(json.dumps({"robots": [], "skills": [skill]}))
-        with pytest.raises(CatalogueError, match=r"skills\[0\]: (action|arguments) must"):
+        with pytest.raises(CatalogueError, match=r"skills\[0\]: skill Grab: (action|arguments) must"):
             load_domain("household", catalogue=path)
 
 

@@ -9,6 +9,8 @@ from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.grammar import Grammar, GrammarError, alt, chars, rep, seq
 
+from .test_repetition import check_loop_guard
+
 PROMPT = "The capital of France is"
 
 
@@ -104,3 +106,8 @@ def test_the_other_embedded_model_runs_too():
         assert grammar.matches(out.text)
     finally:
         gemma.close()
+
+
+
+def test_the_loop_guard_ends_free_text_that_loops(smollm2):
+    check_loop_guard(smollm2)

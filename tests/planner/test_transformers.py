@@ -21,6 +21,8 @@ from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.domain import load_domain
 
+from .test_repetition import check_loop_guard
+
 LOAD_STDERR: dict[str, str] = {}
 
 
@@ -81,6 +83,10 @@ def test_a_task_planned_through_all_stages(hf_smollm2):
 
 
 # ------------------------------------------------------------------ loading quietly, failing clearly
+
+
+def test_the_loop_guard_ends_free_text_that_loops(hf_smollm2):
+    check_loop_guard(hf_smollm2)
 
 
 def test_quiet_loading_hides_progress_bars_but_not_warnings(capfd):

@@ -9,10 +9,11 @@ from typing import Any, Sequence
 from ...errors import UserError
 from ..models import EMBEDDED
 from .base import Backend, Generated, Sampling
+from .repetition import LoopGuard
 
 BACKENDS = ("llamacpp", "transformers", "server")
 
-__all__ = ["BACKENDS", "Backend", "Generated", "Sampling", "check_server_options", "load_backend", "load_backends",
+__all__ = ["BACKENDS", "Backend", "Generated", "LoopGuard", "Sampling", "check_server_options", "load_backend", "load_backends",
            "model_location"]
 
 

@@ -12,14 +12,17 @@ from typing import Callable, Protocol, Sequence
 
 from ...errors import ModelError
 from ..grammar import Grammar
+from .repetition import LoopGuard
 
 
 @dataclass(frozen=True)
 class Sampling:
-    """Decoding settings; temperature 0 is greedy, the seed makes sampling reproducible."""
+    """Decoding settings; temperature 0 is greedy, the seed makes sampling reproducible, and
+    ``loop_guard`` (None: off) keeps a line from ending in text said three times over."""
 
     temperature: float = 0.0
     seed: int = 0
+    loop_guard: LoopGuard | None = LoopGuard()
 
 
 @dataclass
@@ -27,6 +30,7 @@ class Generated:
     tokens: list[int]
     text: str
     stop: str  # "line" (a grammar line completed), "eos", "stop" (a stop string), "length"
+    loops: int = 0  # loops the loop guard ended
 
 
 class Backend(Protocol):

@@ -37,7 +37,7 @@ import ctypes
 import io
 import os
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -45,6 +45,7 @@ from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..grammar import Grammar, GrammarError, Matcher
 from ..prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
 from .base import Generated, Sampling, continuation_tokens, shared_prefix
+from .repetition import current_line
 
 _TOP = 64
 
@@ -235,35 +236,48 @@ class LlamaCppBackend(PrefixReuse):
         masked[self._full["id"]] = self._full["logit"]
         return masked
 
-    def _pick(self, logits: np.ndarray, sampler, sampling: Sampling, rng: np.random.Generator) -> int:
+    def _pick(self, logits: np.ndarray, sampler, sampling: Sampling, rng: np.random.Generator,
+              avoid: Callable[[int], bool] | None = None) -> int:
+        """The next token, greedy or sampled, among those the grammar admits and, where any of them is
+        left, those ``avoid`` does not refuse."""
         if sampling.temperature <= 0:
             best = int(np.argmax(logits))
-            if sampler is None or self._allowed(sampler, best):
+            if (sampler is None or self._allowed(sampler, best)) and not (avoid and avoid(best)):
                 return best
             top = np.argpartition(-logits, _TOP)[:_TOP]
             top = top[np.argsort(-logits[top], kind="stable")]
             self._few["id"] = top
             self._few["logit"] = logits[top]
-            self._apply(sampler, self._few, _TOP)
-            finite = np.isfinite(self._few["logit"])
-            if finite.any():
-                return int(self._few["id"][np.argmax(finite)])
-            masked = self._masked(sampler, logits)
-            if not np.isfinite(masked).any():
-                raise GrammarError("the grammar admits no token here")
-            return int(np.argmax(masked))
+            if sampler is not None:
+                self._apply(sampler, self._few, _TOP)
+            admitted = self._few["id"][np.isfinite(self._few["logit"])]
+            if not len(admitted):
+                masked = self._masked(sampler, logits)
+                if not np.isfinite(masked).any():
+                    raise GrammarError("the grammar admits no token here")
+                admitted = np.argsort(-masked, kind="stable")[: int(np.isfinite(masked).sum())]
+            return next((int(t) for t in admitted if not (avoid and avoid(int(t)))), int(admitted[0]))
         scaled = logits.astype(np.float64) / sampling.temperature
         probs = np.exp(scaled - scaled.max())
         probs /= probs.sum()
         token = int(rng.choice(self.n_vocab, p=probs))
-        if sampler is None or self._allowed(sampler, token):
+        if (sampler is None or self._allowed(sampler, token)) and not (avoid and avoid(token)):
             return token
-        masked = self._masked(sampler, logits).astype(np.float64) / sampling.temperature
+        masked = self._masked(sampler, logits).astype(np.float64) / sampling.temperature if sampler else scaled
         if not np.isfinite(masked).any():
             raise GrammarError("the grammar admits no token here")
         probs = np.exp(masked - masked[np.isfinite(masked)].max())
-        probs /= probs.sum()
-        return int(rng.choice(self.n_vocab, p=probs))
+        # Drawing again without each refused draw samples exactly the admitted tokens avoid allows.
+        first = -1
+        for _ in range(_TOP):
+            token = int(rng.choice(self.n_vocab, p=probs / probs.sum()))
+            first = token if first < 0 else first
+            if not (avoid and avoid(token)):
+                return token
+            probs[token] = 0.0
+            if probs.sum() <= 0:
+                break
+        return first
 
     # ------------------------------------------------------------ generation
 
@@ -283,16 +297,27 @@ class LlamaCppBackend(PrefixReuse):
         self._sync(context)
         sampler = self._grammar_sampler(grammar) if grammar is not None else None
         matcher = Matcher(grammar) if grammar is not None else None
+        guard, loops = sampling.loop_guard, 0
         out: list[int] = []
         text = ""
         decoder = codecs.getincrementaldecoder("utf-8")("replace")
         try:
             while len(out) < max_tokens:
-                new = self._forced_tokens(matcher, sampler) if matcher is not None else []
+                new = self._forced_tokens(matcher.forced(), sampler) if matcher is not None else []
                 if not new:
-                    token = self._pick(self._logits(), sampler, sampling, rng)
+                    logits = self._logits()
+                    token = self._pick(logits, sampler, sampling, rng)
+                    line = current_line(text)
+                    if guard is not None and guard.loops(line + self._text(token)):
+                        # A loop: end the free text it runs in (the grammar's shortest way on), or else
+                        # take the best token that does not close the loop.
+                        new = self._forced_tokens(matcher.shortest_way(), sampler, way=True) if matcher is not None else []
+                        token = token if new else self._pick(
+                            logits, sampler, sampling, rng, lambda t: guard.loops(line + self._text(t)))
+                        loops += 1
+                if not new:
                     if self._lib.llama_vocab_is_eog(self._vocab, token):
-                        return Generated(out, text + decoder.decode(b"", final=True), "eos")
+                        return Generated(out, text + decoder.decode(b"", final=True), "eos", loops)
                     if sampler is not None:
                         self._lib.llama_sampler_accept(sampler, token)
                     new = [token]
@@ -304,22 +329,21 @@ class LlamaCppBackend(PrefixReuse):
                                                "the planner's grammar does not allow it")
                 text += piece
                 if sampler is not None and text.endswith("\n"):
-                    return Generated(out, text, "line")
+                    return Generated(out, text, "line", loops)
                 for s in stop:
                     if s in text:
-                        return Generated(out, text[: text.index(s)], "stop")
-            return Generated(out, text + decoder.decode(b"", final=True), "length")
+                        return Generated(out, text[: text.index(s)], "stop", loops)
+            return Generated(out, text + decoder.decode(b"", final=True), "length", loops)
         finally:
             if sampler is not None:
                 self._lib.llama_sampler_free(sampler)
 
-    def _forced_tokens(self, matcher: Matcher, sampler) -> list[int]:
-        """The tokens of the text the grammar forces next, all in one batch, accepted by llama.cpp's grammar.
+    def _forced_tokens(self, forced: str, sampler, way: bool = False) -> list[int]:
+        """The tokens of text the planner's grammar forces, all in one batch, accepted by llama.cpp's grammar.
 
         Each is checked before llama.cpp accepts it: accepting a token its grammar refuses aborts the process.
         """
-        forced = matcher.forced()
-        if len(forced) < 2:
+        if len(forced) < 2 and not way:  # one character costs no more sampled than forced
             return []
         tokens = self.tokenize_continuation(forced)
         for token in tokens:
@@ -327,6 +351,9 @@ class LlamaCppBackend(PrefixReuse):
                 raise GrammarMismatchError(forced, "the planner's grammar forces it, llama.cpp's grammar refuses it")
             self._lib.llama_sampler_accept(sampler, token)
         return tokens
+
+    def _text(self, token: int) -> str:
+        return self._piece(token).decode("utf-8", errors="replace")
 
     def close(self) -> None:
         llm, self.llm = getattr(self, "llm", None), None

@@ -29,21 +29,24 @@ import copy
 import importlib
 import importlib.util
 import logging
+import math
 import os
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
-from ..grammar import Grammar, GrammarError
+from ..grammar import Grammar, GrammarError, Matcher
 from ..models import EMBEDDED, embedded_model_path, is_gguf
 from ..prefix_cache import MemoryStates, PrefixReuse
 from .base import Generated, Sampling, continuation_tokens, shared_prefix
+from .repetition import current_line
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
     os.environ[_switch] = "1"
 
+_AVOID_TRIES = 64  # the best tokens (or draws) tried for one that closes no loop
 _EXTRA = "pip install 'smartllm-local[transformers]' (torch, transformers, gguf, accelerate, llguidance)"
 
 # Said by transformers whenever a GGUF is loaded in another dtype than float32, also for architectures it
@@ -267,6 +270,7 @@ class TransformersBackend(PrefixReuse):
             if matcher.is_error():
                 raise GrammarError(f"llguidance rejected a grammar: {matcher.get_error()}")
             mask = llg.torch.allocate_token_bitmask(1, self.n_vocab)  # on the CPU: llguidance fills it there
+        guard, loops = sampling.loop_guard, 0
         out: list[int] = []
         while len(out) < max_tokens:
             logits = self._logits[: self.n_vocab].clone().unsqueeze(0)
@@ -277,31 +281,59 @@ class TransformersBackend(PrefixReuse):
                 blocked = torch.from_numpy(bits == 0).to(logits.device)
                 logits[0, blocked] = -float("inf")
             token = self._pick(logits[0], sampling, rng)
-            if token == self.eos or (matcher is not None and matcher.is_stopped()):
-                return Generated(out, self.detokenize(out), "eos")
-            if matcher is not None and not matcher.consume_token(token):
-                raise GrammarError(f"llguidance refused token {token}: {matcher.get_error()}")
-            out.append(token)
-            self._evaluate([token])
+            new = [token]
+            line = current_line(self.detokenize(out)) if guard is not None else ""
+            if guard is not None and guard.loops(line + self.detokenize([token])):
+                # A loop (see LoopGuard): end the free text it runs in, or else avoid the looping token.
+                way = ""
+                if grammar is not None:
+                    follow = Matcher(grammar)
+                    way = follow.shortest_way() if follow.advance(self.detokenize(out)) else ""
+                loops += 1
+                if way:
+                    new = self.tokenize_continuation(way)
+                else:
+                    new = [self._pick(logits[0], sampling, rng, lambda t: guard.loops(line + self.detokenize([t])))]
+            if new[0] == self.eos or (matcher is not None and matcher.is_stopped()):
+                return Generated(out, self.detokenize(out), "eos", loops)
+            for t in new:
+                if matcher is not None and not matcher.consume_token(t):
+                    raise GrammarError(f"llguidance refused token {t}: {matcher.get_error()}")
+            out.extend(new)
+            self._evaluate(new)
             text = self.detokenize(out)
             if matcher is not None and text.endswith("\n"):
                 if not grammar.matches(text):
                     raise GrammarMismatchError(text, "llguidance let the model write it, the planner's grammar "
                                                "does not allow it")
-                return Generated(out, text, "line")
+                return Generated(out, text, "line", loops)
             for s in stop:
                 if s in text:
-                    return Generated(out, text[: text.index(s)], "stop")
-        return Generated(out, self.detokenize(out), "length")
+                    return Generated(out, text[: text.index(s)], "stop", loops)
+        return Generated(out, self.detokenize(out), "length", loops)
 
-    def _pick(self, logits: Any, sampling: Sampling, rng: np.random.Generator) -> int:
+    def _pick(self, logits: Any, sampling: Sampling, rng: np.random.Generator,
+              avoid: Callable[[int], bool] | None = None) -> int:
+        """Greedy or sampled from the (grammar-masked) logits; ``avoid`` refuses tokens while others are left."""
         if sampling.temperature <= 0:
-            return int(self._torch.argmax(logits))
+            if avoid is None:
+                return int(self._torch.argmax(logits))
+            order = self._torch.argsort(logits, descending=True, stable=True)[:_AVOID_TRIES].tolist()
+            finite = [t for t in order if math.isfinite(float(logits[t]))]
+            return next((t for t in finite if not avoid(t)), finite[0])
         scores = (logits / sampling.temperature).double().cpu().numpy()
         finite = np.isfinite(scores)
         probs = np.where(finite, np.exp(scores - scores[finite].max()), 0.0)
-        probs /= probs.sum()
-        return int(rng.choice(len(probs), p=probs))
+        first = -1
+        for _ in range(_AVOID_TRIES if avoid else 1):  # drawing again without each refused draw
+            token = int(rng.choice(len(probs), p=probs / probs.sum()))
+            first = token if first < 0 else first
+            if avoid is None or not avoid(token):
+                return token
+            probs[token] = 0.0
+            if probs.sum() <= 0:
+                break
+        return first
 
     def close(self) -> None:
         self._cache = self._logits = None

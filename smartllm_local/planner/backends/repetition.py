@@ -1,0 +1,47 @@
+"""A guard against degenerate repetition: free text that starts saying one thing over and over ends there.
+
+Small models fall into loops inside free text ("1.1.1.1.", "the glass of the glass of the
+glass of the", "PickupObject, PickupObject, ..."), and a grammar that bounds a comment's
+length still lets a loop run to that bound (SmolLM2's coalitions over the household benchmark:
+half of what it decoded). Banning the looping token does not help (the model
+wanders into the next loop), so when a candidate token would close a loop, the backend
+ends the free text instead, writing the grammar's shortest way out of it
+(:meth:`Matcher.shortest_way`: `` (`` before a summary's skills, ``;`` before a coalition's
+team, the newline after a comment) and letting the model go on from there. Only where no
+grammar gives a way out is the best token that closes no loop taken instead. Either way the
+guard only ever chooses among what the grammar admits.
+
+Unlike a repetition penalty (llama.cpp's ``repeat_penalty``, its DRY sampler), it looks at
+the current line alone and acts only on a third copy in a row, so the code a plan repeats
+from line to line (``GoToObject('Bread')`` in every function) and the robots a coalition
+names twice in a line are never touched.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class LoopGuard:
+    """A line may not end with a stretch of ``unit`` characters or fewer repeated ``times`` times in a
+    row, or as many more times as it takes the repeats to span ``span`` characters (so "ll", "..."
+    and "1.1.1" stay allowed, "1.1.1.1.1." does not)."""
+
+    times: int = 3
+    span: int = 9
+    unit: int = 32
+
+    def loops(self, line: str) -> bool:
+        """Whether ``line`` ends in a loop."""
+        for size in range(1, min(self.unit, len(line) // self.times) + 1):
+            repeats = max(self.times, -(-self.span // size))
+            tail = line[-size * repeats:]
+            if len(tail) == size * repeats and tail == tail[:size] * repeats:
+                return True
+        return False
+
+
+def current_line(text: str) -> str:
+    """The text after the last newline: the line a guard looks at."""
+    return text[text.rfind("\n") + 1:]

@@ -1,0 +1,142 @@
+"""The loop guard: what counts as a loop, that no hand-written plan ever trips it, and the grammar's way out."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hypothesis import given, strategies as st
+
+from smartllm_local.planner.backends.repetition import LoopGuard, current_line
+from smartllm_local.planner.coalition import CoalitionConstraint
+from smartllm_local.planner.constraints import COMMENT_CHARS, Choose, text_run
+from smartllm_local.planner.grammar import Grammar, Matcher, alt, opt, seq
+
+from smartllm_local.planner.backends.base import Sampling
+
+DOMAINS = Path(__file__).resolve().parents[2] / "domains"
+GUARD = LoopGuard()
+
+
+@pytest.mark.parametrize("line", [
+    "# SubTask 1: 1.1.1.1.1.",
+    "# SubTask 2: Cut the glass of the glass of the glass of the",
+    "; GoToObject, PickupObject, PickupObject, PickupObject, Pick",
+    "# ---------",
+    "    # so so so",
+])
+def test_a_third_copy_in_a_row_is_a_loop(line):
+    assert GUARD.loops(line)
+
+
+@pytest.mark.parametrize("line", [
+    "# SubTask 1: 1.1.1.1.",  # short repeats must span 9 characters
+    "# Sub-task three: fill the kettle...",
+    "# SubTask 2: Cut the glass of the glass of the",  # two copies
+    "# SubTask 1 (subtask1_toast): needs SwitchOn; robots[1] has SwitchOn; so robots[1]",
+    "    PutObject(robot_list[0], 'Bread', 'CounterTop')",
+    "",
+])
+def test_what_is_not_a_loop(line):
+    assert not GUARD.loops(line)
+
+
+@given(st.text(min_size=0, max_size=20), st.text(alphabet=sorted(COMMENT_CHARS), min_size=1, max_size=32),
+       st.integers(min_value=1, max_value=12))
+def test_a_unit_repeated_to_three_copies_and_nine_characters_is_found_after_any_text(before, unit, copies):
+    """Whatever precedes it, a line ending in ``copies`` copies of ``unit`` loops once there are three of them
+    spanning nine characters (and perhaps sooner, where the copies themselves repeat a shorter unit)."""
+    if copies >= 3 and len(unit) * copies >= 9:
+        assert GUARD.loops(before + unit * copies)
+
+
+def _hand_written() -> list[Path]:
+    files = [p for p in DOMAINS.glob("*/examples/*/*") if p.suffix in (".py", ".txt")]
+    return files + list(DOMAINS.glob("*/reference_plans/*.py"))
+
+
+def test_no_line_any_domain_writes_by_hand_is_ever_a_loop():
+    """Every prefix of every line of the examples and the reference plans: the guard never cuts what a
+    plan is meant to say, only what no example ever says."""
+    files = _hand_written()
+    assert len(files) > 60
+    for path in files:
+        for line in path.read_text(encoding="utf-8").splitlines():
+            for end in range(len(line) + 1):
+                assert not GUARD.loops(line[:end]), f"{path.name}: {line[:end]!r}"
+
+
+def test_no_loop_guard_turns_it_off_and_labels_the_run():
+    from smartllm_local.cli.plan import ModelOptions
+    from smartllm_local.report.runs import Run
+
+    def options(off: bool) -> ModelOptions:
+        return ModelOptions(None, "llamacpp", 4096, None, 0, 0, 0.0, False, False, False, False,
+                            prefix_cache="off", no_loop_guard=off)
+
+    assert options(False).config.sampling.loop_guard == LoopGuard()
+    assert options(True).config.sampling.loop_guard is None
+    run = Run(Path("."), [{"identity": {"arguments": {"no_loop_guard": True}}}])
+    assert run.variant == "no loop guard"
+
+
+def test_the_current_line_is_what_follows_the_last_newline():
+    assert current_line("# a\n# b b") == "# b b"
+    assert current_line("no newline") == "no newline"
+    assert current_line("ends\n") == ""
+
+
+# ------------------------------------------------------------------ the way out of free text
+
+SUMMARY = Grammar({"root": seq("# SubTask 1: ", text_run(COMMENT_CHARS - set("()"), 60), " (skills: ",
+                               alt("GoToObject", "PickupObject"), opt(", PutObject"), ")\n")})
+
+
+def _after(grammar: Grammar, text: str) -> Matcher:
+    matcher = Matcher(grammar)
+    assert matcher.advance(text)
+    return matcher
+
+
+def test_the_way_out_leaves_the_free_text_and_stops_before_the_models_next_choice():
+    """Out of a summary's text and up to its skills: never choosing a skill (GoToObject is shorter than
+    PickupObject, but which to write stays the model's)."""
+    assert _after(SUMMARY, "# SubTask 1: 1.1.1.1.").shortest_way() == " ("
+
+
+def test_outside_free_text_there_is_no_way_to_take():
+    assert _after(SUMMARY, "# Sub").shortest_way() == ""
+    assert _after(SUMMARY, "# SubTask 1: a (skills: ").shortest_way() == ""
+
+
+def test_a_comment_ends_with_its_line():
+    comment = Grammar({"root": seq("    # ", text_run(COMMENT_CHARS, 48), "\n")})
+    assert _after(comment, "    # it up it up it").shortest_way() == "\n"
+
+
+def test_a_coalitions_reasoning_ends_where_its_team_begins():
+    constraint = CoalitionConstraint(["subtask1_toast"], 2)  # the model writes needs and reasoning
+    choose = constraint.next(2000)
+    assert isinstance(choose, Choose)
+    matcher = _after(choose.grammar, "# SubTask 1 (subtask1_toast): needs GoToObject; PickupObject, PickupObject,")
+    way = matcher.shortest_way()
+    assert way == ";"
+    assert matcher.advance(way) and matcher.forced() == " so robots["
+
+
+# A context after which SmolLM2 goes on counting "1." to the end of any line it is given.
+LOOPING = "Version: 1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.\nVersion: "
+
+
+def check_loop_guard(backend) -> None:
+    """On a real model (called by each backend's tests): unguarded, the model fills a line's free text
+    with its loop; guarded, the line leaves the free text at the third copy by the grammar's way out, and
+    still matches the grammar."""
+    grammar = Grammar({"root": seq(text_run(COMMENT_CHARS - {"("}, 60), " (done)\n")})
+    context = backend.tokenize(LOOPING, bos=True)
+    budget = grammar.max_length() + 1
+    free = backend.generate(context, grammar=grammar, max_tokens=budget, sampling=Sampling(loop_guard=None))
+    guarded = backend.generate(context, grammar=grammar, max_tokens=budget, sampling=Sampling())
+    assert free.loops == 0 and GUARD.loops(free.text[: -len(" (done)\n")]), free.text
+    assert guarded.loops == 1 and guarded.text.endswith(" (done)\n") and grammar.matches(guarded.text), guarded.text
+    assert len(guarded.text) < len(free.text) and len(guarded.tokens) < len(free.tokens)
