@@ -12,9 +12,9 @@ the grammar rather than by running out of tokens.
 from __future__ import annotations
 
 import random
-from collections import deque
 import re
 import string
+from collections import deque
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Iterable, Union
@@ -310,11 +310,14 @@ class Matcher:
                     stack.append(target)
         return frozenset(seen)
 
+    def _step(self, states: frozenset[int], c: str) -> frozenset[int]:
+        return self._closure({t for s in states for label, t in self._edges[s] if label is not None and c in label})
+
     def advance(self, text: str) -> bool:
         """Consume ``text``; False (and no change) if the grammar does not allow it."""
         states = self._states
         for c in text:
-            states = self._closure({t for s in states for label, t in self._edges[s] if label is not None and c in label})
+            states = self._step(states, c)
             if not states:
                 return False
         self._states = states
@@ -330,17 +333,13 @@ class Matcher:
         distance = self._distances()
         out: list[str] = []
         states = self._states
-        while states & self._free:
-            nearest = min(distance[s] for s in states)
-            if nearest == 0:
+        while states & self._free and (nearest := min(distance[s] for s in states)) > 0:
+            c = _only_char({label for s in states if distance[s] == nearest
+                            for label, t in self._edges[s] if label is not None and distance[t] == nearest - 1})
+            if c is None:
                 break
-            labels = {label for s in states if distance[s] == nearest
-                      for label, t in self._edges[s] if label is not None and distance[t] == nearest - 1}
-            if len(labels) != 1 or len(next(iter(labels))) != 1:
-                break
-            c = next(iter(next(iter(labels))))
             out.append(c)
-            states = self._closure({t for s in states for label, t in self._edges[s] if label is not None and c in label})
+            states = self._step(states, c)
         return "".join(out)
 
     def _distances(self) -> list[float]:
@@ -367,13 +366,19 @@ class Matcher:
         out: list[str] = []
         states = self._states
         while self._accept not in states:
-            labels = {label for s in states for label, _ in self._edges[s] if label is not None}
-            if len(labels) != 1 or len(next(iter(labels))) != 1:
+            c = _only_char({label for s in states for label, _ in self._edges[s] if label is not None})
+            if c is None:
                 break
-            c = next(iter(next(iter(labels))))
             out.append(c)
-            states = self._closure({t for s in states for label, t in self._edges[s] if label is not None and c in label})
+            states = self._step(states, c)
         return "".join(out)
+
+
+def _only_char(labels: set[frozenset[str]]) -> str | None:
+    """The character the edges leaving a set of states all take, or None where they offer a choice."""
+    if len(labels) != 1 or len(label := next(iter(labels))) != 1:
+        return None
+    return next(iter(label))
 
 
 def _refs(node: Node) -> Iterable[str]:

@@ -124,6 +124,15 @@ def test_a_coalitions_reasoning_ends_where_its_team_begins():
     assert matcher.advance(way) and matcher.forced() == " so robots["
 
 
+@given(st.text(alphabet=sorted(COMMENT_CHARS - set("()")), min_size=1, max_size=60))
+def test_the_way_out_is_always_one_the_grammar_admits_and_leaves_nothing_more_to_force(text):
+    """Whatever free text came before it, the way out continues a text the grammar admits, and once it is
+    taken there is no further way to force: the model chooses again."""
+    matcher = _after(SUMMARY, "# SubTask 1: " + text)
+    way = matcher.shortest_way()
+    assert way and matcher.advance(way) and matcher.shortest_way() == ""
+    assert matcher.advance(matcher.forced() + "GoToObject)\n") and matcher.accepting
+
 # A context after which SmolLM2 goes on counting "1." to the end of any line it is given.
 LOOPING = "Version: 1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.\nVersion: "
 
