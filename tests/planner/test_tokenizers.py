@@ -115,10 +115,10 @@ def test_the_grammars_forced_text_goes_in_one_batch(vocab):
     matcher = Matcher(grammar)
     sampler = vocab._grammar_sampler(grammar)
     try:
-        tokens = vocab._forced_tokens(matcher, sampler)
+        tokens = vocab._forced_tokens(matcher.forced(), sampler)
         assert vocab.detokenize(tokens) == forced
         assert matcher.advance(forced)
-        assert vocab._forced_tokens(matcher, sampler) == []
+        assert vocab._forced_tokens(matcher.forced(), sampler) == []
     finally:
         vocab._lib.llama_sampler_free(sampler)
 
