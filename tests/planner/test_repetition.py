@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from smartllm_local.planner.backends.repetition import LoopGuard, current_line
+from smartllm_local.planner.backends.repetition import LoopGuard, current_line, draw
 from smartllm_local.planner.coalition import CoalitionConstraint
 from smartllm_local.planner.constraints import COMMENT_CHARS, Choose, text_run
 from smartllm_local.planner.grammar import Grammar, Matcher, alt, opt, seq
@@ -84,6 +85,14 @@ def test_the_current_line_is_what_follows_the_last_newline():
     assert current_line("# a\n# b b") == "# b b"
     assert current_line("no newline") == "no newline"
     assert current_line("ends\n") == ""
+
+
+
+def test_a_draw_avoids_what_it_is_told_to_while_anything_else_is_left():
+    rng = np.random.default_rng(0)
+    assert {draw(np.array([0.9, 0.05, 0.05, 0.0]), rng, lambda t: t == 0) for _ in range(200)} == {1, 2}
+    assert draw(np.array([0.0, 1.0, 0.0]), rng, lambda t: True) == 1  # everything refused: the first draw
+    assert {draw(np.array([0.5, 0.5]), rng) for _ in range(200)} == {0, 1}
 
 
 # ------------------------------------------------------------------ the way out of free text

@@ -45,7 +45,7 @@ from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..grammar import Grammar, GrammarError, Matcher
 from ..prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
 from .base import Generated, Sampling, continuation_tokens, shared_prefix
-from .repetition import current_line
+from .repetition import current_line, draw
 
 _TOP = 64
 
@@ -266,18 +266,7 @@ class LlamaCppBackend(PrefixReuse):
         masked = self._masked(sampler, logits).astype(np.float64) / sampling.temperature if sampler else scaled
         if not np.isfinite(masked).any():
             raise GrammarError("the grammar admits no token here")
-        probs = np.exp(masked - masked[np.isfinite(masked)].max())
-        # Drawing again without each refused draw samples exactly the admitted tokens avoid allows.
-        first = -1
-        for _ in range(_TOP):
-            token = int(rng.choice(self.n_vocab, p=probs / probs.sum()))
-            first = token if first < 0 else first
-            if not (avoid and avoid(token)):
-                return token
-            probs[token] = 0.0
-            if probs.sum() <= 0:
-                break
-        return first
+        return draw(np.exp(masked - masked[np.isfinite(masked)].max()), rng, avoid, _TOP)
 
     # ------------------------------------------------------------ generation
 

@@ -20,6 +20,9 @@ names twice in a line are never touched.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -45,3 +48,19 @@ class LoopGuard:
 def current_line(text: str) -> str:
     """The text after the last newline: the line a guard looks at."""
     return text[text.rfind("\n") + 1:]
+
+
+def draw(probs: np.ndarray, rng: np.random.Generator, avoid: Callable[[int], bool] | None = None,
+         tries: int = 64) -> int:
+    """A token drawn from ``probs`` (unnormalised; changed in place), drawn again without each draw ``avoid``
+    refuses, which samples exactly the tokens it allows; the first draw if ``tries`` draws are all refused."""
+    first = -1
+    for _ in range(tries if avoid else 1):
+        token = int(rng.choice(len(probs), p=probs / probs.sum()))
+        first = token if first < 0 else first
+        if avoid is None or not avoid(token):
+            return token
+        probs[token] = 0.0
+        if probs.sum() <= 0:
+            break
+    return first

@@ -41,7 +41,7 @@ from ..grammar import Grammar, GrammarError, Matcher
 from ..models import EMBEDDED, embedded_model_path, is_gguf
 from ..prefix_cache import MemoryStates, PrefixReuse
 from .base import Generated, Sampling, continuation_tokens, shared_prefix
-from .repetition import current_line
+from .repetition import current_line, draw
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
     os.environ[_switch] = "1"
@@ -272,6 +272,7 @@ class TransformersBackend(PrefixReuse):
             mask = llg.torch.allocate_token_bitmask(1, self.n_vocab)  # on the CPU: llguidance fills it there
         guard, loops = sampling.loop_guard, 0
         out: list[int] = []
+        text = ""
         while len(out) < max_tokens:
             logits = self._logits[: self.n_vocab].clone().unsqueeze(0)
             if matcher is not None:
@@ -282,13 +283,13 @@ class TransformersBackend(PrefixReuse):
                 logits[0, blocked] = -float("inf")
             token = self._pick(logits[0], sampling, rng)
             new = [token]
-            line = current_line(self.detokenize(out)) if guard is not None else ""
+            line = current_line(text)
             if guard is not None and guard.loops(line + self.detokenize([token])):
                 # A loop (see LoopGuard): end the free text it runs in, or else avoid the looping token.
                 way = ""
                 if grammar is not None:
                     follow = Matcher(grammar)
-                    way = follow.shortest_way() if follow.advance(self.detokenize(out)) else ""
+                    way = follow.shortest_way() if follow.advance(text) else ""
                 loops += 1
                 if way:
                     new = self.tokenize_continuation(way)
@@ -323,17 +324,7 @@ class TransformersBackend(PrefixReuse):
             return next((t for t in finite if not avoid(t)), finite[0])
         scores = (logits / sampling.temperature).double().cpu().numpy()
         finite = np.isfinite(scores)
-        probs = np.where(finite, np.exp(scores - scores[finite].max()), 0.0)
-        first = -1
-        for _ in range(_AVOID_TRIES if avoid else 1):  # drawing again without each refused draw
-            token = int(rng.choice(len(probs), p=probs / probs.sum()))
-            first = token if first < 0 else first
-            if avoid is None or not avoid(token):
-                return token
-            probs[token] = 0.0
-            if probs.sum() <= 0:
-                break
-        return first
+        return draw(np.where(finite, np.exp(scores - scores[finite].max()), 0.0), rng, avoid, _AVOID_TRIES)
 
     def close(self) -> None:
         self._cache = self._logits = None
