@@ -6,6 +6,7 @@ import random
 
 import llguidance
 import pytest
+from hypothesis import given, strategies as st
 
 from smartllm_local.planner.grammar import Grammar, GrammarError, Ref, alt, chars, opt, rep, seq
 
@@ -74,3 +75,50 @@ def test_the_matcher_follows_text_and_knows_what_is_forced():
     assert m.advance("dge', 'Bowl')\n") and m.accepting and m.forced() == ""
     optional = Matcher(Grammar({"root": alt("", "abc\n")}))
     assert optional.accepting and optional.forced() == ""
+
+
+# A grammar with every kind of node: literals, classes, references, nullable items in sequences, nested and
+# bounded repetitions, alternatives that share their starts.
+_WORDS = Grammar({
+    "name": alt("ab", "abc", seq("b", rep(chars("abc"), 0, 2))),
+    "list": seq(Ref("name"), rep(seq(opt(" "), ",", Ref("name")), 0, 3)),
+    "root": seq(opt("c"), alt(Ref("list"), seq("a", rep(chars("ab "), 2, 4))), opt(seq(" ", rep("ca", 1, 2))), "\n"),
+})
+
+
+_SHORT = ["", *(a + b for a in " abc,\n" for b in ("", *" abc,\n"))]  # every text of up to two characters
+
+
+@given(st.integers(0, 2**32), st.text(alphabet="abc ,\n", max_size=12))
+def test_after_a_prefix_a_grammar_admits_exactly_what_may_follow_it(seed, noise):
+    """The derivative's defining equation: after every prefix of a line, a text follows exactly when the
+    prefix and the text make a line (texts that do and texts that almost do)."""
+    from smartllm_local.planner.grammar import Matcher
+
+    line = _WORDS.sample(random.Random(seed))
+    for cut in range(len(line) + 1):
+        prefix, rest = line[:cut], line[cut:]
+        after = _WORDS.after(prefix)
+        for text in (rest, noise, rest + noise, noise + rest, *(x + y for x in _SHORT for y in ("", rest, rest[1:]))):
+            assert after.matches(text) == _WORDS.matches(prefix + text), (prefix, text)
+        if not Matcher(_WORDS).advance(prefix + noise):
+            with pytest.raises(GrammarError, match="does not begin"):
+                _WORDS.after(prefix + noise)
+
+
+def test_after_real_stage_lines_llama_cpp_reads_the_grammar_and_forces_the_same_text(smollm2):
+    """Every line of a few tasks' three stages, written by adversarial writers, cut at every point: what the
+    rest of the line must be is the same in the grammar after the cut as in the whole grammar, and
+    llama.cpp's grammar engine reads the grammar a server is sent."""
+    from smartllm_local.planner.grammar import Matcher
+    from tests.planner import test_guarantees as guarantees
+
+    lines = guarantees.collect_lines(random.Random(7), ["kitchen-01", "living-01", "bathroom-01"])
+    assert len(lines) > 100
+    for grammar, line in lines:
+        for cut in range(0, len(line) + 1, 3):
+            after = grammar.after(line[:cut])
+            whole = Matcher(grammar)
+            assert whole.advance(line[:cut]) and after.matches(line[cut:])
+            assert Matcher(after).forced() == whole.forced()
+        smollm2._lib.llama_sampler_free(smollm2._grammar_sampler(grammar.after(line[: len(line) // 2])))

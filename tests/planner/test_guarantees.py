@@ -45,24 +45,25 @@ def _team_skills(team) -> SkillSet:
     return SkillSet(s for s in CATALOGUE.skills.values() if any(s.name in r.skills for r in team))
 
 
-def _decompose(scene, kind, rng, budget):
+def _decompose(scene, kind, rng, budget, make_writer=writer):
     constraint = PlanConstraint(scene, CATALOGUE.skills)
-    text = run_constraint(constraint, writer(kind, rng), len, budget)
+    text = run_constraint(constraint, make_writer(kind, rng), len, budget)
     plan = parse_plan(text, form="decomposed", skills=CATALOGUE.skills, scene_types=scene.types)
     return constraint, text, plan
 
 
-def _check_all_stages(task, kind: str, rng: random.Random, budget: int, counts: dict[str, int]) -> None:
+def _check_all_stages(task, kind: str, rng: random.Random, budget: int, counts: dict[str, int],
+                      make_writer=writer) -> None:
     scene = scene_objects(task.floor_plan)
     team = CATALOGUE.team(task.robots)
-    constraint, text, plan = _decompose(scene, kind, rng, budget)
+    constraint, text, plan = _decompose(scene, kind, rng, budget, make_writer)
     counts["decomposition"] += 1
     if plan.is_refusal:
         return
     names = [f.name for f in plan.functions]
     needs = function_needs(plan, scene, PICKUPS)
     coalition = CoalitionConstraint(names, team, needs=[needs[n] for n in names])
-    lines = run_constraint(coalition, writer(kind, rng), len, coalition.minimum_budget() + 200)
+    lines = run_constraint(coalition, make_writer(kind, rng), len, coalition.minimum_budget() + 200)
     counts["coalition"] += 1
     assert all(re.match(r"^# (SubTask \d+ \(|INFEASIBLE: )", line) for line in lines.splitlines()), lines
     if coalition.refusal is not None:
@@ -75,12 +76,33 @@ def _check_all_stages(task, kind: str, rng: random.Random, budget: int, counts: 
         else:
             allocator = PlanConstraint(scene, _team_skills(team), team=team, function_names=names)
             limit = max(budget, allocator.minimum_budget())
-        allocated = run_constraint(allocator, writer(kind, rng), len, limit)
+        allocated = run_constraint(allocator, make_writer(kind, rng), len, limit)
         counts["allocation"] += 1
         result = parse_plan(allocated, form="allocated", skills=CATALOGUE.skills, team_size=len(team),
                             scene_types=scene.types)
         if restate and not result.is_refusal:
             assert _steps(allocated) == _steps(text), "the allocation must restate the decomposition's steps"
+
+
+def collect_lines(rng: random.Random, task_ids: list[str]) -> list[tuple]:
+    """The lines every writer writes through the three stages of some tasks, each with its line's grammar."""
+    seen = []
+
+    def recording(kind: str, rng: random.Random):
+        write = writer(kind, rng)
+
+        def record(choose, remaining):
+            text, cost = write(choose, remaining)
+            seen.append((choose.grammar, text))
+            return text, cost
+        return record
+
+    tasks = {task.id: task for task in all_tasks()}
+    for task_id in task_ids:
+        for kind in WRITERS:
+            _check_all_stages(tasks[task_id], kind, rng, 1600, {"decomposition": 0, "coalition": 0, "allocation": 0},
+                              recording)
+    return seen
 
 
 def _steps(plan_text: str) -> list[str]:

@@ -22,6 +22,7 @@ import pytest
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.models import resolve_gguf
 from smartllm_local.domain import load_domain
+from tests.llama_server import llama_server
 from tests.test_cli_errors import cli, one_line_error
 
 TASKS = ("kitchen-01", "living-01")
@@ -176,31 +177,55 @@ def test_a_vocabulary_that_is_not_the_served_models_is_refused(server):
                        server.url, "--model", gemma), "tokenizes text differently", "--model")
 
 
-LLAMA_SERVER = os.environ.get("SMARTLLM_LLAMA_SERVER")  # a llama-server binary (llama.cpp's tools/server)
-
-
-@pytest.mark.skipif(not LLAMA_SERVER, reason="set SMARTLLM_LLAMA_SERVER to a llama-server binary to run it")
-def test_llama_server_slots_plan_from_token_ids_with_the_servers_own_vocabulary(tmp_path):
-    """As from another machine: the served file is gone from this one once the server has loaded it, so
-    the tokenizer and chat template are the server's own."""
+def _llama_server(tmp_path: Path, *args: str) -> tuple[Server, Path]:
+    """llama-server on the embedded SmolLM2, whose file is gone from this machine once the server has loaded
+    it (as on a GPU box): the tokenizer and chat template are the server's own."""
     log, served = tmp_path / "llama-server.log", tmp_path / "served.gguf"
     served.symlink_to(resolve_gguf(None))
-    server = Server(log, command=[LLAMA_SERVER, "-m", str(served), "-c", "8192", "-np", "2", "-t", "2"], ready="/health")
+    server = Server(log, command=[str(llama_server()), "-m", str(served), "-t", "2", *args], ready="/health")
+    served.unlink()
+    return server, log
+
+
+def test_llama_server_plans_token_for_token_what_the_in_process_backend_plans(tmp_path):
+    """Greedy plans through llama.cpp's own server (flash attention off, as in-process) are the in-process
+    backend's, stage for stage and token for token, prefix reuse and the loop guard included."""
+    tasks = (*TASKS, "kitchen-02")
+    task_args = [a for t in tasks for a in ("--task", t)]
+    run = cli("benchmark", "run", "--out", tmp_path / "in-process", "--prefix-cache", "off", *task_args)
+    assert run.returncode == 0, run.stderr
+    server, _ = _llama_server(tmp_path, "-c", "4096", "-np", "1", "-fa", "off")
     try:
-        served.unlink()
+        run = cli("benchmark", "run", "--backend", "server", "--endpoint", server.url, "--out", tmp_path / "server",
+                  *task_args)
+        assert run.returncode == 0, run.stderr
+    finally:
+        server.stop()
+    local, remote = lines(tmp_path / "in-process"), lines(tmp_path / "server")
+    assert set(remote) == set(tasks) and not any(line.get("error") for line in remote.values())
+    for task in tasks:
+        stages = json.loads((tmp_path / "server" / task / "result.json").read_text())["stages"]
+        assert list(stages) == ["decomposition", "coalition", "allocation"]
+        assert stages["decomposition"]["chat_template"] == "applied"  # SmolLM2's template, from /props
+        for stage in stages:
+            ours, theirs = ((tmp_path / run / task / stage / "raw_output.txt").read_text()
+                            for run in ("in-process", "server"))
+            assert theirs == ours, (task, stage)
+            counts = [{k: line[task]["tokens"][stage][k] for k in ("prompt", "generated")} for line in (local, remote)]
+            assert counts[0] == counts[1], (task, stage)
+    assert remote["kitchen-02"]["tokens"]["decomposition"]["reused"] > 2000  # the slot held the examples
+
+
+def test_two_workers_plan_on_two_llama_server_slots(tmp_path):
+    server, log = _llama_server(tmp_path, "-c", "8192", "-np", "2")
+    try:
         out = tmp_path / "run"
-        tasks = (*TASKS, "kitchen-02")
         run = cli("benchmark", "run", "--method", "decomp-rule", "--backend", "server", "--endpoint", server.url,
-                  "--workers", "2", "--out", out, *(a for t in tasks for a in ("--task", t)))
+                  "--workers", "2", "--out", out, *(a for t in TASKS for a in ("--task", t)))
         assert run.returncode == 0, run.stderr
     finally:
         server.stop()
     results = lines(out)
-    assert set(results) == set(tasks) and not any(line.get("error") for line in results.values())
-    for task in tasks:
-        record = json.loads((out / task / "result.json").read_text())["stages"]["decomposition"]
-        assert record["chat_template"] == "applied", record  # SmolLM2's template, from the server's /props
-    decompositions = [line["tokens"]["decomposition"] for line in results.values()]
-    assert sum(d["reused"] > 0 for d in decompositions) >= 1  # a slot's second task starts from its cached prefix
+    assert set(results) == set(TASKS) and not any(line.get("error") for line in results.values())
     served = log.read_text()
     assert "launch_slot_: id  0" in served and "launch_slot_: id  1" in served  # both slots planned

@@ -92,6 +92,16 @@ def shared_prefix(cached: Sequence[int], context: Sequence[int]) -> int:
     return common
 
 
+def keep_whole(alone: Sequence[bool], keep: int) -> int:
+    """Where to cut a cache that would keep ``keep`` tokens (``alone``: which were evaluated alone) so that no
+    token evaluated in a batch is kept without another of its batch: llama.cpp computes a batch's tokens
+    otherwise than a lone one's, and a server can only evaluate such a token again with others (see
+    :mod:`slot_mirror`)."""
+    if keep >= 1 and not alone[keep - 1] and (keep == 1 or alone[keep - 2]):
+        return keep - 1
+    return keep
+
+
 #: What :func:`continuation_tokens` puts before a text, in order: nothing (most tokenizers add nothing of
 #: their own), then a newline or a letter, after which a SentencePiece tokenizer adds no space.
 _ANCHORS = ("", "\n", "a")

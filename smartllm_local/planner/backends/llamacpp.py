@@ -44,8 +44,8 @@ import numpy as np
 from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..grammar import Grammar, GrammarError, Matcher
 from ..prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
-from .base import Generated, Sampling, continuation_tokens, shared_prefix
-from .repetition import current_line, draw
+from .base import Generated, Sampling, continuation_tokens, keep_whole, shared_prefix
+from .repetition import TRIES, current_line, draw
 
 _TOP = 64
 
@@ -99,6 +99,7 @@ class LlamaCppBackend(PrefixReuse):
         self._vocab = self.llm._model.vocab
         self._ctx = self.llm._ctx.ctx
         self._tokens: list[int] = []  # what the key/value cache holds
+        self._alone: list[bool] = []  # which of them were evaluated alone (a lone token computes otherwise)
         self._states = MemoryStates()
         self.prefix_store = prefix_store
         self._settings = {"backend": self.name, "llama_cpp": getattr(llama_cpp, "__version__", ""), "n_ctx": n_ctx,
@@ -157,7 +158,8 @@ class LlamaCppBackend(PrefixReuse):
         common = shared_prefix(self._tokens, context)
         if common == len(context) == len(self._tokens) and self._fresh:
             return
-        self._truncate(min(common, len(context) - 1))  # re-evaluate at least one token for its logits
+        # Re-evaluate at least one token for its logits, and no part of a batch alone.
+        self._truncate(keep_whole(self._alone, min(common, len(context) - 1)))
         self._evaluate(context[len(self._tokens):])
 
     def _truncate(self, size: int) -> None:
@@ -167,7 +169,7 @@ class LlamaCppBackend(PrefixReuse):
             self._lib.llama_memory_clear(self._lib.llama_get_memory(self._ctx), True)
         else:
             self.llm._ctx.kv_cache_seq_rm(-1, size, -1)
-        self._tokens = self._tokens[:size]
+        self._tokens, self._alone = self._tokens[:size], self._alone[:size]
         self._fresh = False
 
     # -------------------------------------------------------------- prefixes
@@ -191,7 +193,7 @@ class LlamaCppBackend(PrefixReuse):
             return False
         self.llm.input_ids[: len(prefix)] = prefix
         self.llm.n_tokens = len(prefix)
-        self._tokens = list(prefix)
+        self._tokens, self._alone = list(prefix), [False] * len(prefix)  # evaluated in batches
         return True
 
     def _state_size(self, state: bytes) -> int:
@@ -203,6 +205,7 @@ class LlamaCppBackend(PrefixReuse):
         self.llm.eval(tokens)
         self.evaluated_tokens += len(tokens)
         self._tokens.extend(tokens)
+        self._alone.extend([len(tokens) == 1] * len(tokens))
         self._fresh = True
 
     def _logits(self) -> np.ndarray:
@@ -251,12 +254,13 @@ class LlamaCppBackend(PrefixReuse):
             if sampler is not None:
                 self._apply(sampler, self._few, _TOP)
             admitted = self._few["id"][np.isfinite(self._few["logit"])]
-            if not len(admitted):
+            if not len(admitted) or (avoid and len(admitted) < TRIES and all(avoid(int(t)) for t in admitted)):
                 masked = self._masked(sampler, logits)
                 if not np.isfinite(masked).any():
                     raise GrammarError("the grammar admits no token here")
                 admitted = np.argsort(-masked, kind="stable")[: int(np.isfinite(masked).sum())]
-            return next((int(t) for t in admitted if not (avoid and avoid(int(t)))), int(admitted[0]))
+            # The best admitted token that ``avoid`` does not refuse, among the best TRIES; else the best.
+            return next((int(t) for t in admitted[:TRIES] if not (avoid and avoid(int(t)))), int(admitted[0]))
         scaled = logits.astype(np.float64) / sampling.temperature
         probs = np.exp(scaled - scaled.max())
         probs /= probs.sum()
@@ -266,7 +270,7 @@ class LlamaCppBackend(PrefixReuse):
         masked = self._masked(sampler, logits).astype(np.float64) / sampling.temperature if sampler else scaled
         if not np.isfinite(masked).any():
             raise GrammarError("the grammar admits no token here")
-        return draw(np.exp(masked - masked[np.isfinite(masked)].max()), rng, avoid, _TOP)
+        return draw(np.exp(masked - masked[np.isfinite(masked)].max()), rng, avoid, TRIES)
 
     # ------------------------------------------------------------ generation
 

@@ -45,13 +45,18 @@ class LoopGuard:
         return False
 
 
+#: How many of the likeliest admitted tokens (or draws) are tried for one that closes no loop, by every
+#: backend alike.
+TRIES = 64
+
+
 def current_line(text: str) -> str:
     """The text after the last newline: the line a guard looks at."""
     return text[text.rfind("\n") + 1:]
 
 
 def draw(probs: np.ndarray, rng: np.random.Generator, avoid: Callable[[int], bool] | None = None,
-         tries: int = 64) -> int:
+         tries: int = TRIES) -> int:
     """A token drawn from ``probs`` (unnormalised; changed in place), drawn again without each draw ``avoid``
     refuses, which samples exactly the tokens it allows; the first draw if ``tries`` draws are all refused."""
     first = -1

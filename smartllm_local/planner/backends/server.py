@@ -40,8 +40,10 @@ import numpy as np
 
 from ...errors import ModelError, SmartLLMError, UserError
 from ..grammar import Grammar
-from .base import Generated, Sampling, continuation_tokens
+from .base import Generated, Sampling, continuation_tokens, shared_prefix
+from .line_requests import LineRequests, WrongLine
 from .llamacpp import LlamaCppBackend
+from .slot_mirror import SlotMirror
 
 #: How long a request may go without an answer before the task fails (a 70B model evaluating a
 #: 3,000-token prompt on a GPU takes seconds; on CPUs, minutes).
@@ -137,8 +139,8 @@ class Dialect(Protocol):
     takes_tokens: bool
 
     def completion(self, prompt: list[int] | str, grammar: str | None, max_tokens: int, temperature: float,
-                   seed: int, stop: Sequence[str], slot: int) -> tuple[str, dict[str, Any]]:
-        """The path and body of a completion request."""
+                   seed: int, stop: Sequence[str], slot: int, banned: Sequence[int]) -> tuple[str, dict[str, Any]]:
+        """The path and body of a completion request (``banned``: tokens it must not write)."""
 
     def reply(self, answer: dict[str, Any]) -> Reply:
         """What a completion's answer says."""
@@ -156,9 +158,10 @@ class LlamaServer:
     name = "llama-server"
     takes_tokens = True
 
-    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot):
+    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot, banned):
         body = {"prompt": prompt, "n_predict": max_tokens, "temperature": temperature, "seed": seed,
-                "stop": list(stop), "cache_prompt": True, "id_slot": slot, "return_tokens": True, **_PLAIN}
+                "stop": list(stop), "cache_prompt": True, "id_slot": slot, "return_tokens": True,
+                "logit_bias": [[t, False] for t in banned], **_PLAIN}
         if grammar is not None:
             body["grammar"] = grammar
         return "/completion", body
@@ -176,9 +179,9 @@ class LlamaCppPythonServer:
     name = "llama-cpp-python"
     takes_tokens = False
 
-    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot):
+    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot, banned):
         body = {"prompt": prompt, "max_tokens": max_tokens, "temperature": temperature, "seed": seed,
-                "stop": list(stop), **_PLAIN}
+                "stop": list(stop), "logit_bias": {str(t): -1e30 for t in banned}, **_PLAIN}
         if grammar is not None:
             body["grammar"] = grammar
         return "/v1/completions", body
@@ -315,6 +318,10 @@ class ServerBackend:
         self.chat_template = vocabulary.chat_template
         self.bos_token, self.eos_token = vocabulary.bos_token, vocabulary.eos_token
         self._bos = vocabulary.bos_added()
+        self._texts: dict[int, str] = {}
+        # llama-server's slot, kept as the in-process backend keeps its cache (a server that takes text cannot be)
+        self._slot = SlotMirror(lambda prompt: self._request(prompt, None, 0, Sampling(), (), 0)) \
+            if dialect.takes_tokens else None
 
     def tokenize(self, text: str, *, bos: bool = False, special: bool = False) -> list[int]:
         return self.vocabulary.tokenize(text, bos=bos, special=special)
@@ -326,12 +333,15 @@ class ServerBackend:
         return self.vocabulary.tokenize_continuation(text)
 
     def prefill(self, context: Sequence[int], prefixes: Sequence[int]) -> int:
-        """llama-server evaluates the prompt first (``n_predict`` 0) and says how much of it its cache held;
-        llama-cpp-python's server cannot be asked, and evaluates it with the first line."""
-        if not self.dialect.takes_tokens:
+        """The prompt is evaluated as the in-process backend evaluates it (:class:`SlotMirror`), the last
+        batch with the first request for a line; returns how much of it the slot held. llama-cpp-python's
+        server cannot be steered so, and evaluates it with the first line."""
+        if self._slot is None:
             return 0
-        reply = self._complete(list(context), None, 0, Sampling(), (), seed=0)
-        return len(context) - reply.evaluated if reply.evaluated is not None else 0
+        held = shared_prefix(self._slot.held, context)
+        self._slot.prefill(context, prefixes)
+        self._slot.prepare(context)
+        return held
 
     def generate(
         self,
@@ -343,27 +353,61 @@ class ServerBackend:
         stop: Sequence[str] = (),
         rng: np.random.Generator | None = None,
     ) -> Generated:
+        """A line is written as the in-process backend writes it (:class:`LineRequests`); free text in one
+        request."""
         if len(context) >= self.n_ctx:
             raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
         max_tokens = min(max_tokens, self.n_ctx - len(context) - 1)
-        # The server samples with a seed drawn from the stage's generator, whichever worker asks.
-        seed = int((rng or np.random.default_rng(sampling.seed)).integers(2**31 - 1))
-        reply = self._complete(list(context), None if grammar is None else grammar.to_gbnf(), max_tokens,
-                               sampling, stop, seed)
-        text = reply.text
-        tokens = reply.tokens if reply.tokens is not None else self.vocabulary.tokenize_continuation(text)
-        if grammar is not None:
-            if text.endswith("\n"):
-                return Generated(tokens, text, "line")
-            if text == "" and reply.finish != "length":
-                return Generated([], "", "eos")
-            return Generated(tokens, text, "length")
-        return Generated(tokens, text, reply.finish)
+        # The server samples with seeds drawn from the stage's generator, whichever worker asks.
+        rng = rng or np.random.default_rng(sampling.seed)
+        slot = self._slot
+        if slot is not None:
+            slot.sync(context)
+
+        def ask(prompt: list[int], rest: Grammar | None, limit: int, banned: Sequence[int] = ()) -> list[int]:
+            if slot is not None:
+                slot.prepare(prompt)
+            return self._tokens(self._request(prompt, None if rest is None else rest.to_gbnf(), limit, sampling,
+                                              stop if rest is None else (), int(rng.integers(2**31 - 1)), banned))
+
+        if grammar is None:
+            if slot is not None:
+                slot.prepare(context)
+            reply = self._request(list(context), None, max_tokens, sampling, stop, int(rng.integers(2**31 - 1)))
+            return Generated(self._tokens(reply), reply.text, reply.finish)
+        try:
+            return LineRequests(context, grammar, sampling, ask, self.vocabulary.tokenize_continuation,
+                                self._text_of, slot.take if slot is not None else lambda tokens: None).write(max_tokens)
+        except WrongLine as exc:
+            raise ServerError(f"the server at {self.connection.url} wrote {str(exc)!r}, which the line's grammar "
+                              "does not allow: it ignores or mis-applies grammars") from exc
+
+    def _request(self, prompt: list[int], grammar: str | None, max_tokens: int, sampling: Sampling,
+                 stop: Sequence[str], seed: int, banned: Sequence[int] = ()) -> Reply:
+        reply = self._complete(prompt, grammar, max_tokens, sampling, stop, seed, banned)
+        if self._slot is not None:
+            # The server evaluated each token it wrote, alone, before writing the next (the last one too where
+            # it went on to end the sequence).
+            written = self._tokens(reply)
+            self._slot.served(prompt, written if reply.finish == "eos" else written[:-1], reply.evaluated)
+        return reply
+
+    def _tokens(self, reply: Reply) -> list[int]:
+        """The tokens a server wrote: as it says them, else its text's (a server that takes text tokenizes
+        it again anyway)."""
+        return reply.tokens if reply.tokens is not None else self.vocabulary.tokenize_continuation(reply.text)
+
+    def _text_of(self, token: int) -> str:
+        text = self._texts.get(token)
+        if text is None:
+            text = self._texts[token] = self.vocabulary.detokenize([token])
+        return text
 
     def _complete(self, context: list[int], grammar: str | None, max_tokens: int, sampling: Sampling,
-                  stop: Sequence[str], seed: int) -> Reply:
+                  stop: Sequence[str], seed: int, banned: Sequence[int] = ()) -> Reply:
         prompt: list[int] | str = context if self.dialect.takes_tokens else self._text(context)
-        path, body = self.dialect.completion(prompt, grammar, max_tokens, sampling.temperature, seed, stop, self.slot)
+        path, body = self.dialect.completion(prompt, grammar, max_tokens, sampling.temperature, seed, stop,
+                                             self.slot, banned)
         started = time.perf_counter()
         status, answer = self.connection.call("POST", path, body)
         if status != 200 or not isinstance(answer, dict):

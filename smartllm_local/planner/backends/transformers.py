@@ -41,12 +41,11 @@ from ..grammar import Grammar, GrammarError, Matcher
 from ..models import EMBEDDED, embedded_model_path, is_gguf
 from ..prefix_cache import MemoryStates, PrefixReuse
 from .base import Generated, Sampling, continuation_tokens, shared_prefix
-from .repetition import current_line, draw
+from .repetition import TRIES, current_line, draw
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
     os.environ[_switch] = "1"
 
-_AVOID_TRIES = 64  # the best tokens (or draws) tried for one that closes no loop
 _EXTRA = "pip install 'smartllm-local[transformers]' (torch, transformers, gguf, accelerate, llguidance)"
 
 # Said by transformers whenever a GGUF is loaded in another dtype than float32, also for architectures it
@@ -319,12 +318,12 @@ class TransformersBackend(PrefixReuse):
         if sampling.temperature <= 0:
             if avoid is None:
                 return int(self._torch.argmax(logits))
-            order = self._torch.argsort(logits, descending=True, stable=True)[:_AVOID_TRIES].tolist()
+            order = self._torch.argsort(logits, descending=True, stable=True)[:TRIES].tolist()
             finite = [t for t in order if math.isfinite(float(logits[t]))]
             return next((t for t in finite if not avoid(t)), finite[0])
         scores = (logits / sampling.temperature).double().cpu().numpy()
         finite = np.isfinite(scores)
-        return draw(np.where(finite, np.exp(scores - scores[finite].max()), 0.0), rng, avoid, _AVOID_TRIES)
+        return draw(np.where(finite, np.exp(scores - scores[finite].max()), 0.0), rng, avoid, TRIES)
 
     def close(self) -> None:
         self._cache = self._logits = None

@@ -1,0 +1,84 @@
+"""How a line is asked of a server, around a scripted stand-in for one (one token per character). That a
+real server then writes the in-process backend's plans is tested in test_server_backend.py."""
+
+from __future__ import annotations
+
+import pytest
+
+from smartllm_local.planner.backends.base import Sampling
+from smartllm_local.planner.backends.line_requests import LineRequests, WrongLine
+from smartllm_local.planner.backends.repetition import LoopGuard
+from smartllm_local.planner.constraints import COMMENT_CHARS, text_run
+from smartllm_local.planner.grammar import Grammar, Matcher, Ref, alt, seq
+
+PUT = Grammar({"obj": alt("'Apple'", "'Fridge'"), "root": seq("    PutObject(", Ref("obj"), ", 'Bowl')\n")})
+CONTEXT = [1, 2, 3]
+
+
+def spell(text: str) -> list[int]:
+    return [1000 + ord(c) for c in text]  # forced text: tokens of its own, told apart from the server's
+
+
+def text_of(token: int) -> str:
+    return chr(token % 1000)
+
+
+class Scripted:
+    """Writes ``line`` on from wherever the text stands (or ``wrong``), and records each request."""
+
+    def __init__(self, line: str, wrong: str | None = None):
+        self.line, self.wrong, self.asked = line, wrong, []
+
+    def __call__(self, context, grammar, limit, banned):
+        written = "".join(text_of(t) for t in context[len(CONTEXT):])
+        self.asked.append((written, grammar.to_gbnf(), limit, list(banned)))
+        rest = self.wrong if self.wrong is not None else self.line[len(written):]
+        return [ord(c) for c in rest if ord(c) not in banned][:limit]
+
+
+def test_the_planner_writes_what_the_grammar_forces_and_asks_only_where_the_model_chooses():
+    server = Scripted("    PutObject('Fridge', 'Bowl')\n")
+    line = LineRequests(CONTEXT, PUT, Sampling(), server, spell, text_of).write(100)
+    assert line.text == server.line and line.stop == "line"
+    # One request, at the choice between the objects; of its answer only the F is kept, the rest is forced.
+    assert [written for written, *_ in server.asked] == ["    PutObject('"]
+    assert server.asked[0][1] == PUT.after("    PutObject('").to_gbnf()
+    assert line.tokens == spell("    PutObject('") + [ord("F")] + spell("ridge', 'Bowl')\n")
+
+
+def test_a_server_that_writes_outside_the_grammar_is_caught():
+    with pytest.raises(WrongLine, match=r"PutObject\('P"):
+        LineRequests(CONTEXT, PUT, Sampling(), Scripted("", wrong="Pear'"), spell, text_of).write(100)
+
+
+NOTE = Grammar({"root": seq("# ", text_run(COMMENT_CHARS, 48), "\n")})
+
+
+def test_a_loop_in_free_text_ends_by_the_grammars_way_out_and_the_rest_of_the_answer_is_dropped():
+    server = Scripted("# 1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1.1\n")
+    line = LineRequests(CONTEXT, NOTE, Sampling(loop_guard=LoopGuard()), server, spell, text_of).write(100)
+    assert line.loops == 1 and line.text.endswith("\n") and NOTE.matches(line.text)
+    assert line.tokens[-1] == spell("\n")[0]  # the way out is the planner's, not the server's
+    unguarded = LineRequests(CONTEXT, NOTE, Sampling(loop_guard=None), server, spell, text_of).write(100)
+    assert unguarded.text == server.line and unguarded.loops == 0
+
+
+class NoGoA:
+    """A stand-in loop guard: "go a" is a loop."""
+
+    def loops(self, line: str) -> bool:
+        return line.endswith("go a")
+
+
+def test_where_there_is_no_way_out_the_best_token_that_closes_no_loop_is_asked_for():
+    """Outside free text the looping token is banned and the server asked again: its next best is taken."""
+    choices = Grammar({"root": seq("go ", alt("ab", "ac", "b"), "\n")})
+    asked = []
+
+    def prefers_a(context, grammar, limit, banned):  # a, then b, c and newline, as the grammar allows
+        asked.append(list(banned))
+        return next([ord(c)] for c in "abc\n" if ord(c) not in banned and Matcher(grammar).advance(c))
+
+    line = LineRequests(CONTEXT, choices, Sampling(loop_guard=NoGoA()), prefers_a, spell, text_of).write(100)
+    assert line.text == "go b\n" and line.loops == 1
+    assert asked == [[], [ord("a")], []]
