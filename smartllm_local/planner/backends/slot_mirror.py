@@ -67,13 +67,13 @@ class SlotMirror:
         """Bring the slot to the in-process state of ``prompt`` (which the in-process backend holds), all but
         the last batch, which the next request evaluates."""
         prompt = list(prompt)
-        assert prompt == self.ours, "the mirror follows every token the planner adds"
+        self.sync(prompt)  # nothing to do: the mirror follows every token the planner adds
         n, alone = len(prompt), self.ours_alone
         held = shared_prefix(self.held, prompt)
         same = next((p for p in range(held) if self.held_alone[p] != alone[p]), held)
         start = min(same, n - 1)  # a request re-evaluates at least its last token
         # Where that splits a batch, evaluate at least two of its tokens together.
-        if not alone[start] and (start + 1 == n or alone[start + 1]):
+        if start > 0 and not alone[start] and (start + 1 == n or alone[start + 1]):
             start -= 1
         if held > start:
             other = 1 if prompt[start] != 1 else 2  # any token but the one held there
