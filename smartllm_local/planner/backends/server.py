@@ -1,14 +1,16 @@
 """Planning against a model server: llama.cpp's ``llama-server`` or llama-cpp-python's server.
 
 The planner stays on this side: prompts, grammars, the line-by-line protocol
-and every check. Each line the model writes is one completion request that
-carries that line's grammar (GBNF); the forced text between lines is added
-here. So consecutive requests of a task share all but their last few tokens,
-and the server's own prompt cache (llama-server's ``cache_prompt`` with one
-slot per worker, llama-cpp-python's longest-common-prefix reuse) evaluates
-only what is new. What a server writes is checked against the planner's
-grammar as the in-process backends' output is: a server that ignores the
-grammar gives an error, never a plan.
+and every check. A line is asked for in stretches of the model's own choices,
+each request carrying the grammar of what may follow (GBNF), and the planner
+writes forced text itself (:mod:`line_requests`); a llama-server slot is kept
+as the in-process cache is kept (:mod:`slot_mirror`), so greedy plans are the
+in-process backend's. Consecutive requests of a task share all but their last
+few tokens, and the server's own prompt cache (llama-server's ``cache_prompt``
+with one slot per worker, llama-cpp-python's longest-common-prefix reuse)
+evaluates only what is new. What a server writes is checked against the
+planner's grammar as the in-process backends' output is: a server that ignores
+the grammar gives an error, never a plan.
 
 The vocabulary is the served model's: read here from the GGUF file
 (``vocab_only``: its metadata, not its weights) where there is one, or asked
