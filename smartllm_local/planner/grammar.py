@@ -231,52 +231,36 @@ class Grammar:
         """The grammar of what may follow ``prefix`` (its derivative): how a server is asked to go on with a
         line the planner has begun, so that it admits exactly the tokens the whole grammar admits there.
         Only the rules ``prefix`` runs through are rewritten; the rest stay as references."""
-        nullable: dict[str, bool] = {}
+        shortest: dict[str, int] = {}  # each rule's shortest string, for what may be skipped
         node: Node | None = self.rules["root"]
         for c in prefix:
-            node = self._derive(node, c, nullable)
+            node = self._derive(node, c, shortest)
             if node is None:
                 raise GrammarError(f"{prefix!r} does not begin a string of this grammar")
         return Grammar({**self.rules, "root": node})
 
-    def _derive(self, node: Node, c: str, nullable: dict[str, bool]) -> Node | None:
+    def _derive(self, node: Node, c: str, shortest: dict[str, int]) -> Node | None:
         """What ``node`` admits after the character ``c`` (None: nothing; Brzozowski's derivative)."""
         if isinstance(node, Lit):
             return Lit(node.text[1:]) if node.text[:1] == c else None
         if isinstance(node, Chars):
             return _EMPTY if c in node.chars else None
         if isinstance(node, Ref):
-            return self._derive(self.rules[node.name], c, nullable)
+            return self._derive(self.rules[node.name], c, shortest)
         if isinstance(node, Alt):
-            options = [d for d in (self._derive(o, c, nullable) for o in node.options) if d is not None]
+            options = [d for d in (self._derive(o, c, shortest) for o in node.options) if d is not None]
             return alt(*options) if options else None
         if isinstance(node, Seq):
             options = []
             for i, item in enumerate(node.items):
-                derived = self._derive(item, c, nullable)
+                derived = self._derive(item, c, shortest)
                 if derived is not None:
                     options.append(seq(derived, *node.items[i + 1:]))
-                if not self._nullable(item, nullable):
+                if self._length(item, shortest, False):  # not to be skipped: nothing later starts here
                     break
             return alt(*options) if options else None
-        derived = self._derive(node.item, c, nullable)
+        derived = self._derive(node.item, c, shortest)
         return None if derived is None else seq(derived, rep(node.item, max(node.min - 1, 0), node.max - 1))
-
-    def _nullable(self, node: Node, memo: dict[str, bool]) -> bool:
-        """Whether ``node`` admits the empty string."""
-        if isinstance(node, Lit):
-            return not node.text
-        if isinstance(node, Chars):
-            return False
-        if isinstance(node, Ref):
-            if node.name not in memo:
-                memo[node.name] = self._nullable(self.rules[node.name], memo)
-            return memo[node.name]
-        if isinstance(node, Seq):
-            return all(self._nullable(i, memo) for i in node.items)
-        if isinstance(node, Alt):
-            return any(self._nullable(o, memo) for o in node.options)
-        return node.min == 0 or self._nullable(node.item, memo)
 
     def to_lark(self) -> str:
         """The same grammar in the Lark dialect llguidance reads (``start`` is root)."""
