@@ -74,7 +74,7 @@ def free_stages(planner: Planner, task: Task, guided: PlanResult) -> list[StageR
         if "coalition" in done:
             records.append(planner.form_coalition(fresh(decomposition), decomposition.plan, team, scene))
         if "allocation" in done:
-            coalition = done["coalition"].output if "coalition" in done else None
+            coalition = done.get("coalition")
             records.append(planner.allocate(fresh(decomposition), decomposition.plan, coalition, team, scene))
     return records
 

@@ -10,6 +10,7 @@ refusing a feasible task is a failure.
 
 from __future__ import annotations
 
+import itertools
 import json
 import threading
 import time
@@ -23,7 +24,7 @@ from .errors import SmartLLMError
 from .domain import Domain
 from .executor import run_plan
 from .files import write_atomic
-from .methods import Method, SmartLLM
+from .methods import Method, SmartLLM, Stage
 from .planner.pipeline import Planner, PlanResult, restore_stage, write_artifacts
 from .planner.scene_context import scene_objects, site_objects
 from .results import metric_mean, summary_table
@@ -145,7 +146,7 @@ def run_benchmark(
         task = outcome.task
         outcome.result = PlanResult(instruction=task.instruction, floor_plan=task.floor_plan, robots=list(task.robots))
         if store is not None:
-            _restore(store, catalogue, outcome, site)
+            _restore(store, catalogue, outcome, site, methods[0].stages())
         if _goes_on(outcome):
             live.append(outcome)
 
@@ -153,26 +154,33 @@ def run_benchmark(
     total = (len(stages) + 1) * len(outcomes)  # a unit per stage and per execution of each task
     scored: list[TaskOutcome] = []
     lock = threading.Lock()
-    for number, stage in enumerate(stages):
-        batch = [o for o in live if not any(r.stage == stage.name for r in o.result.stages)]  # type: ignore[union-attr]
-        order = iter(range(len(outcomes) - len(batch), len(outcomes)))  # after those done before, or out of the run
+    for group in _passes(stages):
+        # Where each stage's progress count starts: after the tasks done before, or out of the run.
+        order = {number: itertools.count(len(outcomes) - sum(not _has(o, stage.name) for o in live))
+                 for number, stage in group}
 
         def run(worker: Method, outcome: TaskOutcome) -> None:
-            with lock:
-                progress(Progress(stage.name, outcome.task.id, number * len(outcomes) + next(order), total, scored))
             result = outcome.result
             assert result is not None
-            try:
-                worker.stages()[number].run(outcome.task, result)
-            except SmartLLMError as exc:
-                outcome.error = f"{stage.name}: {exc}"
-            except Exception as exc:  # a bug or a backend failure costs this task, not the run
-                outcome.error = f"{stage.name}: {type(exc).__name__}: {exc}"
-            if store is not None and not outcome.error and result.stages and result.stages[-1].stage == stage.name:
+            for number, stage in group:
+                if _has(outcome, stage.name):
+                    continue
+                if not _goes_on(outcome):
+                    return
                 with lock:
-                    store.save_stage(outcome.task.id, result.stages[-1])
+                    progress(Progress(stage.name, outcome.task.id, number * len(outcomes) + next(order[number]),
+                                      total, scored))
+                try:
+                    worker.stages()[number].run(outcome.task, result)
+                except SmartLLMError as exc:
+                    outcome.error = f"{stage.name}: {exc}"
+                except Exception as exc:  # a bug or a backend failure costs this task, not the run
+                    outcome.error = f"{stage.name}: {type(exc).__name__}: {exc}"
+                if store is not None and not outcome.error and result.stages and result.stages[-1].stage == stage.name:
+                    with lock:
+                        store.save_stage(outcome.task.id, result.stages[-1])
 
-        _spread(batch, methods, run)
+        _spread([o for o in live if not all(_has(o, stage.name) for _, stage in group)], methods, run)
         live = [o for o in live if _goes_on(o)]
 
     controller = None
@@ -249,13 +257,30 @@ def _spread(batch: Sequence[TaskOutcome], workers: Sequence[Method],
     pool.shutdown()
 
 
+def _passes(stages: Sequence[Stage]) -> list[list[tuple[int, Stage]]]:
+    """The stages, numbered, in passes over the tasks: a stage that follows another joins its pass."""
+    passes: list[list[tuple[int, Stage]]] = []
+    for number, stage in enumerate(stages):
+        if stage.follows and passes:
+            passes[-1].append((number, stage))
+        else:
+            passes.append([(number, stage)])
+    return passes
+
+
+def _has(outcome: TaskOutcome, stage: str) -> bool:
+    return any(r.stage == stage for r in outcome.result.stages)  # type: ignore[union-attr]
+
+
 def _goes_on(outcome: TaskOutcome) -> bool:
     result = outcome.result
     return not (outcome.error or result is None or result.error or result.refusal is not None)
 
 
-def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome, site: Domain | None) -> None:
-    """Put back the stages an interrupted run finished for this task (a damaged one is run again)."""
+def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome, site: Domain | None,
+             stages: Sequence[Stage]) -> None:
+    """Put back the stages an interrupted run finished for this task (a damaged one is run again, and
+    so is one that the next stage goes on from, when that one is not done: the context they share is not saved)."""
     task, result = outcome.task, outcome.result
     assert result is not None
     scene = None
@@ -265,4 +290,8 @@ def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome, site: 
             restore_stage(result, record, catalogue.skills, scene, len(task.robots))
         except SmartLLMError:
             store.forget_stages(task.id, record.stage)
-            return
+            break
+    for before, stage in zip(stages, stages[1:]):
+        if stage.follows and _has(outcome, before.name) and not _has(outcome, stage.name) and _goes_on(outcome):
+            store.forget_stages(task.id, before.name)
+            result.stages = [r for r in result.stages if r.stage != before.name]

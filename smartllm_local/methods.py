@@ -2,9 +2,10 @@
 
 A method is a sequence of named stages, each of which adds one StageRecord to a
 task's PlanResult. The benchmark runner takes every task through one stage
-before the next (so a model keeps each stage's examples in its cache), saves
-each finished stage, and never needs to know which method it runs: a new
-method is a new class here, not a branch in the runner.
+before the next (so a model keeps each stage's examples in its cache), except
+that a stage which goes on in its predecessor's context runs right after it for
+each task. It saves each finished stage, and never needs to know which method
+it runs: a new method is a new class here, not a branch in the runner.
 """
 
 from __future__ import annotations
@@ -27,10 +28,13 @@ from .tasks import Task
 
 @dataclass(frozen=True)
 class Stage:
-    """One step of a method: it adds the record named ``name`` to the task's result."""
+    """One step of a method: it adds the record named ``name`` to the task's result. A stage that
+    ``follows`` goes on in the context of the stage before it: a runner runs it for a task right
+    after that stage, on the same worker, before the next task's."""
 
     name: str
     run: Callable[[Task, PlanResult], None]
+    follows: bool = False
 
 
 class Method(Protocol):
@@ -48,10 +52,10 @@ class SmartLLM:
         self.planner, self.catalogue = planner, catalogue
 
     def stages(self) -> list[Stage]:
-        stages = [Stage("decomposition", self.decompose)]
-        if self.planner.config.prompts.coalition:
-            stages.append(Stage("coalition", self.coalition))
-        return stages + [Stage("allocation", self.allocate)]
+        if not self.planner.config.prompts.coalition:
+            return [Stage("decomposition", self.decompose), Stage("allocation", self.allocate)]
+        return [Stage("decomposition", self.decompose), Stage("coalition", self.coalition),
+                Stage("allocation", self.allocate, follows=True)]
 
     def decompose(self, task: Task, result: PlanResult) -> None:
         self.planner.decompose(result, self.planner.scene(task.floor_plan))
@@ -61,7 +65,7 @@ class SmartLLM:
                                     self.planner.scene(task.floor_plan))
 
     def allocate(self, task: Task, result: PlanResult) -> None:
-        coalition = result.stages[1].output if len(result.stages) > 1 else None
+        coalition = result.stages[1] if len(result.stages) > 1 else None
         self.planner.allocate(result, result.stages[0].plan, coalition, self.catalogue.team(task.robots),  # type: ignore[arg-type]
                               self.planner.scene(task.floor_plan))
 

@@ -25,6 +25,6 @@ def smollm2():
     """The embedded SmolLM2 GGUF on llama.cpp, loaded once per session."""
     from smartllm_local.planner.backends import load_backend
 
-    backend = load_backend("llamacpp", "smollm2", n_ctx=4096)
+    backend = load_backend("llamacpp", "smollm2", n_ctx=8192)
     yield backend
     backend.close()

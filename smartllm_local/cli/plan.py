@@ -101,7 +101,7 @@ _ENDPOINT = typer.Option(None, "--endpoint", metavar="URL[,URL...]", help=(
     "http://127.0.0.1:8000 (python -m llama_cpp.server)."))
 _SERVER_TIMEOUT = typer.Option(None, "--server-timeout", help=(
     "--backend server: seconds a request may go unanswered before its task fails (default 300)."))
-_N_CTX = typer.Option(4096, "--n-ctx", help="Context size in tokens.")
+_N_CTX = typer.Option(8192, "--n-ctx", help="Context size in tokens (at most the model's trained context).")
 _THREADS = typer.Option(None, help="CPU threads (default: all cores).")
 _GPU = typer.Option(0, "--n-gpu-layers", help="Layers to offload to a GPU (needs a CUDA or Metal build of llama.cpp).")
 _SEED = typer.Option(0, help="Sampling seed.")

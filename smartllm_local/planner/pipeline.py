@@ -2,7 +2,9 @@
 
 Each stage is a plain method, so a benchmark run can take every task through
 one stage before the next (the examples at the head of a stage's prompt then
-stay in the model's cache from one task to the next).
+stay in the model's cache from one task to the next). Coalition and allocation
+share a prompt where the model's context holds it: a task's allocation goes on
+in the context its coalition left, right after it.
 """
 
 from __future__ import annotations
@@ -23,16 +25,18 @@ from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
 from ..skills import SkillSet
 from .backends.base import Backend, Sampling
-from .chat import chat_format
+from .chat import chat_format, prompt_tokens
 from .coalition import LINE as COALITION_LINE
 from .coalition import CoalitionConstraint
-from .constraints import MAX_SUBTASKS, REFUSAL_PREFIX
+from .constraints import MAX_SUBTASKS, REFUSAL_PREFIX, Constraint
 from .plan_constraint import PlanConstraint
 from .restated import RestatedAllocation, restated_bodies
 from .world_check import WorldCheck
 from .feasibility import function_needs
 from .prompts import (
+    ALLOCATION_GLUE,
     Example,
+    Prompt,
     PromptOptions,
     allocation_prompt,
     coalition_prompt,
@@ -41,9 +45,11 @@ from .prompts import (
     load_examples,
 )
 from .scene_context import SceneObjects, scene_objects, site_objects
-from .stages import StageRecord, check_output, fit_prompt, run_stage
+from .stages import Fitted, StageRecord, check_output, fit_prompt, run_stage
 
 DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 896, "allocation": 1280}
+#: Room for a task's own part of the coalition prompt (its plan, team and objects: 325-630 tokens on average, measured).
+OWN_PART = 768
 
 
 def allocation_budget(decomposition: StageRecord, functions: int, ceiling: int) -> int:
@@ -120,6 +126,7 @@ class Planner:
         self.examples = list(examples) if examples is not None else load_examples(
             site.examples_dir() if site is not None else None)
         self.chat, self.chat_status = chat_format(backend, config.chat_template)
+        self._shared: bool | None = None  # whether coalition and allocation share a prompt (see _shares_context)
 
     def scene(self, floor_plan: str | int) -> SceneObjects:
         """What the stages know of where a task happens: a floor plan's objects, or the site's entries."""
@@ -153,22 +160,26 @@ class Planner:
 
     def form_coalition(self, result: PlanResult, decomposed: Plan, team: Sequence[Robot],
                        scene: SceneObjects) -> StageRecord:
+        """The coalition, in a context that leaves room for the allocation to go on in it."""
         opts = self.config.prompts
         record = StageRecord("coalition", chat_template=self.chat_status)
         decomposition = result.stages[0].output
         examples = examples_for("coalition", self.examples, opts)
-        budget = self.config.budgets["coalition"]
-        prompt = fit_prompt(lambda ex: coalition_prompt(decomposition, team, scene, self.catalogue.robots, ex, opts),
-                            examples, self.backend, budget, self.chat)
+        floor = self.config.budgets["coalition"]
+        shared = self._shares_context(scene)
+        reserve = self._allocation_setup(result, decomposed, team, scene)[1] + self._glue_tokens() if shared else 0
+        prompt = fit_prompt(lambda ex: self._coalition_prompt(decomposition, team, scene, ex, shared), examples,
+                            self.backend, floor + reserve, self.chat)
         names = [f.name for f in decomposed.functions]
         pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
         needs = function_needs(decomposed, scene, pickups)
         constraint = CoalitionConstraint(names, team, needs=[needs[n] for n in names], free=self.config.free_teams) \
             if self.config.grammar else None
+        budget = floor
         if constraint is not None:
-            # The configured budget is a floor: the reasoning may use all the context the prompt leaves
-            # (the constraint ends the output once every sub-task has its line; free text would fill it).
-            budget = max(budget, self.backend.n_ctx - len(prompt.tokens) - 1)
+            # The configured budget is a floor: the reasoning may use all the context the prompt and the
+            # allocation leave (the constraint ends the output once every sub-task has its line).
+            budget = max(floor, self.backend.n_ctx - len(prompt.tokens) - reserve - 1)
         run_stage(record, self.backend, prompt, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
         if constraint is None:
@@ -184,15 +195,33 @@ class Planner:
         result.stages.append(record)
         return record
 
-    def allocate(self, result: PlanResult, decomposed: Plan, coalition: str | None, team: Sequence[Robot],
+    def allocate(self, result: PlanResult, decomposed: Plan, coalition: StageRecord | None, team: Sequence[Robot],
                  scene: SceneObjects) -> StageRecord:
-        opts = self.config.prompts
+        """The allocated plan: in the context ``coalition`` left, where the two share a prompt; otherwise
+        from a prompt of its own."""
         record = StageRecord("allocation", chat_template=self.chat_status)
+        constraint, budget = self._allocation_setup(result, decomposed, team, scene)
+        if coalition is not None and self._shares_context(scene):
+            prompt = self._after_coalition(result, coalition, team, scene, budget)
+        else:
+            decomposition, opts = result.stages[0].output, self.config.prompts
+            text = coalition.output if coalition is not None else None
+            prompt = fit_prompt(lambda ex: allocation_prompt(decomposition, text, team, self.catalogue.skills,
+                                                             self.catalogue.robots, ex, opts),
+                                examples_for("allocation", self.examples, opts), self.backend, budget, self.chat)
+        run_stage(record, self.backend, prompt, constraint, output_budget=budget,
+                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
+        self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))
+        result.stages.append(record)
+        return record
+
+    def _allocation_setup(self, result: PlanResult, decomposed: Plan, team: Sequence[Robot],
+                          scene: SceneObjects) -> tuple[Constraint | None, int]:
+        """The allocation's constraint and output budget (which the coalition keeps room for)."""
         decomposition = result.stages[0].output
-        examples = examples_for("allocation", self.examples, opts)
         skills = self.catalogue.skills
         names = [f.name for f in decomposed.functions]
-        constraint = None
+        constraint: Constraint | None = None
         if self.config.grammar and self.config.restate:
             world = WorldCheck(scene.floor_plan, skills, len(team), site=scene.site) if self.config.world_check else None
             constraint = RestatedAllocation(scene, skills, team=len(team) if self.config.free_teams else team,
@@ -200,22 +229,53 @@ class Planner:
                                             world=world)
         elif self.config.grammar:
             team_skills = [s for s in skills.values() if any(s.name in r.skills for r in team)]
-            constraint = PlanConstraint(scene, SkillSet(team_skills), team_size=len(team), comments=opts.comments,
+            constraint = PlanConstraint(scene, SkillSet(team_skills), team_size=len(team),
+                                        comments=self.config.prompts.comments,
                                         function_names=names, team=None if self.config.free_teams else team)
         # Restating, the output's length is known to the character; rewriting, it is estimated.
         if isinstance(constraint, RestatedAllocation):
-            budget = constraint.maximum_output()
-        else:  # never below what the shortest complete allocation needs
-            budget = max(allocation_budget(result.stages[0], len(names), self.config.budgets["allocation"]),
-                         constraint.minimum_budget() if constraint is not None else 0)
-        prompt = fit_prompt(
-            lambda ex: allocation_prompt(decomposition, coalition, team, skills, self.catalogue.robots, ex, opts),
-            examples, self.backend, budget, self.chat)
-        run_stage(record, self.backend, prompt, constraint, output_budget=budget,
-                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
-        self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))
-        result.stages.append(record)
-        return record
+            return constraint, constraint.maximum_output()
+        # never below what the shortest complete allocation needs
+        minimum = constraint.minimum_budget() if isinstance(constraint, PlanConstraint) else 0
+        return constraint, max(allocation_budget(result.stages[0], len(names), self.config.budgets["allocation"]),
+                               minimum)
+
+    def _coalition_prompt(self, decomposition: str, team: Sequence[Robot], scene: SceneObjects,
+                          examples: Sequence[Example], shared: bool = True) -> Prompt:
+        return coalition_prompt(decomposition, team, scene, self.catalogue.skills, self.catalogue.robots, examples,
+                                self.config.prompts, allocations=shared)
+
+    def _shares_context(self, scene: SceneObjects) -> bool:
+        """Whether coalition and allocation share one prompt: where the model's context holds its examples,
+        a coalition's and an allocation's budgets and a task's own part (:data:`OWN_PART`). A shorter
+        context (a Llama-2's 4,096 tokens) gets the paper's two prompts, which keep more examples."""
+        if self._shared is None:  # the examples are the same for every task a planner plans
+            examples = examples_for("coalition", self.examples, self.config.prompts)
+            _, tokens, prefixes = prompt_tokens(self.backend, self._coalition_prompt("", [], scene, examples), self.chat)
+            need = (prefixes or (len(tokens),))[0] + self.config.budgets["coalition"] + \
+                self.config.budgets["allocation"] + OWN_PART
+            self._shared = need <= self.backend.n_ctx
+        return self._shared
+
+    def _glue_tokens(self) -> int:
+        return len(self.backend.tokenize_continuation(ALLOCATION_GLUE))
+
+    def _after_coalition(self, result: PlanResult, coalition: StageRecord, team: Sequence[Robot],
+                         scene: SceneObjects, budget: int) -> Fitted:
+        """The coalition's context (its prompt with the examples it kept, and the tokens it wrote, or its output
+        tokenized where they were not kept: free text), then the line that opens the allocation. Only
+        where they were kept does the backend go on from its cache (``continues``)."""
+        kept = [e for e in examples_for("coalition", self.examples, self.config.prompts) if e.name in coalition.examples]
+        dropped = [e for e in self.examples if e.name in coalition.dropped]
+        text, tokens, prefixes = prompt_tokens(
+            self.backend, self._coalition_prompt(result.stages[0].output, team, scene, kept), self.chat)
+        live = coalition.context[:len(tokens)] == tokens
+        written = coalition.context[len(tokens):] if live else self.backend.tokenize_continuation(coalition.output)
+        context = tokens + written + self.backend.tokenize_continuation(ALLOCATION_GLUE)
+        if len(context) + budget >= self.backend.n_ctx:
+            raise UserError(f"the coalition's context ({len(context)} tokens) and the allocation's output budget "
+                            f"({budget} tokens) exceed the model's context of {self.backend.n_ctx} tokens; raise --n-ctx")
+        return Fitted(text + coalition.output + ALLOCATION_GLUE, context, prefixes, kept, dropped, continues=live)
 
     def _finish_plan_stage(self, record: StageRecord, result: PlanResult, *, form: str, scene: SceneObjects,
                            team_size: int | None = None) -> None:
@@ -240,12 +300,9 @@ class Planner:
         first = self.decompose(result, scene)
         if self.continue_after(result, first):
             decomposed = first.plan
-            coalition_text = None
-            if self.config.prompts.coalition:
-                second = self.form_coalition(result, decomposed, team, scene)
-                coalition_text = second.output
+            coalition = self.form_coalition(result, decomposed, team, scene) if self.config.prompts.coalition else None
             if result.refusal is None and not result.error:
-                self.allocate(result, decomposed, coalition_text, team, scene)
+                self.allocate(result, decomposed, coalition, team, scene)
         self.conclude(result)
         return result
 

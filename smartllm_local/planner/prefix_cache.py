@@ -27,6 +27,7 @@ from typing import Any, Mapping, Sequence
 
 from ..errors import ModelError
 from ..files import check_output_folder
+from .backends.base import shared_prefix
 
 _MAGIC = b"smartllm-local prefix state 1\n"
 _SUFFIX = ".kv"
@@ -189,9 +190,14 @@ class PrefixReuse:
     _states: MemoryStates
     prefix_store: PrefixStore | None
     n_ctx: int
+    _tokens: list[int]  # what the cache holds
 
     def prefill(self, context: Sequence[int], prefixes: Sequence[int]) -> int:
-        reused = self._load_prefixes(context, [end for end in prefixes if 0 < end < min(len(context), self.n_ctx)])
+        """Make the cache hold ``context``; returns how many of its tokens were not evaluated now. Without
+        prefixes (a stage that goes on in the context the one before left), the cache is kept as it is."""
+        ends = [end for end in prefixes if 0 < end < min(len(context), self.n_ctx)]
+        held = shared_prefix(self._tokens, context)
+        reused = self._load_prefixes(context, ends) if ends else held
         self._sync(context)
         return reused
 

@@ -1,4 +1,4 @@
-"""The three stages' prompts, assembled from the worked examples under a domain's examples/ folder.
+"""The stages' prompts, assembled from the worked examples under a domain's examples/ folder.
 
 Prompts are Python source, as in SMART-LLM: the skills as an import line,
 worked examples (each a task description followed by its plan), then the new
@@ -6,6 +6,11 @@ task. The examples come first, always in file order, and the task's own
 details last: a :class:`Prompt` is the part shared by every task of a stage
 (whose key/value state a backend evaluates once), for a decomposition the
 scene's objects (shared by the tasks on one floor plan), and the task's own part.
+
+Coalition and allocation share one prompt where the model's context holds it:
+each example shows its coalition and then its allocated plan, and a task's
+allocation goes on in the context its coalition left, so it evaluates only the
+line that opens it. A shorter context gets the paper's two prompts.
 
 Ablations (as in the paper): ``comments=False`` removes the comment lines
 from the examples' code, ``summary=False`` removes the summary block of the
@@ -29,7 +34,7 @@ from .coalition import LINE as COALITION_LINE
 from .scene_context import SceneObjects, scene_objects
 
 STAGES = ("decomposition", "coalition", "allocation")
-DEFAULT_EXAMPLE_COUNTS = {"decomposition": 5, "coalition": 3, "allocation": 4}
+DEFAULT_EXAMPLE_COUNTS = {"decomposition": 5, "coalition": 5, "allocation": 4}
 _QUOTED = re.compile(r"'([A-Za-z]+)'")
 _CALLED = re.compile(r"\b([A-Z]\w*)\(")
 
@@ -235,17 +240,33 @@ def coalition_intro(scene: SceneObjects) -> str:
 """
 
 
-def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects, catalogue: dict[int, Robot],
-                     examples: Sequence[Example], options: PromptOptions) -> Prompt:
-    """Decompositions appear here without their line comments: a coalition weighs what each sub-task
+ALLOCATION_GLUE = "# Allocated plan:\n"
+
+TEAM_INTRO = """\
+# Each plan is then rewritten for its robots: every function takes robot_list, every skill
+# call names the robot (robot_list[0]) or the whole team (robot_list) that acts, and each
+# sub-task is started with the robots its coalition chose.
+"""
+
+
+def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects, skills: SkillSet,
+                     catalogue: dict[int, Robot], examples: Sequence[Example], options: PromptOptions, *,
+                     allocations: bool = True) -> Prompt:
+    """The coalition's prompt. With ``allocations``, coalition and allocation share it: each example's
+    coalition is followed by its allocated plan, and the task's allocation goes on from its coalition
+    (:data:`ALLOCATION_GLUE` after the coalition the model wrote), so that it evaluates no prompt of
+    its own. Decompositions appear without their line comments: a coalition weighs what each sub-task
     calls and lifts, not why each step is taken."""
     bare = PromptOptions(comments=False, summary=options.summary)
-    parts = [coalition_intro(scene)]
+    parts = [skills_header(skills), "\n", coalition_intro(scene), TEAM_INTRO] if allocations else [coalition_intro(scene)]
     for k, ex in enumerate(examples, start=1):
         ex_team = [catalogue[i] for i in ex.robots]
         objects = _example_scene(ex, scene).python_list(ex.object_types())
+        allocated = ""
+        if allocations and "allocation" in ex.stages and ex.allocation:
+            allocated = ALLOCATION_GLUE + shape(ex.allocation, PromptOptions(comments=options.comments, summary=True))
         parts.append(f"\n# Example {k}\n{shape(ex.decomposition, bare)}{robots_list(ex_team, ex.decomposition)}"
-                     f"objects = {objects}\n# Coalition:\n{ex.coalition}")
+                     f"objects = {objects}\n# Coalition:\n{ex.coalition}{allocated}")
     objects = scene.python_list(plan_object_types(decomposed, scene))
     own = f" plan\n{shape(decomposed, bare)}{robots_list(team, decomposed)}objects = {objects}\n# Coalition:\n"
     return Prompt(("".join(parts) + "\n# Your", own))
@@ -259,10 +280,10 @@ def coalition_decisions(coalition: str) -> str:
 
 def allocation_prompt(decomposed: str, coalition: str | None, team: Sequence[Robot], skills: SkillSet,
                       catalogue: dict[int, Robot], examples: Sequence[Example], options: PromptOptions) -> Prompt:
-    """Decompositions appear here without their line comments, and coalitions without their
-    reasoning: the allocated code restates every line with its comment, the allocation needs only
-    whom each sub-task is started with, and the saving keeps more examples within a 4,096-token
-    context."""
+    """The allocation's own prompt, where it does not share the coalition's (see :func:`coalition_prompt`).
+    Decompositions appear without their line comments, and coalitions without their reasoning: the
+    allocated code restates every line with its comment, and the allocation needs only whom each
+    sub-task is started with."""
     bare = PromptOptions(comments=False, summary=options.summary)
     parts = [skills_header(skills), "\n", ALLOCATION_INTRO]
     for k, ex in enumerate(examples, start=1):
@@ -270,7 +291,7 @@ def allocation_prompt(decomposed: str, coalition: str | None, team: Sequence[Rob
         coalition_part = f"# Coalition:\n{coalition_decisions(ex.coalition or '')}" if options.coalition else ""
         allocated = shape(ex.allocation or "", PromptOptions(comments=options.comments, summary=True))
         parts.append(f"\n# Example {k}\n{shape(ex.decomposition, bare)}{robots_list(ex_team, ex.decomposition)}"
-                     f"{coalition_part}# Allocated plan:\n{allocated}")
+                     f"{coalition_part}{ALLOCATION_GLUE}{allocated}")
     coalition_part = f"# Coalition:\n{coalition_decisions(coalition)}" if options.coalition and coalition else ""
-    own = f" plan\n{shape(decomposed, bare)}{robots_list(team, decomposed)}{coalition_part}# Allocated plan:\n"
+    own = f" plan\n{shape(decomposed, bare)}{robots_list(team, decomposed)}{coalition_part}{ALLOCATION_GLUE}"
     return Prompt(("".join(parts) + "\n# Your", own))

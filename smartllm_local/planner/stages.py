@@ -25,9 +25,12 @@ from .prompts import Example, Prompt
 
 STOP_STRINGS = {
     "decomposition": ("\n# Example", "\n# Your task", "\n# Task Description", "\nobjects ="),
-    "coalition": ("\n\n", "\n# Example", "\n# Your plan", "\ndef "),
+    "coalition": ("\n\n", "\n# Allocated plan", "\n# Example", "\n# Your plan", "\ndef "),
     "allocation": ("\n# Example", "\n# Your plan", "\n# Task Description"),
 }
+
+
+_TRANSIENT = frozenset({"plan", "context"})
 
 
 @dataclass
@@ -57,16 +60,17 @@ class StageRecord:
     loops_ended: int = 0  # loops in free text the loop guard ended (see backends.repetition)
     error: str = ""
     plan: object = None  # the parsed plan of a plan stage
+    context: list[int] = field(default_factory=list)  # the tokens the stage ended with, for the next to go on from
     chat_template: str = ""  # "applied", "none (base model)" or "off" (--chat-template none)
 
     def saved(self) -> dict[str, Any]:
-        """Everything but the parsed plan (it is parsed again from the output when a run resumes)."""
-        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "plan"}
+        """Everything but the parsed plan and the tokens (parsed and tokenized again when a run resumes)."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name not in _TRANSIENT}
 
     @classmethod
     def restored(cls, data: Mapping[str, Any]) -> "StageRecord":
         """A saved record; one saved before a field was added gets its default."""
-        known = {f.name for f in fields(cls)} - {"plan"}
+        known = {f.name for f in fields(cls)} - _TRANSIENT
         if not isinstance(data, Mapping) or not set(data) <= known or "stage" not in data:
             raise ValueError("not a saved stage record")
         return cls(**data)
@@ -99,6 +103,7 @@ class Fitted:
     prefixes: tuple[int, ...] = ()
     kept: list[Example] = field(default_factory=list)
     dropped: list[Example] = field(default_factory=list)
+    continues: bool = False  # it goes on from the context the backend was left with: no prefix is loaded again
 
 
 def fit_prompt(
@@ -142,7 +147,7 @@ def run_stage(
     record.examples, record.dropped = [e.name for e in prompt.kept], [e.name for e in prompt.dropped]
     record.output_budget = output_budget
     started = time.perf_counter()
-    record.reused_tokens = backend.prefill(context, prompt.prefixes)
+    record.reused_tokens = backend.prefill(context, () if prompt.continues else prompt.prefixes)
     record.prompt_seconds = time.perf_counter() - started
     if constraint is None:
         result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,
@@ -173,6 +178,7 @@ def run_stage(
         record.forced_tokens += len(tokens)
         return len(tokens)
 
+    record.context = context
     try:
         record.raw = record.output = run_constraint(constraint, write, force, output_budget)
     except BudgetError as exc:

@@ -187,6 +187,43 @@ def test_a_saved_plan_that_does_not_parse_is_forgotten(smollm2, tmp_path):
     assert outcomes[0].result.stages[0].output != "def broken(:\n" and not outcomes[0].error
 
 
+class _Recorded:
+    """A method of two stages, the second going on in the first's context; it notes what it runs."""
+
+    name = "recorded"
+
+    def __init__(self):
+        self.calls: list[tuple[str, str]] = []
+
+    def stages(self):
+        from smartllm_local.methods import Stage
+
+        return [Stage("coalition", self._run("coalition")), Stage("allocation", self._run("allocation"), follows=True)]
+
+    def _run(self, stage):
+        def run(task, result):
+            self.calls.append((stage, task.id))
+            result.stages.append(StageRecord(stage, output=f"{stage} of {task.id}\n"))
+        return run
+
+
+def test_a_stage_that_follows_runs_right_after_the_one_it_goes_on_from_and_resumes_with_it(tmp_path):
+    """Each task's coalition is followed by its allocation before the next task's coalition; a run stopped
+    between the two runs both again (the context they share is not saved), a finished pair neither."""
+    catalogue = load_domain().catalogue
+    tasks = [find_task(load_tasks(), t) for t in ("kitchen-01", "kitchen-02", "kitchen-03")]
+    store = RunStore(tmp_path, {"identity": {}, "started": "now"})
+    store.save_stage("kitchen-01", StageRecord("coalition", output="saved\n"))
+    store.save_stage("kitchen-02", StageRecord("coalition", output="saved\n"))
+    store.save_stage("kitchen-02", StageRecord("allocation", output="# INFEASIBLE: saved\n", refusal="saved"))
+    method = _Recorded()
+    run_benchmark(tasks, method, catalogue, store=store)
+    assert method.calls == [("coalition", "kitchen-01"), ("allocation", "kitchen-01"),
+                            ("coalition", "kitchen-03"), ("allocation", "kitchen-03")]
+    assert [r.output for r in store.saved_stages("kitchen-01")] == ["coalition of kitchen-01\n",
+                                                                     "allocation of kitchen-01\n"]
+
+
 def test_a_folder_with_another_run_is_refused_and_restart_clears_only_the_runs_files(tmp_path):
     RunStore(tmp_path, {"identity": {"arguments": {"seed": 0}}, "started": "now"}).save_stage(
         "t", StageRecord("decomposition"))

@@ -96,6 +96,21 @@ def test_a_context_longer_than_n_ctx_is_a_clear_error(smollm2):
         smollm2.generate([1] * smollm2.n_ctx, grammar=None, max_tokens=1, sampling=Sampling())
 
 
+def test_prompts_are_fitted_within_the_context_the_model_was_trained_on(smollm2):
+    """SmolLM2 was trained on 8,192 tokens: a larger --n-ctx fits prompts within those, a smaller one stays."""
+    assert smollm2.trained_context == 8192 and smollm2.n_ctx == 8192
+    larger = load_backend("llamacpp", "smollm2", n_ctx=12288, prefix_cache="off")
+    try:
+        assert larger.n_ctx == 8192
+    finally:
+        larger.close()
+    smaller = load_backend("llamacpp", "smollm2", n_ctx=2048, prefix_cache="off")
+    try:
+        assert smaller.n_ctx == 2048
+    finally:
+        smaller.close()
+
+
 def test_the_other_embedded_model_runs_too():
     gemma = load_backend("llamacpp", "gemma3-270m", n_ctx=1024)
     try:
@@ -106,7 +121,6 @@ def test_the_other_embedded_model_runs_too():
         assert grammar.matches(out.text)
     finally:
         gemma.close()
-
 
 
 def test_the_loop_guard_ends_free_text_that_loops(smollm2):

@@ -114,13 +114,15 @@ def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone(
     finally:
         alone_backend.close()
     assert [r.output for r in after.stages] == [r.output for r in alone.stages] and after.allocated
-    assert all(r.reused_tokens == 0 and r.shared_tokens > 0 for r in alone.stages)
-    decomposition, *later = zip(before.stages, after.stages)
+    *fresh, allocation = alone.stages
+    assert all(r.reused_tokens == 0 and r.shared_tokens > 0 for r in fresh)
+    decomposition, coalition, _ = zip(before.stages, after.stages)
     assert decomposition[1].reused_tokens > decomposition[1].shared_tokens > 0
     assert decomposition[1].prompt_tokens - decomposition[1].reused_tokens < 30  # the instruction alone
-    for earlier, record in later:
-        same_examples = earlier.examples == record.examples
-        assert record.reused_tokens == (record.shared_tokens if same_examples else 0), record.stage
+    assert coalition[1].reused_tokens == (coalition[1].shared_tokens if coalition[0].examples == coalition[1].examples
+                                          else 0)
+    for record in (allocation, after.stages[2]):  # the coalition's context, then the line that opens it
+        assert record.reused_tokens > record.shared_tokens and record.prompt_tokens - record.reused_tokens < 12
 
 
 def test_a_second_process_starts_from_the_stored_examples_and_a_damaged_store_is_rebuilt(tmp_path):
@@ -137,14 +139,16 @@ def test_a_second_process_starts_from_the_stored_examples_and_a_damaged_store_is
 
     first, cold = plan("first")
     stored = entries(states)
-    assert len(stored) == 4 and all(t["reused_tokens"] == 0 for t in cold.values())  # per stage, and the scene
+    # The decomposition's examples and scene, and the examples coalition and allocation share.
+    assert len(stored) == 3 and cold["decomposition"]["reused_tokens"] == cold["coalition"]["reused_tokens"] == 0
     second, warm = plan("second")
     assert second == first
-    decomposition = warm.pop("decomposition")
+    decomposition = warm["decomposition"]
     assert decomposition["prompt_tokens"] - decomposition["reused_tokens"] < 40  # the instruction in its chat turn
-    assert all(t["reused_tokens"] == t["shared_tokens"] > 0 for t in warm.values()), warm
+    assert warm["coalition"]["reused_tokens"] == warm["coalition"]["shared_tokens"] > 0, warm
+    assert cold["allocation"]["prompt_tokens"] - cold["allocation"]["reused_tokens"] < 12  # in the coalition's context
     for path in stored:
         path.write_bytes(path.read_bytes()[:1000])
     third, rebuilt = plan("third")
-    assert third == first and all(t["reused_tokens"] == 0 for t in rebuilt.values())
-    assert [p.stat().st_size > 1000 for p in entries(states)] == [True] * 4
+    assert third == first and rebuilt["coalition"]["reused_tokens"] == rebuilt["decomposition"]["reused_tokens"] == 0
+    assert [p.stat().st_size > 1000 for p in entries(states)] == [True] * 3

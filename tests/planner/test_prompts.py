@@ -7,7 +7,7 @@ import re
 import pytest
 
 from smartllm_local.errors import UserError
-from smartllm_local.planner.pipeline import Planner, PlannerConfig, write_artifacts
+from smartllm_local.planner.pipeline import OWN_PART, Planner, PlannerConfig, write_artifacts
 from smartllm_local.planner.prompts import (
     PromptOptions,
     coalition_decisions,
@@ -38,7 +38,7 @@ def test_the_three_prompts_have_their_parts(catalogue):
     assert len(re.findall(r"^# Example \d$", decomposition, re.M)) == 5
     assert "{'name': 'Apple', 'mass': 0.2}" in decomposition and "{'name': 'Fridge'" in decomposition
     assert decomposition.endswith(f"# Task Description: {INSTRUCTION}\n")
-    assert len(re.findall(r"^# Example \d$", coalition, re.M)) == 3
+    assert len(re.findall(r"^# Example \d$", coalition, re.M)) == 5
     own = coalition.split("# Your plan")[1]
     called = set(re.findall(r"^    (\w+)\(", result.stages[0].output, re.M))
     for i, robot in enumerate(catalogue.robots[r] for r in (29, 24, 25)):
@@ -48,13 +48,32 @@ def test_the_three_prompts_have_their_parts(catalogue):
     assert "'id': 24, 'skills': ['GoToObject'], 'mass_capacity'" in own  # of GoToObject, SwitchOff, SwitchOn
     assert "'id': 24, 'skills': ['GoToObject', 'SwitchOn']" in coalition, "an example's robots, by its own plan"
     assert coalition.endswith("# Coalition:\n")
-    assert len(re.findall(r"^# Example \d$", allocation, re.M)) == 4
-    assert "# Allocated plan:\ndef subtask1_" in allocation
-    assert allocation.endswith("# Allocated plan:\n")
+    assert coalition.startswith("from skills import GoToObject, OpenObject, CloseObject")
+    examples_part = coalition.split("# Your plan")[0]
+    assert len(re.findall(r"^# Allocated plan:\ndef subtask1_", examples_part, re.M)) == 4, \
+        "each feasible example's coalition is followed by its allocated plan"
+    assert "# INFEASIBLE: both sub-tasks need SwitchOn" in examples_part
     assert strip_comments(result.stages[0].output) in coalition and "    # " not in own
-    assert coalition_decisions(result.stages[1].output) in allocation
+    assert allocation == coalition + result.stages[1].output + "# Allocated plan:\n", \
+        "the allocation goes on in the coalition's context"
+    assert result.stages[2].shared_tokens == result.stages[1].shared_tokens > 0
+
+
+def test_a_context_too_short_for_the_shared_prompt_gets_the_papers_two_prompts(catalogue):
+    """Where the shared prompt's examples, both budgets and a task's own part do not fit (a 4,096-token
+    Llama-2), the coalition has a prompt without allocations and the allocation one of its own, which
+    shows each example's coalition cut to its decisions, then the task's."""
+    shared = plan_with(FakeBackend(), catalogue).stages[1].shared_tokens
+    need = shared + 896 + 1280 + OWN_PART
+    _, coalition, allocation = plan_with(FakeBackend(n_ctx=need - 1), catalogue).stages
+    assert "# Allocated plan:" not in coalition.prompt and coalition.prompt.endswith("# Coalition:\n")
+    assert coalition.shared_tokens < shared and len(re.findall(r"^# Example \d$", coalition.prompt, re.M)) == 5
+    assert len(re.findall(r"^# Example \d$", allocation.prompt, re.M)) == 4
+    assert allocation.prompt.endswith(f"# Coalition:\n{coalition_decisions(coalition.output)}# Allocated plan:\n")
     assert "# Coalition:\n# SubTask 1 (subtask1_slice_bread): robots[0]\n# SubTask 2 (subtask2_toast_slice): " \
-        "robots[1] and robots[2]\n# Allocated plan:" in allocation, "the examples' coalitions without their reasoning"
+        "robots[1] and robots[2]\n# Allocated plan:" in allocation.prompt, "the examples' coalitions without reasoning"
+    _, coalition, allocation = plan_with(FakeBackend(n_ctx=need), catalogue).stages
+    assert allocation.prompt.startswith(coalition.prompt) and coalition.shared_tokens == shared
 
 
 def test_ablations_change_the_prompts(catalogue):
@@ -66,6 +85,8 @@ def test_ablations_change_the_prompts(catalogue):
     assert not re.search(r"^    #", examples_part, re.M) and re.search(r"^    #", full.stages[0].prompt, re.M)
     assert "# Coalition:" not in bare.stages[1].prompt
     assert "robots = [" in bare.stages[1].prompt
+    assert len(re.findall(r"^# Example \d$", bare.stages[1].prompt, re.M)) == 4, "the allocation's own examples"
+    assert bare.stages[1].prompt.endswith("# Allocated plan:\n")
 
 
 def test_strip_helpers():

@@ -38,7 +38,7 @@ class Server:
             self.port = probe.getsockname()[1]
         self.url, self.log = f"http://127.0.0.1:{self.port}", log
         command = command or [sys.executable, "-m", "llama_cpp.server", "--model", str(resolve_gguf(None)),
-                              "--n_ctx", "4096", "--n_threads", str(threads), "--logits_all", "False"]
+                              "--n_ctx", "8192", "--n_threads", str(threads), "--logits_all", "False"]
         self.process = subprocess.Popen([*command, "--host", "127.0.0.1", "--port", str(self.port)],
                                         stdout=open(log, "w"), stderr=subprocess.STDOUT,
                                         env={**os.environ, "PYTHONUNBUFFERED": "1"})
@@ -194,7 +194,7 @@ def test_llama_server_plans_token_for_token_what_the_in_process_backend_plans(tm
     task_args = [a for t in tasks for a in ("--task", t)]
     run = cli("benchmark", "run", "--out", tmp_path / "in-process", "--prefix-cache", "off", *task_args)
     assert run.returncode == 0, run.stderr
-    server, _ = _llama_server(tmp_path, "-c", "4096", "-np", "1", "-fa", "off")
+    server, _ = _llama_server(tmp_path, "-c", "8192", "-np", "1", "-fa", "off")
     try:
         run = cli("benchmark", "run", "--backend", "server", "--endpoint", server.url, "--out", tmp_path / "server",
                   *task_args)

@@ -188,8 +188,11 @@ def test_a_prompt_tokenized_in_its_parts_is_tokenized_as_a_whole(vocab):
         prompts = {
             "decomposition": decomposition_prompt(task.instruction, scene, catalogue.skills,
                                                   examples_for("decomposition", examples, options), options),
-            "coalition": coalition_prompt(decomposition, team, scene, catalogue.robots,
+            "coalition": coalition_prompt(decomposition, team, scene, catalogue.skills, catalogue.robots,
                                           examples_for("coalition", examples, options), options),
+            "coalition alone": coalition_prompt(decomposition, team, scene, catalogue.skills, catalogue.robots,
+                                                examples_for("coalition", examples, options), options,
+                                                allocations=False),
             "allocation": allocation_prompt(decomposition, coalition, team, catalogue.skills, catalogue.robots,
                                             examples_for("allocation", examples, options), options),
         }

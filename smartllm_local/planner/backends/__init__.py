@@ -21,7 +21,7 @@ def load_backend(
     name: str = "llamacpp",
     model: str | None = None,
     *,
-    n_ctx: int = 4096,
+    n_ctx: int = 8192,
     threads: int | None = None,
     n_gpu_layers: int = 0,
     seed: int = 0,
@@ -70,7 +70,7 @@ def load_backends(
         return [load_backend(name, model, **settings)]
     from .server import DEFAULT_TIMEOUT, connect
 
-    return list(connect(endpoints, model, workers=workers, n_ctx=settings.get("n_ctx", 4096),
+    return list(connect(endpoints, model, workers=workers, n_ctx=settings.get("n_ctx", 8192),
                         timeout=server_timeout or DEFAULT_TIMEOUT))
 
 

@@ -50,6 +50,12 @@ from .repetition import TRIES, current_line, draw
 _TOP = 64
 
 
+def _trained_context(metadata: dict[str, str]) -> int | None:
+    """The context the model was trained on, from its GGUF metadata (a vocabulary file has none)."""
+    value = metadata.get(f"{metadata.get('general.architecture', '')}.context_length", "")
+    return int(value) if value.isdigit() and int(value) > 0 else None
+
+
 class LlamaCppBackend(PrefixReuse):
     """A GGUF model run by llama.cpp."""
 
@@ -59,7 +65,7 @@ class LlamaCppBackend(PrefixReuse):
         self,
         model_path: str | Path,
         *,
-        n_ctx: int = 4096,
+        n_ctx: int = 8192,
         threads: int | None = None,
         n_gpu_layers: int = 0,
         seed: int = 0,
@@ -111,6 +117,10 @@ class LlamaCppBackend(PrefixReuse):
         self._few = np.zeros(_TOP, dtype=self._full.dtype)
         self.n_gpu_layers = n_gpu_layers
         self.chat_template = self.llm.metadata.get("tokenizer.chat_template")
+        # Prompts are fitted within what the model was trained on: a Llama-2 keeps 4,096 tokens.
+        self.trained_context = _trained_context(self.llm.metadata)
+        if self.trained_context and not vocab_only:
+            self.n_ctx = min(self.n_ctx, self.trained_context)
         self.bos_token, self.eos_token = (self.llm._model.token_get_text(t) if t != -1 else ""
                                           for t in (self.llm.token_bos(), self.llm.token_eos()))
 

@@ -213,6 +213,7 @@ class Vocabulary(Protocol):
     chat_template: str | None
     bos_token: str
     eos_token: str
+    trained_context: int | None  # the context the model was trained on, where the vocabulary says
 
     def tokenize(self, text: str, *, bos: bool = False, special: bool = False) -> list[int]: ...
     def detokenize(self, tokens: Sequence[int]) -> str: ...
@@ -229,6 +230,7 @@ class LocalVocabulary:
         self._llama = LlamaCppBackend(path, n_ctx=512, vocab_only=True)
         self.model, self.chat_template = self._llama.model, self._llama.chat_template
         self.bos_token, self.eos_token = self._llama.bos_token, self._llama.eos_token
+        self.trained_context = self._llama.trained_context
         self.tokenize, self.detokenize = self._llama.tokenize, self._llama.detokenize
         self.tokenize_continuation, self.text_of = self._llama.tokenize_continuation, self._llama.text_of
 
@@ -246,6 +248,7 @@ class RemoteVocabulary:
         self.model = str(props.get("model_path") or connection.url)
         self.chat_template = props.get("chat_template") or None
         self.bos_token, self.eos_token = str(props.get("bos_token") or ""), str(props.get("eos_token") or "")
+        self.trained_context = None  # llama-server says its slots' context instead
         self._pieces: dict[int, bytes] = {}
         self._lock = threading.Lock()  # the workers share it, and its one connection
 
@@ -311,7 +314,7 @@ class ServerBackend:
 
     name = "server"
 
-    def __init__(self, endpoint: str, vocabulary: Vocabulary, dialect: Dialect, *, n_ctx: int = 4096,
+    def __init__(self, endpoint: str, vocabulary: Vocabulary, dialect: Dialect, *, n_ctx: int = 8192,
                  slot: int = -1, timeout: float = DEFAULT_TIMEOUT):
         self.connection = Connection(endpoint, timeout)
         self.vocabulary, self.dialect, self.slot = vocabulary, dialect, slot
@@ -447,10 +450,10 @@ def check_vocabulary(vocabulary: Vocabulary, connection: Connection, dialect: Di
                         "pass --model with the GGUF file the server serves")
 
 
-def connect(endpoints: Sequence[str], model: str | None, *, workers: int = 1, n_ctx: int = 4096,
+def connect(endpoints: Sequence[str], model: str | None, *, workers: int = 1, n_ctx: int = 8192,
             timeout: float = DEFAULT_TIMEOUT) -> list[ServerBackend]:
     """One backend per worker, spread over the endpoints (and over each llama-server's slots)."""
-    found: list[tuple[str, Dialect, int]] = []
+    found: list[tuple[str, Dialect, int, int]] = []
     vocabulary = None
     for url in endpoints:
         connection = Connection(url, min(timeout, 30.0))
@@ -462,15 +465,15 @@ def connect(endpoints: Sequence[str], model: str | None, *, workers: int = 1, n_
         if not (isinstance(vocabulary, RemoteVocabulary) and vocabulary.connection.url == connection.url):
             check_vocabulary(vocabulary, connection, dialect)  # not a server against its own tokenizer
         connection.close()
+        # Prompts are fitted within a slot's context and the model's trained one, as in-process.
         slot_ctx = (props.get("default_generation_settings") or {}).get("n_ctx")
-        if isinstance(slot_ctx, int) and slot_ctx < n_ctx:
-            raise UserError(f"the server at {url} gives each slot {slot_ctx} tokens of context, less than "
-                            f"--n-ctx {n_ctx}: lower --n-ctx, or start it with a larger -c (or fewer -np slots)")
-        found.append((url, dialect, int(props.get("total_slots") or 1)))
+        limits = [n_ctx, vocabulary.trained_context, slot_ctx]
+        context = min(limit for limit in limits if isinstance(limit, int) and limit > 0)
+        found.append((url, dialect, int(props.get("total_slots") or 1), context))
     assert vocabulary is not None
     backends = []
     for worker in range(workers):
-        url, dialect, slots = found[worker % len(found)]
+        url, dialect, slots, context = found[worker % len(found)]
         slot = (worker // len(found)) % slots if dialect.takes_tokens else -1
-        backends.append(ServerBackend(url, vocabulary, dialect, n_ctx=n_ctx, slot=slot, timeout=timeout))
+        backends.append(ServerBackend(url, vocabulary, dialect, n_ctx=context, slot=slot, timeout=timeout))
     return backends

@@ -31,8 +31,12 @@ class SlotMirror:
     # ------------------------------------------------------ the in-process side
 
     def prefill(self, context: Sequence[int], prefixes: Sequence[int]) -> None:
-        """The shared prefixes come from kept states (evaluated in batches), the rest is a batch of its own."""
+        """The shared prefixes come from kept states (evaluated in batches), the rest is a batch of its own;
+        without prefixes, the cache is kept and what the context adds is the batch."""
         last = max([0, *(end for end in prefixes if end < len(context))])
+        if not last:
+            self.sync(context)
+            return
         self.ours = list(context)
         self.ours_alone = [False] * last + [len(context) - last == 1] * (len(context) - last)
 

@@ -136,7 +136,7 @@ def _quiet_loading(transformers: Any):
 class TransformersBackend(PrefixReuse):
     name = "transformers"
 
-    def __init__(self, model: str | None, *, n_ctx: int = 4096, threads: int | None = None, n_gpu_layers: int = 0,
+    def __init__(self, model: str | None, *, n_ctx: int = 8192, threads: int | None = None, n_gpu_layers: int = 0,
                  seed: int = 0):
         try:
             import llguidance
