@@ -258,7 +258,8 @@ def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects
     its own. Decompositions appear without their line comments: a coalition weighs what each sub-task
     calls and lifts, not why each step is taken."""
     bare = PromptOptions(comments=False, summary=options.summary)
-    parts = [skills_header(skills), "\n", coalition_intro(scene), TEAM_INTRO] if allocations else [coalition_intro(scene)]
+    parts = [skills_header(skills), "\n", coalition_intro(scene), TEAM_INTRO] if allocations \
+        else [coalition_intro(scene)]
     for k, ex in enumerate(examples, start=1):
         ex_team = [catalogue[i] for i in ex.robots]
         objects = _example_scene(ex, scene).python_list(ex.object_types())

@@ -64,7 +64,7 @@ class StageRecord:
     chat_template: str = ""  # "applied", "none (base model)" or "off" (--chat-template none)
 
     def saved(self) -> dict[str, Any]:
-        """Everything but the parsed plan and the tokens (parsed and tokenized again when a run resumes)."""
+        """Everything but the parsed plan (parsed again when a run resumes) and the tokens (not kept)."""
         return {f.name: getattr(self, f.name) for f in fields(self) if f.name not in _TRANSIENT}
 
     @classmethod
