@@ -429,30 +429,50 @@ def _refs(node: Node) -> Iterable[str]:
         yield from _refs(node.item)
 
 
-def _escape_char(c: str, in_class: bool) -> str:
-    if c.isalnum() or c == " " or (not in_class and c not in '"\\'):
-        return c
-    return f"\\x{ord(c):02X}"
+_HEX_DIGITS = frozenset("0123456789abcdefABCDEF")
+
+
+class _Escaper:
+    """Characters as every GBNF reader reads them (llama.cpp, llguidance, vLLM's XGrammar): as themselves where
+    they can be, else ``\\xHH``. XGrammar reads every hex digit that follows ``\\x`` (llama.cpp and llguidance
+    read two), so a hex digit right after such an escape is escaped too. Characters past ASCII are written as
+    themselves (UTF-8), which all three read; a ``\\x`` escape holds one byte's worth."""
+
+    def __init__(self, in_class: bool):
+        self.in_class, self.after_escape = in_class, False
+
+    def __call__(self, c: str) -> str:
+        if c == "\n" and not self.in_class:
+            self.after_escape = False
+            return "\\n"
+        plain = c.isalnum() or c == " " or c >= "\x80" or (not self.in_class and c not in '"\\')
+        if plain and not (self.after_escape and c in _HEX_DIGITS):
+            self.after_escape = False
+            return c
+        self.after_escape = True
+        return f"\\x{ord(c):02X}"
 
 
 def _literal(text: str) -> str:
-    body = "".join("\\n" if c == "\n" else _escape_char(c, in_class=False) for c in text)
-    return f'"{body}"'
+    escape = _Escaper(in_class=False)
+    return '"' + "".join(escape(c) for c in text) + '"'
 
 
 def _class(allowed: frozenset[str]) -> str:
     codes = sorted(ord(c) for c in allowed)
+    escape = _Escaper(in_class=True)
     parts: list[str] = []
     i = 0
     while i < len(codes):
         j = i
         while j + 1 < len(codes) and codes[j + 1] == codes[j] + 1:
             j += 1
-        first, last = chr(codes[i]), chr(codes[j])
         if j - i >= 2:
-            parts.append(f"{_escape_char(first, True)}-{_escape_char(last, True)}")
+            first = escape(chr(codes[i]))
+            escape.after_escape = False  # a '-' comes between
+            parts.append(f"{first}-{escape(chr(codes[j]))}")
         else:
-            parts.extend(_escape_char(chr(c), True) for c in codes[i:j + 1])
+            parts.extend(escape(chr(c)) for c in codes[i:j + 1])
         i = j + 1
     return "[" + "".join(parts) + "]"
 

@@ -12,10 +12,13 @@ from smartllm_local.planner.grammar import Grammar, GrammarError, Ref, alt, char
 
 
 def test_gbnf_escapes_quotes_backslashes_newlines_and_class_punctuation():
-    g = Grammar({"root": seq('say "hi"\\', "\n", rep(chars("-]^[a"), 1, 2), opt("x"))})
+    """A hex digit right after an escape is escaped too (XGrammar would read it as part of the escape), and
+    characters past ASCII are written as themselves."""
+    g = Grammar({"root": seq('say "hi"\\', "\n", rep(chars("-]^[a"), 1, 2), opt("x"), '"F1g', "é—")})
     text = g.to_gbnf()
-    assert text == 'root ::= "say \\x22hi\\x22\\x5C" "\\n" [\\x2D\\x5B\\x5D\\x5Ea]{1,2} "x"?\n'
-    assert g.matches('say "hi"\\\n-]x') and g.matches('say "hi"\\\n^') and not g.matches('say "hi"\\\n')
+    assert text == ('root ::= "say \\x22hi\\x22\\x5C" "\\n" [\\x2D\\x5B\\x5D\\x5E\\x61]{1,2} "x"? '
+                    '"\\x22\\x46\\x31g" "é—"\n')
+    assert g.matches('say "hi"\\\n-]x"F1gé—') and g.matches('say "hi"\\\n^"F1gé—') and not g.matches('say "hi"\\\n')
 
 
 def test_rules_are_emitted_reachable_only_and_root_first():
