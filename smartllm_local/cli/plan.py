@@ -94,11 +94,12 @@ class ModelOptions:
 # Options shared by every command that plans (typer option objects can be reused as defaults).
 _MODEL = typer.Option(None, help=MODEL_HELP)
 _BACKEND = typer.Option("llamacpp", help=(
-    "llamacpp or transformers (the model runs in this process), or server (a llama-server or llama_cpp.server "
-    "at --endpoint runs it; --model then names the served GGUF, read for its vocabulary only)."))
+    "llamacpp or transformers (the model runs in this process), or server (a llama-server, llama_cpp.server or "
+    "vLLM at --endpoint runs it; --model then names the served GGUF or tokenizer folder, read for its vocabulary "
+    "only)."))
 _ENDPOINT = typer.Option(None, "--endpoint", metavar="URL[,URL...]", help=(
     "--backend server: the servers' URLs, such as http://gpu-box:8080 (llama-server, with -np slots) or "
-    "http://127.0.0.1:8000 (python -m llama_cpp.server)."))
+    "http://127.0.0.1:8000 (python -m llama_cpp.server or vllm serve)."))
 _SERVER_TIMEOUT = typer.Option(None, "--server-timeout", help=(
     "--backend server: seconds a request may go unanswered before its task fails (default 300)."))
 _N_CTX = typer.Option(8192, "--n-ctx", help="Context size in tokens (at most the model's trained context).")
@@ -280,7 +281,8 @@ def benchmark_run(
     endpoint: Optional[str] = _ENDPOINT,
     workers: int = typer.Option(1, "--workers", help=(
         "--backend server: plan this many tasks at once, spread over the endpoints and their slots "
-        "(llama-server -np N has N). Through a server, plans can differ with it: see the README.")),
+        "(llama-server -np N has N; vLLM batches them all). Through a server, plans can differ with it: see the "
+        "README.")),
     server_timeout: Optional[float] = _SERVER_TIMEOUT,
     domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:

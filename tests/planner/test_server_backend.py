@@ -30,9 +30,11 @@ TASKS = ("kitchen-01", "living-01")
 
 class Server:
     """A server process on a free loopback port (``command`` with ``--host`` and ``--port`` added), ready
-    once ``ready`` answers; its log says which requests it answered. By default llama_cpp.server."""
+    once ``ready`` answers; its log says which requests it answered. By default llama_cpp.server. It runs in
+    a process group of its own, which :meth:`stop` ends whole (vLLM's engine is a process of its own)."""
 
-    def __init__(self, log: Path, threads: int = 1, command: list[str] | None = None, ready: str = "/v1/models"):
+    def __init__(self, log: Path, threads: int = 1, command: list[str] | None = None, ready: str = "/v1/models",
+                 env: dict[str, str] | None = None, start_limit: float = 120):
         with socket.socket() as probe:
             probe.bind(("127.0.0.1", 0))
             self.port = probe.getsockname()[1]
@@ -41,8 +43,9 @@ class Server:
                               "--n_ctx", "8192", "--n_threads", str(threads), "--logits_all", "False"]
         self.process = subprocess.Popen([*command, "--host", "127.0.0.1", "--port", str(self.port)],
                                         stdout=open(log, "w"), stderr=subprocess.STDOUT,
-                                        env={**os.environ, "PYTHONUNBUFFERED": "1"})
-        deadline = time.monotonic() + 120
+                                        env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
+                                        start_new_session=True)
+        deadline = time.monotonic() + start_limit
         while True:
             try:
                 urllib.request.urlopen(f"{self.url}{ready}", timeout=2).read()
@@ -63,9 +66,11 @@ class Server:
             time.sleep(0.2)
 
     def stop(self) -> None:
-        if self.process.poll() is None:
-            os.kill(self.process.pid, signal.SIGCONT)
-            self.process.kill()
+        for sent in (signal.SIGCONT, signal.SIGKILL):
+            try:
+                os.killpg(self.process.pid, sent)
+            except ProcessLookupError:
+                break  # the group is gone (its leader was killed on purpose, and had no children)
         self.process.wait(timeout=30)
 
 

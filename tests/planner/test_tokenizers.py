@@ -156,22 +156,25 @@ def test_a_stage_writes_forced_text_in_one_batch_without_generating(vocab):
     assert record.forced_tokens == len(vocab.tokenize_continuation(head)) + len(vocab.tokenize_continuation(tail))
 
 
-def test_the_transformers_backend_spells_llama2_continuations_exactly(tmp_path):
+def test_a_hugging_face_vocabulary_spells_llama2_continuations_exactly(tmp_path):
     """Hugging Face's decode drops a SentencePiece token's leading space at the start of what it decodes
-    ("   GoToObject" for four spaces); the backend spells tokens by their bytes instead."""
+    ("   GoToObject" for four spaces); the vocabulary of the transformers backend (and of a vLLM-served
+    model) spells tokens by their bytes instead."""
     transformers = pytest.importorskip("transformers")
-    llguidance_hf = pytest.importorskip("llguidance.hf")
-    from smartllm_local.planner.backends.transformers import TransformersBackend
+    pytest.importorskip("llguidance.hf")
+    from smartllm_local.planner.backends.hf_vocabulary import HFVocabulary
 
     with lzma.open(VOCAB_DIR / "ggml-vocab-llama-spm.gguf.xz") as packed, (tmp_path / "spm.gguf").open("wb") as out:
         shutil.copyfileobj(packed, out)
     tokenizer = transformers.AutoTokenizer.from_pretrained(str(tmp_path), gguf_file="spm.gguf", local_files_only=True)
-    backend = TransformersBackend.__new__(TransformersBackend)  # its tokenizer alone: no weights to load
-    backend.tokenizer, backend.ll_tokenizer = tokenizer, llguidance_hf.from_tokenizer(tokenizer)
+    vocabulary = HFVocabulary(tokenizer, "llama-spm")
     for text in FORCED:
-        tokens = backend.tokenize_continuation(text)
-        assert backend.detokenize(tokens) == text, text
-    assert backend.tokenize("# Task\n", bos=True)[0] == tokenizer.bos_token_id
+        tokens = vocabulary.tokenize_continuation(text)
+        assert vocabulary.detokenize(tokens) == text, text
+    assert vocabulary.tokenize("# Task\n", bos=True)[0] == tokenizer.bos_token_id == vocabulary.bos_added()
+    # what a server that takes text is sent: control tokens written out, so it reads them back as such
+    prompt = vocabulary.tokenize("<s>[INST] Plan [/INST]", special=True)
+    assert vocabulary.tokenize(vocabulary.text_of(prompt), special=True) == prompt
 
 
 def test_a_prompt_tokenized_in_its_parts_is_tokenized_as_a_whole(vocab):
@@ -209,3 +212,13 @@ def test_a_prompt_tokenized_in_its_parts_is_tokenized_as_a_whole(vocab):
                 assert len(prefixes) == 1
     assert all(len(kinds) == 1 for kinds in shared_tokens.values()), vocab.family
     assert all(len(kinds) == 1 for kinds in site_tokens.values()) and len(site_tokens) > 1, vocab.family
+
+
+def test_a_folder_without_a_tokenizer_is_a_clear_error(tmp_path):
+    pytest.importorskip("transformers")
+    from smartllm_local.errors import ModelError
+    from smartllm_local.planner.backends.vocabulary import open_vocabulary
+
+    (tmp_path / "config.json").write_text("{}")
+    with pytest.raises(ModelError, match="holds no Hugging Face tokenizer.*tokenizer files"):
+        open_vocabulary(tmp_path)

@@ -64,7 +64,8 @@ def load_backends(
     **settings: Any,
 ) -> list[Backend]:
     """One backend per worker: several only for ``server``, spread over ``endpoints`` and their slots
-    (``model`` is then the served GGUF, read for its vocabulary alone, or None where the server says its path)."""
+    (``model`` is then the served GGUF or tokenizer folder, read for its vocabulary alone, or None where the
+    server says its path)."""
     check_server_options(name, endpoints, workers)
     if name != "server":
         return [load_backend(name, model, **settings)]
@@ -77,7 +78,7 @@ def load_backends(
 def check_server_options(name: str, endpoints: Sequence[str], workers: int) -> None:
     """Endpoints and workers belong to the server backend, which needs at least one endpoint."""
     if name == "server" and not endpoints:
-        raise UserError("--backend server needs --endpoint URL[,URL...] (a llama-server or llama_cpp.server)")
+        raise UserError("--backend server needs --endpoint URL[,URL...] (a llama-server, llama_cpp.server or vLLM)")
     if name != "server" and (endpoints or workers != 1):
         raise UserError("--endpoint and --workers are for --backend server; an in-process model plans one task "
                         "at a time")
@@ -92,6 +93,7 @@ def model_location(name: str, model: str | None) -> Path | None:
 
     if name == "server" and model is None:
         return None
-    if name == "transformers" and model is not None and model not in EMBEDDED and Path(model).expanduser().is_dir():
+    if name in ("transformers", "server") and model is not None and model not in EMBEDDED \
+            and Path(model).expanduser().is_dir():
         return Path(model).expanduser()
     return resolve_gguf(model)

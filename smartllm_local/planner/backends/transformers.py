@@ -40,13 +40,12 @@ from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..grammar import Grammar, GrammarError, Matcher
 from ..models import EMBEDDED, embedded_model_path, is_gguf
 from ..prefix_cache import MemoryStates, PrefixReuse
-from .base import Generated, Sampling, continuation_tokens, shared_prefix
+from .base import Generated, Sampling, shared_prefix
+from .hf_vocabulary import EXTRA as _EXTRA, HFVocabulary
 from .repetition import TRIES, current_line, draw
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
     os.environ[_switch] = "1"
-
-_EXTRA = "pip install 'smartllm-local[transformers]' (torch, transformers, gguf, accelerate, llguidance)"
 
 # Said by transformers whenever a GGUF is loaded in another dtype than float32, also for architectures it
 # dequantizes anyway (llama, gemma3); the dtype is this backend's choice and the user cannot act on it.
@@ -167,7 +166,7 @@ class TransformersBackend(PrefixReuse):
                 self.tokenizer = transformers.AutoTokenizer.from_pretrained(str(folder), **kwargs)
                 self.lm = transformers.AutoModelForCausalLM.from_pretrained(
                     str(folder), dtype=dtype, device_map=device_map, **kwargs)
-                self.ll_tokenizer = llguidance.hf.from_tokenizer(self.tokenizer)
+                self.vocabulary = HFVocabulary(self.tokenizer, self.model)
         except (MemoryError, getattr(torch, "OutOfMemoryError", MemoryError)) as exc:
             where = "GPU memory (run on the CPU with --n-gpu-layers 0)" if device_map else "memory"
             raise ModelError(f"{self.model} does not fit in {where} ({_one_line(exc)}); use a smaller model") from exc
@@ -187,30 +186,18 @@ class TransformersBackend(PrefixReuse):
         self.lm.eval()
         limit = getattr(self.lm.config, "max_position_embeddings", n_ctx) or n_ctx
         self.n_ctx = min(n_ctx, int(limit))
+        self.ll_tokenizer = self.vocabulary.ll_tokenizer
         self.n_vocab = self.ll_tokenizer.vocab_size
         self.eos = self.tokenizer.eos_token_id
-        template = getattr(self.tokenizer, "chat_template", None)  # a dict where a checkpoint names several
-        self.chat_template = template.get("default") if isinstance(template, dict) else template
-        self.bos_token, self.eos_token = self.tokenizer.bos_token or "", self.tokenizer.eos_token or ""
+        self.chat_template = self.vocabulary.chat_template
+        self.bos_token, self.eos_token = self.vocabulary.bos_token, self.vocabulary.eos_token
+        self.tokenize, self.detokenize = self.vocabulary.tokenize, self.vocabulary.detokenize
+        self.tokenize_continuation = self.vocabulary.tokenize_continuation
         self._tokens: list[int] = []
         self._states = MemoryStates()
         self.evaluated_tokens = 0
         self._cache: Any = None
         self._logits: Any = None
-
-    def tokenize(self, text: str, *, bos: bool = False, special: bool = False) -> list[int]:
-        return list(self.tokenizer(text, add_special_tokens=bos, split_special_tokens=not special)["input_ids"])
-
-    def detokenize(self, tokens: Sequence[int]) -> str:
-        return b"".join(self._piece(t) for t in tokens).decode("utf-8", errors="replace")
-
-    def tokenize_continuation(self, text: str) -> list[int]:
-        return continuation_tokens(text, self.tokenize, self._piece)
-
-    def _piece(self, token: int) -> bytes:
-        """A token's bytes, control tokens none (Hugging Face's decode drops a SentencePiece token's
-        leading space at the start of what it decodes, wrong for a continuation)."""
-        return b"" if self.ll_tokenizer.is_special_token(token) else self.ll_tokenizer.decode_bytes([token])
 
     def _evaluate(self, tokens: list[int]) -> None:
         torch = self._torch
