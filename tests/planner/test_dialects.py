@@ -91,3 +91,12 @@ def test_a_server_whose_grammar_field_the_planner_does_not_know_is_refused():
         probe(Answers({"/v1/models": {"data": [{"id": "qwen", "owned_by": "sglang"}]}}))
     with pytest.raises(UserError, match="neither as llama-server .* nor as an OpenAI-compatible"):
         probe(Answers({}))
+
+
+def test_a_vllm_older_than_structured_outputs_is_refused_before_it_could_plan_unconstrained():
+    # vLLM before 0.12 reads guided_grammar and ignores structured_outputs, answering without a grammar
+    with pytest.raises(UserError, match=r"http://gpu-box:8000 is vLLM, but version 0\.11\.2 .*upgrade vLLM"):
+        probe(Answers({"/v1/models": VLLM_MODELS, "/version": {"version": "0.11.2"}}))
+    for version in ({"version": "0.12.1.dev5+gabc.cpu"}, {"version": "0.32.0"}, {"version": "nightly"}, None):
+        table = {"/v1/models": VLLM_MODELS} | ({"/version": version} if version else {})
+        assert isinstance(probe(Answers(table))[0], Vllm)  # what cannot be read as older is not refused

@@ -8,6 +8,7 @@ grammar with its requests is not recognized rather than trusted: its plans would
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Any, Callable, Protocol, Sequence
 
@@ -33,6 +34,10 @@ class Served:
     props: dict[str, Any] = field(default_factory=dict)  # llama-server's /props, for its vocabulary
 
 
+class Unsupported(Exception):
+    """The server is a dialect's, but one the planner cannot plan against (the message says why and what to do)."""
+
+
 #: GET a path of the server once: its decoded answer, or None where it does not answer 200.
 Get = Callable[[str], Any]
 
@@ -51,7 +56,8 @@ class Dialect(Protocol):
     reports_cache: bool
 
     def recognize(self, get: Get) -> Served | None:
-        """What the server at the other end says about itself, if it is this dialect's."""
+        """What the server at the other end says about itself, if it is this dialect's (:class:`Unsupported`
+        where it is, but cannot be planned against)."""
 
     def completion(self, prompt: list[int] | str, grammar: str | None, max_tokens: int, temperature: float,
                    seed: int, stop: Sequence[str], slot: int, banned: Sequence[int]) -> tuple[str, dict[str, Any]]:
@@ -119,6 +125,13 @@ class Vllm:
         model = _first_model(get)
         if model is None or model.get("owned_by") != "vllm":
             return None
+        answer = get("/version")
+        version = str(answer.get("version", "")) if isinstance(answer, dict) else ""
+        found = re.match(r"(\d+)\.(\d+)", version)
+        if found and (int(found[1]), int(found[2])) < (0, 12):
+            # older ones read the grammar from guided_grammar, and ignore a field they do not know
+            raise Unsupported(f"version {version} takes grammars in a field the planner does not send "
+                              "(structured_outputs came with 0.12): upgrade vLLM there")
         return Served(model.get("root") or model.get("id"), model.get("max_model_len"))
 
     def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot, banned):
@@ -195,7 +208,10 @@ def probe(connection: Connection) -> tuple[Dialect, Served]:
         return asked[path]
 
     for dialect in DIALECTS:
-        served = dialect.recognize(get)
+        try:
+            served = dialect.recognize(get)
+        except Unsupported as exc:
+            raise UserError(f"{connection.url} is {dialect.name}, but {exc}") from exc
         if served is not None:
             return dialect, served
     if _first_model(get) is not None:
