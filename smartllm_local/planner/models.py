@@ -65,6 +65,14 @@ def is_gguf(path: Path) -> bool:
         return False
 
 
+def checkpoint_folder(model: str | None) -> Path | None:
+    """The folder ``--model`` names (a Hugging Face checkpoint, or its tokenizer files), if it names one."""
+    if model is None or model in EMBEDDED:
+        return None
+    path = Path(model).expanduser()
+    return path if path.is_dir() else None
+
+
 def resolve_gguf(model: str | None) -> Path:
     """A GGUF path from ``--model``: a file, an embedded model name, or None for the default."""
     if model is None or model in EMBEDDED:

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ...errors import UserError
-from ..models import EMBEDDED
+from ..models import checkpoint_folder, resolve_gguf
 from .base import Backend, Generated, Sampling
 from .repetition import LoopGuard
 
@@ -89,11 +89,7 @@ def check_server_options(name: str, endpoints: Sequence[str], workers: int) -> N
 def model_location(name: str, model: str | None) -> Path | None:
     """The file (or checkpoint folder) a backend would load for ``--model``, found without loading it
     (None: a server's model that ``--model`` does not name)."""
-    from ..models import resolve_gguf
-
     if name == "server" and model is None:
         return None
-    if name in ("transformers", "server") and model is not None and model not in EMBEDDED \
-            and Path(model).expanduser().is_dir():
-        return Path(model).expanduser()
-    return resolve_gguf(model)
+    folder = checkpoint_folder(model) if name in ("transformers", "server") else None
+    return folder or resolve_gguf(model)

@@ -109,13 +109,11 @@ class RemoteVocabulary:
 
 def open_vocabulary(model: str | Path) -> Vocabulary:
     """The vocabulary of ``--model``: a GGUF file (or an embedded model's name), or a Hugging Face folder."""
-    from ..models import EMBEDDED, resolve_gguf
+    from ..models import checkpoint_folder, resolve_gguf
     from .hf_vocabulary import HFVocabulary
 
-    path = Path(model).expanduser()
-    if str(model) not in EMBEDDED and path.is_dir():
-        return HFVocabulary.load(path)
-    return LocalVocabulary(resolve_gguf(str(model)))
+    folder = checkpoint_folder(str(model))
+    return HFVocabulary.load(folder) if folder else LocalVocabulary(resolve_gguf(str(model)))
 
 
 def served_vocabulary(model: str | None, served: Served, connection: Connection, dialect: Dialect) -> Vocabulary:
