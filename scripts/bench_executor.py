@@ -26,9 +26,9 @@ import statistics
 import sys
 import time
 
+from smartllm_local.domain import load_domain
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.domain import load_domain
 from smartllm_local.world.controller import open_controller
 
 FLOOR_PLAN = 6
@@ -186,7 +186,8 @@ def main(argv: list[str] | None = None) -> int:
 
     mean = statistics.fmean(times)
     print(f"plan: {actions} actions, {len(team)} robots, FloorPlan{FLOOR_PLAN}; "
-          f"{first.succeeded}/{first.attempted} actions succeed, {first.ticks} ticks, {first.transitions} transition(s)")
+          f"{first.succeeded}/{first.attempted} actions succeed, {first.ticks} ticks, "
+          f"{first.transitions} transition(s)")
     print(f"first run incl. start-up: {first_done - start:.3f} s "
           f"(open Controller {opened - start:.3f} s + first plan {first_done - opened:.3f} s)")
     print(f"repeated runs (N={len(times)}, one Controller): mean {mean * 1e3:.2f} ms, "

@@ -25,11 +25,11 @@ import time
 
 import numpy as np
 
+from smartllm_local.domain import load_domain
 from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
 from smartllm_local.planner.models import resolve_gguf
 from smartllm_local.planner.pipeline import Planner, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.domain import load_domain
 from smartllm_local.tasks import find_task, load_tasks
 
 
@@ -120,8 +120,10 @@ def measure(model: str, task_ids: list[str]) -> dict:
     per = lambda key, n: round(1e6 * backend.times[key] / max(1, n), 1)  # noqa: E731
     return {"steps": backend.steps, "lines": backend.lines, "full_vocabulary_masks": backend.full_masks,
             "different_choices": backend.disagreements,
-            "us_per_step": {"llamacpp_top64": per("cpp_step", backend.steps), "llguidance": per("llg_step", backend.steps),
-                            "top64_scan": per("scan", backend.steps), "llguidance_mask": per("llg_mask", backend.steps)},
+            "us_per_step": {"llamacpp_top64": per("cpp_step", backend.steps),
+                            "llguidance": per("llg_step", backend.steps),
+                            "top64_scan": per("scan", backend.steps),
+                            "llguidance_mask": per("llg_mask", backend.steps)},
             "us_per_line_compile": {"llamacpp": per("cpp_compile", backend.lines),
                                     "llguidance": per("llg_compile", backend.lines)},
             "us_per_decoded_token": per("eval", backend.evaluated)}
@@ -141,7 +143,8 @@ def main() -> None:
         llg = f"{step['llguidance']} ({step['llguidance_mask']})"
         print(f"{model:<14}{found['steps']:>7}{top64:>23}{llg:>22}"
               f"{found['full_vocabulary_masks']:>12}{found['different_choices']:>8}"
-              f"{str(compile_['llamacpp']) + ' / ' + str(compile_['llguidance']):>24}{found['us_per_decoded_token']:>17}")
+              f"{str(compile_['llamacpp']) + ' / ' + str(compile_['llguidance']):>24}"
+              f"{found['us_per_decoded_token']:>17}")
 
 
 if __name__ == "__main__":

@@ -11,7 +11,8 @@ checked to be the grammar run's. "valid" says whether the output is a valid
 plan (decomposition, allocation) or list of coalition lines, or a refusal.
 
 Each configuration gets a freshly loaded model and no prefix store on disk, so
-both start with an empty cache (`smartllm-local bench` measures the reuse). A stage's seconds include evaluating its prompt, less what the key/value
+both start with an empty cache (`smartllm-local bench` measures the reuse).
+A stage's seconds include evaluating its prompt, less what the key/value
 cache already held; forced tokens (text the grammar admits in one way only) are
 written in one batch rather than decoded one by one.
 
@@ -25,13 +26,13 @@ from __future__ import annotations
 
 import argparse
 import time
-from typing import Sequence
+from collections.abc import Sequence
 
+from smartllm_local.domain import load_domain
 from smartllm_local.planner.backends import BACKENDS, Sampling, load_backend
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord
-from smartllm_local.domain import load_domain
 from smartllm_local.tasks import Task, find_task, load_tasks
 
 

@@ -30,7 +30,6 @@ from smartllm_local.world.controller import open_controller
 from smartllm_local.world.scenes import _memo, all_floor_plans, load_scene
 from smartllm_local.world.simulator import Simulator
 
-
 FOCUS = ("LightSwitch", "Fridge", "Apple", "Mug")
 
 

@@ -22,8 +22,9 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 from .benchmark import load_reference_plan
 from .errors import SmartLLMError
@@ -71,7 +72,8 @@ def decode_speed(model: str, catalogue: Catalogue, tasks: Sequence[Task], thread
 
 
 def _costs(result: PlanResult) -> dict[str, dict[str, float]]:
-    return {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens, "evaluated": r.prompt_tokens - r.reused_tokens,
+    return {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens,
+                      "evaluated": r.prompt_tokens - r.reused_tokens,
                       "ttft_s": round(r.prompt_seconds, 3)} for r in result.stages}
 
 
@@ -202,9 +204,11 @@ def summary(report: dict[str, Any]) -> str:
         for stage, cost in prefix["stages"].items():
             lines.append(f"  {stage:<14} first task: {cost['first']['prompt']} prompt tokens, ttft "
                          f"{cost['first']['ttft_s']} s; later tasks: {cost['later_evaluated_mean']} evaluated "
-                         f"({cost['later_over_first_prompt_tokens']} of the first's), ttft {cost['later_ttft_s_mean']} s")
+                         f"({cost['later_over_first_prompt_tokens']} of the first's), "
+                         f"ttft {cost['later_ttft_s_mean']} s")
     executor = report["executor"]
-    lines.append(f"executor: {executor['plans']} reference plans, {executor['actions']} actions in {executor['seconds']} s "
+    lines.append(f"executor: {executor['plans']} reference plans, "
+                 f"{executor['actions']} actions in {executor['seconds']} s "
                  f"({executor['plans_per_s']} plans/s, {executor['actions_per_s']} actions/s)")
     if report["benchmark_minutes"] is not None:
         lines.append(f"whole benchmark with {report['benchmark_model']}: {report['benchmark_minutes']} min")

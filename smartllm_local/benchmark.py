@@ -12,13 +12,14 @@ than starting a process per task.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from statistics import mean
-from typing import Any, Iterable, Sequence
+from typing import Any
 
-from .errors import UserError
 from .domain import Domain, load_domain
+from .errors import UserError
 from .executor import Execution, run_plan
 from .executor.site import unattainable
 from .plan_language import Plan, read_plan

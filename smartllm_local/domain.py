@@ -22,10 +22,11 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import re
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any
 
 try:
     import tomllib
@@ -157,7 +158,7 @@ def load_domain(name_or_dir: str | Path | None = None, *, catalogue: str | Path 
     return dataclasses.replace(domain, catalogue=load_catalogue(catalogue))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _builtin(name: str) -> Domain:
     return read_domain_file(data_dir("domains") / name / DOMAIN_FILE)
 

@@ -14,14 +14,15 @@ import itertools
 import json
 import threading
 import time
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any
 
 from .benchmark import reference_ticks
-from .errors import SmartLLMError
 from .domain import Domain
+from .errors import SmartLLMError
 from .executor import run_plan
 from .files import write_atomic
 from .methods import Method, SmartLLM, Stage
@@ -123,7 +124,7 @@ def run_benchmark(
     out: Path | None = None,
     store: RunStore | None = None,
     build: str | None = None,
-    progress: Callable[["Progress"], None] = lambda step: None,
+    progress: Callable[[Progress], None] = lambda step: None,
     domain: Domain | None = None,
 ) -> list[TaskOutcome]:
     """Plan (with ``method``; a Planner is SMART-LLM's), execute (in AI2-THOR, or on a site ``domain``'s

@@ -31,13 +31,14 @@ import json
 import re
 import reprlib
 from collections import Counter
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
-from .errors import UnknownFloorPlanError, UserError
 from .domain import load_domain
+from .errors import UnknownFloorPlanError, UserError
 from .robots import Catalogue
 from .scoring import STATES
 from .tasks import check_task

@@ -11,9 +11,10 @@ it runs: a new method is a new class here, not a branch in the runner.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Protocol, Sequence
+from typing import Protocol
 
 from .benchmark import default_plans_dir
 from .errors import UserError

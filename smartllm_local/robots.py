@@ -9,9 +9,10 @@ ordered list of catalogue robots; inside a plan, ``robots[i]`` is the i-th.
 from __future__ import annotations
 
 import json
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any
 
 from .errors import CatalogueError
 from .skills import DEFAULT_SKILLS, Skill, SkillSet, thor_skill

@@ -32,8 +32,9 @@ counts only object interactions as actions for Exe.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any
 
 from .errors import TaskFileError
 from .world.object_types import SLICE_RESULTS, base_type
@@ -86,7 +87,7 @@ class Goal:
     def as_dict(self) -> dict[str, Any]:
         return {"name": self.name, "contains": list(self.contains), "state": self.state}
 
-    def conditions(self) -> list["Condition"]:
+    def conditions(self) -> list[Condition]:
         out = [Condition(self.name, state=self.state)] if self.state else []
         out += [Condition(self.name, item=item) for item in self.contains]
         return out
@@ -158,7 +159,8 @@ def condition_holds(condition: Condition, objects: Sequence[Mapping[str, Any]],
     inside = inside if inside is not None else containment(objects)
     by_id = {o["objectId"]: o for o in objects}
     return any(
-        o["objectType"].lower() == subject and any(_matches(by_id[c], item) for c in inside.get(o["objectId"], ()) if c in by_id)
+        o["objectType"].lower() == subject and any(_matches(by_id[c], item)
+                                                   for c in inside.get(o["objectId"], ()) if c in by_id)
         for o in objects
     )
 
@@ -206,7 +208,7 @@ class Scores:
     ticks: int = 0  # the run's length (its makespan)
     Speed: float | None = None  # the reference plan's ticks over the run's (see with_speed)
 
-    def with_speed(self, reference_ticks: int | None) -> "Scores":
+    def with_speed(self, reference_ticks: int | None) -> Scores:
         """RU counts parallel starts, so one robot doing everything in one sub-task scores RU 1; Speed
         shows efficiency: the reference plan's ticks over the run's, capped at 1, for a run that met
         every goal condition (0 for one that did not; None without a reference or goal conditions)."""

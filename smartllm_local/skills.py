@@ -9,8 +9,9 @@ from ``domains/household/domain.toml``.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, Iterable, Mapping
+from typing import Any
 
 try:
     import tomllib

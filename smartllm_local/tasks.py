@@ -12,16 +12,17 @@ from __future__ import annotations
 import copy
 import difflib
 import json
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any
 
 import jsonschema
 
+from .domain import Domain, load_domain
 from .errors import TaskFileError, UnknownFloorPlanError, UserError
 from .resources import data_dir
-from .domain import Domain, load_domain
 from .robots import Catalogue
 from .scoring import STATES, Goal, parse_goals
 from .world.object_types import SLICE_RESULTS
@@ -96,7 +97,8 @@ def _scene_types(floor_plan: str) -> frozenset[str]:
     return frozenset(t.lower() for t in types)
 
 
-def check_task(data: Any, catalogue: Catalogue, where: str, domain: Domain | None = None) -> tuple[Task | None, list[str]]:
+def check_task(data: Any, catalogue: Catalogue, where: str,
+               domain: Domain | None = None) -> tuple[Task | None, list[str]]:
     """Check one decoded line (of ``domain``'s tasks, default household); return the task and the problems found."""
     problems = []
     site = domain is not None and not domain.is_ai2thor

@@ -37,8 +37,8 @@ def llama_server() -> Path:
 def _build(version: str, binary: Path) -> None:
     tools = Path(sys.executable).parent  # cmake and ninja, from the test extra
     with tempfile.TemporaryDirectory(dir=binary.parent) as work:
-        _run([sys.executable, "-m", "pip", "download", f"llama-cpp-python=={version}", "--no-binary", "llama-cpp-python",
-              "--no-deps", "--quiet", "-d", work], work)
+        _run([sys.executable, "-m", "pip", "download", f"llama-cpp-python=={version}", "--no-binary",
+              "llama-cpp-python", "--no-deps", "--quiet", "-d", work], work)
         (archive,) = Path(work).glob("llama_cpp_python-*.tar.gz")
         with tarfile.open(archive) as sdist:
             root = f"llama_cpp_python-{version}/vendor/llama.cpp/"

@@ -87,7 +87,8 @@ def test_seed_and_temperature_are_checked_before_any_work(tmp_path, command, arg
     (["--seeds", "1,1", "--temperature", "0.7"], ["--seeds must name distinct seeds"]),
     (["--seeds", "0"], ["--seeds must name distinct seeds between 0 and 4294967295, at least one"]),
     (["--seeds", "3"], ["--seeds needs --temperature above 0"]),
-    (["--category", "cooking"], ["--category must be one of elemental, simple, compound, complex, vague, not 'cooking'"]),
+    (["--category", "cooking"],
+     ["--category must be one of elemental, simple, compound, complex, vague, not 'cooking'"]),
 ])
 def test_methods_and_seeds_are_checked_before_any_work(tmp_path, args, parts):
     one_line_error(cli("benchmark", "run", "--out", "out", *args, cwd=tmp_path), *parts)

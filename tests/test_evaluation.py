@@ -52,10 +52,10 @@ def test_a_reference_plan_runs_at_speed_1_and_a_padded_one_slower(tmp_path):
     """The real Controller: the reference plan's ticks are the yardstick; the same plan with its
     sub-tasks run one after another (no parallelism) is slower."""
     from smartllm_local.benchmark import default_plans_dir, reference_ticks
+    from smartllm_local.domain import load_domain
     from smartllm_local.evaluation import execute_and_score
     from smartllm_local.plan_language import parse_plan
     from smartllm_local.planner.pipeline import PlanResult
-    from smartllm_local.domain import load_domain
     from smartllm_local.tasks import load_tasks
     from smartllm_local.world.controller import open_controller
 

@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
 
 import typer
 
 from ..bench import run_bench, summary
+from ..domain import load_domain
 from ..errors import UserError
 from ..files import check_output_file, check_output_folder, json_text, write_atomic
 from ..planner.backends import model_location
 from ..planner.models import EMBEDDED
-from ..domain import load_domain
 from ..tasks import load_tasks
 
 
@@ -24,10 +23,10 @@ def bench_command(
                                                    "prefix-reuse figures."),
     whole_benchmark: bool = typer.Option(True, "--benchmark/--no-benchmark", help=(
         "Also time the whole benchmark with the first model (minutes).")),
-    benchmark_out: Optional[Path] = typer.Option(None, "--benchmark-out", help=(
+    benchmark_out: Path | None = typer.Option(None, "--benchmark-out", help=(
         "Keep the whole benchmark's run folder here (a new folder, as `benchmark run --out` writes it), "
         "for `benchmark report`.")),
-    threads: Optional[int] = typer.Option(None, help="CPU threads (default: all cores)."),
+    threads: int | None = typer.Option(None, help="CPU threads (default: all cores)."),
     out: Path = typer.Option(Path("bench.json"), "--out", help="The JSON file to write."),
 ) -> None:
     """Measure, side by side: constrained and free decoding, prompt tokens and time to first token with

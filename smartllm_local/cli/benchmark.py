@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Optional
 
 import typer
 
-from ..files import check_output_file, write_atomic
 from ..domain import load_domain
+from ..files import check_output_file, write_atomic
 from ..tasks import CATEGORIES, check_category, load_tasks
 from .plans import DOMAIN_HELP
 
@@ -18,10 +17,10 @@ app = typer.Typer(help="The benchmark: list its tasks, check it, import SMART-LL
 
 @app.command("list")
 def list_tasks(
-    category: Optional[str] = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
-    tasks: Optional[Path] = typer.Option(None, help="A task file (default: the domain's benchmark)."),
+    category: str | None = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
+    tasks: Path | None = typer.Option(None, help="A task file (default: the domain's benchmark)."),
     as_json: bool = typer.Option(False, "--json", help="Print the tasks as JSON lines."),
-    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
+    domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Print the tasks: id, category, floor plan (or site), robots and instruction."""
     check_category(category)
@@ -41,13 +40,13 @@ def list_tasks(
 
 @app.command("check")
 def check(
-    tasks: Optional[Path] = typer.Option(None, help="A task file (default: the domain's benchmark)."),
-    plans: Optional[Path] = typer.Option(None, help="Reference plans folder (default: the domain's reference_plans)."),
-    thor_build: Optional[Path] = typer.Option(None, help="A Unity AI2-THOR executable (default: the stand-in)."),
-    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
+    tasks: Path | None = typer.Option(None, help="A task file (default: the domain's benchmark)."),
+    plans: Path | None = typer.Option(None, help="Reference plans folder (default: the domain's reference_plans)."),
+    thor_build: Path | None = typer.Option(None, help="A Unity AI2-THOR executable (default: the stand-in)."),
+    domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Validate the task files and run every reference plan; print a per-category table."""
-    from ..benchmark import check_reference_plans, category_table
+    from ..benchmark import category_table, check_reference_plans
 
     dom = load_domain(domain)
     loaded = load_tasks(tasks or dom.task_files(), domain=dom)
@@ -64,7 +63,7 @@ def check(
 def report(
     runs: list[Path] = typer.Argument(..., help="Run folders (the --out of `benchmark run`; a --seeds folder is one "
                                                 "row with its spread)."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Where to write report.md, the CSVs and the figures "
+    out: Path | None = typer.Option(None, "--out", help="Where to write report.md, the CSVs and the figures "
                                                            "(default: FIRST_RUN/report)."),
 ) -> None:
     """The paper's Tables I-III, refusals, efficiency, time and tokens per stage (Markdown and CSV) and
@@ -72,7 +71,7 @@ def report(
     from ..report import write_report
 
     written = write_report(runs, out if out is not None else runs[0] / "report")
-    typer.echo((written[0].read_text(encoding="utf-8")))
+    typer.echo(written[0].read_text(encoding="utf-8"))
     typer.echo(f"wrote {', '.join(str(p) for p in written)}")
 
 

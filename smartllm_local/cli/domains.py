@@ -6,7 +6,6 @@ import os
 import shutil
 import tempfile
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -28,7 +27,7 @@ def list_domains() -> None:
 
 @app.command("new")
 def new(folder: Path = typer.Argument(..., help="The folder to create (it must not exist yet)."),
-        source: Optional[str] = typer.Option(None, "--from", help=(
+        source: str | None = typer.Option(None, "--from", help=(
             "Copy a built-in domain instead of the starter site: household, for your own robots or skills in "
             "AI2-THOR; patrol."))) -> None:
     """Write a commented starting domain (domain.toml, prompt examples, a task and its reference plan) to edit

@@ -7,7 +7,6 @@ import math
 import sys
 from dataclasses import asdict, replace
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -15,7 +14,6 @@ from ..domain import Domain, load_domain
 from ..errors import UserError
 from ..evaluation import execute_and_score, run_benchmark
 from ..executor.dispatch import dispatch_plan, load_dispatch
-from ..results import summary_table, variability_table
 from ..files import check_output_folder, write_atomic
 from ..methods import METHODS, make_method
 from ..planner.backends import BACKENDS, LoopGuard, Sampling, check_server_options, load_backends, model_location
@@ -25,12 +23,19 @@ from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
 from ..planner.prefix_cache import open_store
 from ..planner.prompts import PromptOptions
 from ..provenance import run_manifest
+from ..results import summary_table, variability_table
 from ..robots import parse_robot_ids
 from ..run_store import RunStore
 from ..tasks import CATEGORIES, check_category, find_task, load_tasks
 from ..world.scenes import floor_plan_name
-from .plans import (CATALOGUE_HELP, DOMAIN_HELP, dispatch_report, dispatch_succeeded, refuse_household_options,
-                    run_record)
+from .plans import (
+    CATALOGUE_HELP,
+    DOMAIN_HELP,
+    dispatch_report,
+    dispatch_succeeded,
+    refuse_household_options,
+    run_record,
+)
 from .progress import RunProgress
 
 MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
@@ -42,7 +47,7 @@ MAX_SEED = 2**32 - 1  # llama.cpp takes an unsigned 32-bit seed
 class ModelOptions:
     """The options every planning command shares, turned into a Planner."""
 
-    def __init__(self, model: Optional[str], backend: str, n_ctx: int, threads: Optional[int], n_gpu_layers: int,
+    def __init__(self, model: str | None, backend: str, n_ctx: int, threads: int | None, n_gpu_layers: int,
                  seed: int, temperature: float, no_comments: bool, no_summary: bool, no_coalition: bool,
                  no_grammar: bool, free_teams: bool = False, chat_template: str = "auto",
                  free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None,
@@ -136,23 +141,23 @@ _TASKS = typer.Option(None, help="A task file (default: the project's benchmark)
 
 
 def plan_command(
-    instruction: Optional[str] = typer.Argument(None, help="What the robots should do (or use --task)."),
-    floor_plan: Optional[str] = typer.Option(None, help="Floor plan, e.g. 15 or FloorPlan15."),
-    robots: Optional[str] = typer.Option(None, help="The team as catalogue ids, e.g. 1,2,3."),
-    tasks: Optional[Path] = _TASKS,
-    task: Optional[str] = typer.Option(None, help="Plan this task of --tasks, with its floor plan and robots."),
-    out: Optional[Path] = typer.Option(None, help="Write prompts, grammars, raw outputs and timings here."),
+    instruction: str | None = typer.Argument(None, help="What the robots should do (or use --task)."),
+    floor_plan: str | None = typer.Option(None, help="Floor plan, e.g. 15 or FloorPlan15."),
+    robots: str | None = typer.Option(None, help="The team as catalogue ids, e.g. 1,2,3."),
+    tasks: Path | None = _TASKS,
+    task: str | None = typer.Option(None, help="Plan this task of --tasks, with its floor plan and robots."),
+    out: Path | None = typer.Option(None, help="Write prompts, grammars, raw outputs and timings here."),
     execute: bool = typer.Option(False, "--execute", help="Run the plan in AI2-THOR and print the metrics."),
-    dispatch: Optional[Path] = typer.Option(None, "--dispatch", metavar="LAB.toml", help=(
+    dispatch: Path | None = typer.Option(None, "--dispatch", metavar="LAB.toml", help=(
         "Run the plan on the lab's robots: each skill call goes to the function this dispatch file names "
         "for it (see smartllm-local dispatch); exit 1 if an action failed.")),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
-    catalogue: Optional[Path] = _CATALOGUE,
-    thor_build: Optional[Path] = _THOR_BUILD,
-    model: Optional[str] = _MODEL,
+    catalogue: Path | None = _CATALOGUE,
+    thor_build: Path | None = _THOR_BUILD,
+    model: str | None = _MODEL,
     backend: str = _BACKEND,
     n_ctx: int = _N_CTX,
-    threads: Optional[int] = _THREADS,
+    threads: int | None = _THREADS,
     n_gpu_layers: int = _GPU,
     seed: int = _SEED,
     temperature: float = _TEMPERATURE,
@@ -165,10 +170,10 @@ def plan_command(
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
     no_loop_guard: bool = _NO_LOOP_GUARD,
-    prefix_cache: Optional[str] = _PREFIX_CACHE,
-    endpoint: Optional[str] = _ENDPOINT,
-    server_timeout: Optional[float] = _SERVER_TIMEOUT,
-    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
+    prefix_cache: str | None = _PREFIX_CACHE,
+    endpoint: str | None = _ENDPOINT,
+    server_timeout: float | None = _SERVER_TIMEOUT,
+    domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
@@ -249,22 +254,22 @@ def benchmark_run(
         "Folder for run.json, per-task artifacts, results.jsonl and summary.txt. A run stopped at any "
         "point (Ctrl-C, a crash, kill -9) and started again with the same arguments resumes here.")),
     restart: bool = typer.Option(False, "--restart", help="Discard the run --out holds and start over."),
-    seeds: Optional[str] = typer.Option(None, "--seeds", help=(
+    seeds: str | None = typer.Option(None, "--seeds", help=(
         "N (seeds --seed … --seed+N-1) or a list (0,3,7): every task once per seed (with --temperature "
         "above 0), each run in DIR/seed-<s>/; summary.txt gives each category's mean ± standard deviation "
         "over the seeds (the paper's Table II).")),
     method: str = typer.Option("smartllm", help=(
         f"{', '.join(METHODS)}: SMART-LLM's stages; the model's decomposition with robots at random (seeded) "
         "or by a rule (a capable robot, else the smallest capable team); the reference plans (no model).")),
-    tasks: Optional[Path] = _TASKS,
-    category: Optional[str] = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
-    task: Optional[list[str]] = typer.Option(None, help="Only these task ids (repeatable)."),
-    catalogue: Optional[Path] = _CATALOGUE,
-    thor_build: Optional[Path] = _THOR_BUILD,
-    model: Optional[str] = _MODEL,
+    tasks: Path | None = _TASKS,
+    category: str | None = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
+    task: list[str] | None = typer.Option(None, help="Only these task ids (repeatable)."),
+    catalogue: Path | None = _CATALOGUE,
+    thor_build: Path | None = _THOR_BUILD,
+    model: str | None = _MODEL,
     backend: str = _BACKEND,
     n_ctx: int = _N_CTX,
-    threads: Optional[int] = _THREADS,
+    threads: int | None = _THREADS,
     n_gpu_layers: int = _GPU,
     seed: int = _SEED,
     temperature: float = _TEMPERATURE,
@@ -277,14 +282,14 @@ def benchmark_run(
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
     no_loop_guard: bool = _NO_LOOP_GUARD,
-    prefix_cache: Optional[str] = _PREFIX_CACHE,
-    endpoint: Optional[str] = _ENDPOINT,
+    prefix_cache: str | None = _PREFIX_CACHE,
+    endpoint: str | None = _ENDPOINT,
     workers: int = typer.Option(1, "--workers", help=(
         "--backend server: plan this many tasks at once, spread over the endpoints and their slots "
         "(llama-server -np N has N; vLLM batches them all). Through a server, plans can differ with it: see the "
         "README.")),
-    server_timeout: Optional[float] = _SERVER_TIMEOUT,
-    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
+    server_timeout: float | None = _SERVER_TIMEOUT,
+    domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
@@ -332,7 +337,7 @@ def benchmark_run(
         scored = sum(t.id in store.results() for _, store in runs for t in chosen)
         print(f"interrupted: {scored} of {len(chosen) * len(runs)} tasks scored; the same command resumes the run",
               file=sys.stderr)
-        raise typer.Exit(130)
+        raise typer.Exit(130) from None
     finally:
         for planner in planners:
             planner.backend.close()

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any
 
 import typer
 
-from ..errors import UserError
 from ..domain import Domain, load_domain
+from ..errors import UserError
 from ..executor import Execution, run_plan
 from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..files import check_output_file, read_json, write_json
@@ -28,10 +28,10 @@ THOR_BUILD_HELP = "A Unity AI2-THOR executable to run in (default: $SMARTLLM_THO
 def validate(
     plan: Path = typer.Argument(..., help="The plan file (.py)."),
     stage: str = typer.Option("allocated", help="decomposed (no robot arguments) or allocated."),
-    floor_plan: Optional[str] = typer.Option(None, help="Also check object names against this floor plan."),
-    robots: Optional[str] = typer.Option(None, help="Also check robots[i] against this team (catalogue ids, e.g. 1,2,3)."),
-    catalogue: Optional[Path] = typer.Option(None, help=CATALOGUE_HELP),
-    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
+    floor_plan: str | None = typer.Option(None, help="Also check object names against this floor plan."),
+    robots: str | None = typer.Option(None, help="Also check robots[i] against this team (catalogue ids, e.g. 1,2,3)."),
+    catalogue: Path | None = typer.Option(None, help=CATALOGUE_HELP),
+    domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Parse and validate a plan without running it."""
     if stage not in ("decomposed", "allocated"):
@@ -78,18 +78,18 @@ def check_transitions(trans: int | None, max_trans: int | None) -> None:
 
 def execute(
     plan: Path = typer.Argument(..., help="The allocated plan file (.py)."),
-    floor_plan: Optional[str] = typer.Option(None, help="Floor plan, e.g. 6 or FloorPlan6."),
-    robots: Optional[str] = typer.Option(None, help="The team as catalogue ids, e.g. 1,2,3; robots[i] is the i-th."),
-    goal: Optional[Path] = typer.Option(None, help='Goal conditions: a JSON list of {"name", "contains", "state"}.'),
-    trans: Optional[int] = typer.Option(None, help="Ground-truth transitions (for RU and SR)."),
-    max_trans: Optional[int] = typer.Option(None, help="Maximum transitions (for RU and SR)."),
-    tasks: Optional[Path] = typer.Option(None, help="A task file to take the floor plan, robots and goals from."),
-    task: Optional[str] = typer.Option(None, help="The task id in --tasks (default: the project's benchmark)."),
+    floor_plan: str | None = typer.Option(None, help="Floor plan, e.g. 6 or FloorPlan6."),
+    robots: str | None = typer.Option(None, help="The team as catalogue ids, e.g. 1,2,3; robots[i] is the i-th."),
+    goal: Path | None = typer.Option(None, help='Goal conditions: a JSON list of {"name", "contains", "state"}.'),
+    trans: int | None = typer.Option(None, help="Ground-truth transitions (for RU and SR)."),
+    max_trans: int | None = typer.Option(None, help="Maximum transitions (for RU and SR)."),
+    tasks: Path | None = typer.Option(None, help="A task file to take the floor plan, robots and goals from."),
+    task: str | None = typer.Option(None, help="The task id in --tasks (default: the project's benchmark)."),
     as_json: bool = typer.Option(False, "--json", help="Print the metrics as one JSON object."),
-    trace: Optional[Path] = typer.Option(None, help="Write every primitive action to this JSON file."),
-    catalogue: Optional[Path] = typer.Option(None, help=CATALOGUE_HELP),
-    thor_build: Optional[Path] = typer.Option(None, help=THOR_BUILD_HELP),
-    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
+    trace: Path | None = typer.Option(None, help="Write every primitive action to this JSON file."),
+    catalogue: Path | None = typer.Option(None, help=CATALOGUE_HELP),
+    thor_build: Path | None = typer.Option(None, help=THOR_BUILD_HELP),
+    domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Run a plan with a robot team (in AI2-THOR, or on a site domain's site) and print SR, TCR, GCR, RU and Exe."""
     given_transitions = trans is not None or max_trans is not None
@@ -135,19 +135,22 @@ def execute(
                f"succeeded in {execution.ticks} ticks, {execution.transitions} transition(s)")
     for entry in execution.trace:
         if not entry.success:
-            typer.echo(f"  tick {entry.tick}: {entry.skill}{tuple(entry.objects)} by {entry.robots} failed: {entry.error}")
+            typer.echo(f"  tick {entry.tick}: {entry.skill}{tuple(entry.objects)} by {entry.robots} "
+                       f"failed: {entry.error}")
     for description, ok in scores.conditions:
         typer.echo(f"  [{'x' if ok else ' '}] {description}")
-    typer.echo(f"SR {fmt(scores.SR)}  TCR {fmt(scores.TCR)}  GCR {fmt(scores.GCR)}  RU {fmt(scores.RU)}  Exe {fmt(scores.Exe)}")
+    typer.echo(f"SR {fmt(scores.SR)}  TCR {fmt(scores.TCR)}  GCR {fmt(scores.GCR)}  "
+               f"RU {fmt(scores.RU)}  Exe {fmt(scores.Exe)}")
 
 
 def dispatch(
     plan: Path = typer.Argument(..., help="The allocated plan file (.py)."),
-    functions: Path = typer.Argument(..., help="The dispatch file (TOML): the module:function carrying out each skill."),
+    functions: Path = typer.Argument(..., help="The dispatch file (TOML): the module:function carrying out "
+                                               "each skill."),
     robots: str = typer.Option(..., help="The team as catalogue ids, e.g. 1,2,3; robots[i] is the i-th."),
-    trace: Optional[Path] = typer.Option(None, help="Write every action to this JSON file."),
-    catalogue: Optional[Path] = typer.Option(None, help=CATALOGUE_HELP),
-    domain: Optional[str] = typer.Option(None, help=DOMAIN_HELP),
+    trace: Path | None = typer.Option(None, help="Write every action to this JSON file."),
+    catalogue: Path | None = typer.Option(None, help=CATALOGUE_HELP),
+    domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Run a plan on real robots: each skill call goes to the lab's own function for that skill.
 

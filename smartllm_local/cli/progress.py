@@ -21,7 +21,7 @@ class RunProgress:
         self.bar: Progress | None = None
         self.task: Any = None
 
-    def __enter__(self) -> "RunProgress":
+    def __enter__(self) -> RunProgress:
         if self.stream.isatty():
             self.bar = Progress(
                 TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),

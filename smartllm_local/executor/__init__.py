@@ -7,14 +7,15 @@ simulated site. The scorer reads the :class:`Execution` either returns.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
+from ..domain import Domain
 from ..plan_language import Plan
 from ..robots import Robot
 from ..skills import DEFAULT_SKILL_SET, SkillSet
 from ..world.controller import open_controller
 from ..world.scenes import floor_plan_name
-from ..domain import Domain
 from .scheduler import DEFAULT_MAX_TICKS, Execution, TraceEntry, check_team, execute, run
 from .site import SiteWorld
 

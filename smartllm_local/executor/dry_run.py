@@ -21,8 +21,9 @@ from __future__ import annotations
 
 import math
 import pickle
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Any
 
 from ai2thor.server import Event, MetadataWrapper, MultiAgentEvent
 

@@ -14,7 +14,8 @@ lifted before scoring so that the scorer reads the whole scene.
 
 from __future__ import annotations
 
-from typing import Any, Collection, Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
+from typing import Any
 
 from ..world.object_types import base_type
 from ..world.rules import linked

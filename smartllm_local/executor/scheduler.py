@@ -20,12 +20,23 @@ groups.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Iterator, Protocol, Sequence
+from typing import Any, Protocol
 
 from ..errors import UserError
 from ..plan_language.ir import (
-    Call, Function, Join, NewThread, Plan, RobotIndexError, SkillCall, Sleep, Start, bind, resolve_robots,
+    Call,
+    Function,
+    Join,
+    NewThread,
+    Plan,
+    RobotIndexError,
+    SkillCall,
+    Sleep,
+    Start,
+    bind,
+    resolve_robots,
 )
 from ..robots import Robot
 from ..skills import DEFAULT_SKILL_SET, Skill, SkillSet

@@ -18,7 +18,8 @@ A call that fails changes nothing, and says why.
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 from ..domain import ANY_KIND, Domain, Place, pooled
 from ..robots import Robot
@@ -118,7 +119,8 @@ class SiteDryRun:
 
     def restore(self, saved: tuple) -> None:
         positions, covered, photographed = saved
-        self.world.positions, self.world.covered, self.world.photographed = list(positions), set(covered), set(photographed)
+        self.world.positions, self.world.covered, self.world.photographed = (
+            list(positions), set(covered), set(photographed))
 
 
 def why_not(domain: Domain, effect: str, skill: str, place: Place | None, robots: Sequence[Robot], name: str) -> str:

@@ -23,8 +23,9 @@ here:
 from __future__ import annotations
 
 import math
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
-from typing import Any, Collection, Sequence
+from typing import Any
 
 from ..robots import Robot
 from ..skills import Skill, SkillSet, has_affordance
@@ -177,7 +178,8 @@ class TeamWorld:
 
     def _shut_away(self) -> set[str]:
         closed = {o["objectId"] for o in self.objects
-                  if o.get("openable") and o.get("receptacle") and not o.get("isOpen") and o["objectType"] not in OPEN_TOPPED}
+                  if o.get("openable") and o.get("receptacle") and not o.get("isOpen")
+                  and o["objectType"] not in OPEN_TOPPED}
         return {o["objectId"] for o in self.objects if set(o.get("parentReceptacles") or ()) & closed}
 
     def _carried_mass(self, obj: dict[str, Any]) -> float:
@@ -221,7 +223,8 @@ class TeamWorld:
             others = {self.position(i) for i in range(len(self.event.events)) if i != member}
             cell = next((c for c in ranked if c not in others and c not in chosen), None)
             if cell is None:
-                return Outcome(False, f"no free place near {target['objectId']}", target["objectId"], "Teleport", member)
+                return Outcome(False, f"no free place near {target['objectId']}", target["objectId"], "Teleport",
+                               member)
             chosen.add(cell)
             yaw = facing_yaw(cell[0], cell[1], target["position"]["x"], target["position"]["z"])
             view = self._step(member, action="Teleport", position={"x": cell[0], "y": self.cell_y, "z": cell[1]},

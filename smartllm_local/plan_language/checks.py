@@ -5,8 +5,8 @@ depth, the size of the plan once expanded, robot indices, object names.
 from __future__ import annotations
 
 import ast
+from collections.abc import Collection, Iterable, Iterator
 from dataclasses import dataclass, field
-from typing import Collection, Iterable, Iterator
 
 from ..skills import SkillSet
 from ..world.object_types import SLICE_RESULTS
@@ -108,7 +108,8 @@ def at(step: object) -> ast.AST:
     return node
 
 
-def _check_call(ctx: Context, functions: dict[str, Function], name: str, args: tuple[RobotRef, ...], step: object) -> None:
+def _check_call(ctx: Context, functions: dict[str, Function], name: str, args: tuple[RobotRef, ...],
+                step: object) -> None:
     fn = functions.get(name)
     if fn is None:
         ctx.fail(at(step), f"{name} is not defined in this plan")

@@ -8,8 +8,9 @@ resolved against a team by :func:`resolve_robots` when a sub-task runs.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Literal, Mapping, Union
+from typing import Literal
 
 Form = Literal["decomposed", "allocated"]
 
@@ -48,10 +49,10 @@ class WholeTeam:
 class RobotGroup:
     """``[robots[0], robot_list[1]]``: a list of single robots, acting together."""
 
-    members: tuple[Union[TeamRobot, ParamRobot], ...]
+    members: tuple[TeamRobot | ParamRobot, ...]
 
 
-RobotRef = Union[TeamRobot, ParamRobot, ParamList, WholeTeam, RobotGroup]
+RobotRef = TeamRobot | ParamRobot | ParamList | WholeTeam | RobotGroup
 
 
 @dataclass(frozen=True)
@@ -109,8 +110,8 @@ class Join:
     col: int
 
 
-Step = Union[SkillCall, Sleep, Call]
-MainStep = Union[NewThread, Start, Join, Call, Sleep]
+Step = SkillCall | Sleep | Call
+MainStep = NewThread | Start | Join | Call | Sleep
 
 
 @dataclass(frozen=True)
@@ -191,7 +192,8 @@ def resolve_robots(ref: RobotRef, env: Mapping[str, tuple[int, ...]], team_size:
     if isinstance(ref, TeamRobot):
         if team_size is not None and ref.index >= team_size:
             raise RobotIndexError(
-                f"robots[{ref.index}] does not exist: the team has {team_size} robot(s), robots[0]..robots[{team_size - 1}]"
+                f"robots[{ref.index}] does not exist: the team has {team_size} robot(s), "
+                f"robots[0]..robots[{team_size - 1}]"
             )
         return (ref.index,)
     if isinstance(ref, ParamRobot):

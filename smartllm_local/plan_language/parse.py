@@ -25,16 +25,24 @@ import builtins
 import difflib
 import math
 import re
-from typing import Collection
+from collections.abc import Collection
 
 from ..errors import PlanError
 from ..skills import DEFAULT_SKILL_SET, SkillSet
 from .checks import (  # noqa: F401  (the limits are part of this module's interface)
     MAX_CALL_DEPTH,
     MAX_EXPANDED_STEPS,
+)
+from .checks import (
     Context as _Context,
+)
+from .checks import (
     check_objects as _check_objects,
+)
+from .checks import (
     check_robots as _check_robots,
+)
+from .checks import (
     check_structure as _check_structure,
 )
 from .ir import (
@@ -204,7 +212,8 @@ def _import(ctx: _Context, node: ast.Import | ast.ImportFrom) -> None:
             if alias.name not in _ALLOWED_MODULES | {"skills"}:
                 ctx.fail(node, f"import {alias.name} is not allowed: plans may import threading, time and skills only")
             elif alias.asname:
-                ctx.fail(node, f"import {alias.name} as {alias.asname} is not allowed: import modules under their own names")
+                ctx.fail(node, f"import {alias.name} as {alias.asname} is not allowed: "
+                               "import modules under their own names")
         return
     if node.module == "skills":
         for alias in node.names:
@@ -215,7 +224,8 @@ def _import(ctx: _Context, node: ast.Import | ast.ImportFrom) -> None:
     elif node.module == "time" and [a.name for a in node.names] == ["sleep"] and not node.names[0].asname:
         ctx.sleep_names.add("sleep")
     else:
-        ctx.fail(node, f"from {node.module} import ... is not allowed: plans may import threading, time and skills only")
+        ctx.fail(node, f"from {node.module} import ... is not allowed: "
+                       "plans may import threading, time and skills only")
 
 
 def _is_main_guard(node: ast.stmt) -> bool:
@@ -379,7 +389,8 @@ def _skill_call(ctx: _Context, call: ast.Call, params: tuple[str, ...]) -> Skill
         ctx.fail(args[0], f"{skill.name}: a decomposed plan names objects only; robots are allocated later")
         return None
     if not skill.required <= len(args) <= skill.max_arguments:
-        expected = str(skill.required) if skill.required == skill.max_arguments else f"{skill.required}-{skill.max_arguments}"
+        expected = (str(skill.required) if skill.required == skill.max_arguments
+                    else f"{skill.required}-{skill.max_arguments}")
         ctx.fail(call, f"{skill.name} takes {expected} object name(s), got {len(args)}")
         return None
     objects: list[str] = []
@@ -500,7 +511,8 @@ def _main_call(ctx: _Context, call: ast.Call) -> MainStep | None:
     name = _dotted(call.func)
     if name in ctx.sleep_names:
         return _sleep(ctx, call)
-    if isinstance(call.func, ast.Attribute) and isinstance(call.func.value, ast.Name) and call.func.attr in ("start", "join"):
+    if (isinstance(call.func, ast.Attribute) and isinstance(call.func.value, ast.Name)
+            and call.func.attr in ("start", "join")):
         if call.args or call.keywords:
             ctx.fail(call, f"{call.func.value.id}.{call.func.attr}() takes no arguments")
             return None

@@ -14,8 +14,8 @@ plan is written as text in the plan language and parsed like any other.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from itertools import combinations
-from typing import Callable, Sequence
 
 import numpy as np
 

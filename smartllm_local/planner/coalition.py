@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import re
 import string
-from typing import Sequence
+from collections.abc import Sequence
 
 from ..robots import Robot
 from .constraints import REASON_CHARS, Choose, Constraint, Forced, longest, refusal_line, robot_list, text_run

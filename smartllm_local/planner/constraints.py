@@ -36,9 +36,9 @@ from __future__ import annotations
 
 import string
 from abc import ABC, abstractmethod
-from itertools import combinations, permutations
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
+from itertools import combinations, permutations
 
 from .grammar import Grammar, Node, alt, chars, opt, rep, seq
 

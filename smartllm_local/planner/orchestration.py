@@ -8,14 +8,16 @@ world check. With a world check, functions are launched in the order they were c
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from .constraints import Choose, robot_list
 from .feasibility import feasible_lists, shortest_list
 from .grammar import Node, Ref, alt, seq
 
 if TYPE_CHECKING:
-    from .plan_constraint import PlanConstraint as _Base, WrittenFunction
+    from .plan_constraint import PlanConstraint as _Base
+    from .plan_constraint import WrittenFunction
 else:
     _Base = object
 

@@ -12,9 +12,9 @@ from __future__ import annotations
 import hashlib
 import json
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -29,10 +29,8 @@ from .chat import chat_format, prompt_tokens
 from .coalition import LINE as COALITION_LINE
 from .coalition import CoalitionConstraint
 from .constraints import MAX_SUBTASKS, REFUSAL_PREFIX, Constraint
-from .plan_constraint import PlanConstraint
-from .restated import RestatedAllocation, restated_bodies
-from .world_check import WorldCheck
 from .feasibility import function_needs
+from .plan_constraint import PlanConstraint
 from .prompts import (
     ALLOCATION_GLUE,
     Example,
@@ -44,8 +42,10 @@ from .prompts import (
     examples_for,
     load_examples,
 )
+from .restated import RestatedAllocation, restated_bodies
 from .scene_context import SceneObjects, scene_objects, site_objects
 from .stages import Fitted, StageRecord, check_output, fit_prompt, run_stage
+from .world_check import WorldCheck
 
 DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 896, "allocation": 1280}
 #: Room for a task's own part of the coalition prompt (its plan, team and objects: 325-630 tokens on average, measured).
@@ -223,7 +223,8 @@ class Planner:
         names = [f.name for f in decomposed.functions]
         constraint: Constraint | None = None
         if self.config.grammar and self.config.restate:
-            world = WorldCheck(scene.floor_plan, skills, len(team), site=scene.site) if self.config.world_check else None
+            world = (WorldCheck(scene.floor_plan, skills, len(team), site=scene.site)
+                     if self.config.world_check else None)
             constraint = RestatedAllocation(scene, skills, team=len(team) if self.config.free_teams else team,
                                             function_names=names, bodies=restated_bodies(decomposition, names),
                                             world=world)
@@ -251,7 +252,8 @@ class Planner:
         context (a Llama-2's 4,096 tokens) gets the paper's two prompts, which keep more examples."""
         if self._shared is None:  # the examples are the same for every task a planner plans
             examples = examples_for("coalition", self.examples, self.config.prompts)
-            _, tokens, prefixes = prompt_tokens(self.backend, self._coalition_prompt("", [], scene, examples), self.chat)
+            _, tokens, prefixes = prompt_tokens(self.backend, self._coalition_prompt("", [], scene, examples),
+                                                self.chat)
             need = (prefixes or (len(tokens),))[0] + self.config.budgets["coalition"] + \
                 self.config.budgets["allocation"] + OWN_PART
             self._shared = need <= self.backend.n_ctx
@@ -265,7 +267,8 @@ class Planner:
         """The coalition's context (its prompt with the examples it kept, and the tokens it wrote, or its output
         tokenized where they were not kept: free text), then the line that opens the allocation. Only
         where they were kept does the backend go on from its cache (``continues``)."""
-        kept = [e for e in examples_for("coalition", self.examples, self.config.prompts) if e.name in coalition.examples]
+        kept = [e for e in examples_for("coalition", self.examples, self.config.prompts)
+                if e.name in coalition.examples]
         dropped = [e for e in self.examples if e.name in coalition.dropped]
         text, tokens, prefixes = prompt_tokens(
             self.backend, self._coalition_prompt(result.stages[0].output, team, scene, kept), self.chat)
@@ -274,7 +277,8 @@ class Planner:
         context = tokens + written + self.backend.tokenize_continuation(ALLOCATION_GLUE)
         if len(context) + budget >= self.backend.n_ctx:
             raise UserError(f"the coalition's context ({len(context)} tokens) and the allocation's output budget "
-                            f"({budget} tokens) exceed the model's context of {self.backend.n_ctx} tokens; raise --n-ctx")
+                            f"({budget} tokens) exceed the model's context of {self.backend.n_ctx} tokens; "
+                            "raise --n-ctx")
         return Fitted(text + coalition.output + ALLOCATION_GLUE, context, prefixes, kept, dropped, continues=live)
 
     def _finish_plan_stage(self, record: StageRecord, result: PlanResult, *, form: str, scene: SceneObjects,

@@ -32,15 +32,33 @@ decomposition's.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Iterator, Sequence
 
 from ..robots import Robot
 from ..skills import Skill, SkillSet
 from .constraints import (
-    COMMENT_LEN, INDENT, MAX_STEPS, STEP_COMMENT_LEN, MAX_SUBTASKS, NAME_FIRST, NAME_LEN, NAME_REST, ORDER_CHARS, ORDER_LEN,
-    SUMMARY_CHARS, SUMMARY_LEN, Choose, Constraint, Forced, comment_text, longest, ordered_subset, refusal_line,
-    refusal_text_len, text_run,
+    COMMENT_LEN,
+    INDENT,
+    MAX_STEPS,
+    MAX_SUBTASKS,
+    NAME_FIRST,
+    NAME_LEN,
+    NAME_REST,
+    ORDER_CHARS,
+    ORDER_LEN,
+    STEP_COMMENT_LEN,
+    SUMMARY_CHARS,
+    SUMMARY_LEN,
+    Choose,
+    Constraint,
+    Forced,
+    comment_text,
+    longest,
+    ordered_subset,
+    refusal_line,
+    refusal_text_len,
+    text_run,
 )
 from .feasibility import Step, call_demand
 from .grammar import Node, Ref, alt, chars, rep, seq

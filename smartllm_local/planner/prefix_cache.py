@@ -22,8 +22,9 @@ import json
 import os
 import tempfile
 from collections import OrderedDict
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 from ..errors import ModelError
 from ..files import check_output_folder
@@ -41,7 +42,7 @@ def default_store_folder() -> Path:
     return cache_root() / "prefix-states"
 
 
-def open_store(setting: str | Path | None) -> "PrefixStore | None":
+def open_store(setting: str | Path | None) -> PrefixStore | None:
     """The store ``--prefix-cache`` names: a folder, ``off`` (none), or None for the user's cache."""
     if setting is not None and str(setting) == "off":
         return None

@@ -22,12 +22,13 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
-from ..errors import UserError
 from ..domain import load_domain
+from ..errors import UserError
 from ..robots import Robot
 from ..skills import SkillSet
 from .coalition import LINE as COALITION_LINE

@@ -18,8 +18,8 @@ reach, team lifting).
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import replace
-from typing import Sequence
 
 from ..robots import Robot
 from ..skills import Skill, SkillSet

@@ -8,15 +8,16 @@ sliceable type, since a plan may slice first and then handle the pieces.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 from ..domain import ARGUMENT_TYPES, Domain
 from ..skills import has_affordance
 from ..world.object_types import SLICE_RESULTS, TYPE_PROPERTIES
 from ..world.scenes import floor_plan_name, load_scene
 
-AFFORDANCE_NAMES = ("pickupable", "receptacle", "openable", "toggleable", "sliceable", "breakable", "dirtyable", "movable")
+AFFORDANCE_NAMES = ("pickupable", "receptacle", "openable", "toggleable", "sliceable", "breakable", "dirtyable",
+                    "movable")
 
 
 @dataclass(frozen=True)

@@ -11,8 +11,9 @@ prefix_cache.py).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -68,7 +69,7 @@ class StageRecord:
         return {f.name: getattr(self, f.name) for f in fields(self) if f.name not in _TRANSIENT}
 
     @classmethod
-    def restored(cls, data: Mapping[str, Any]) -> "StageRecord":
+    def restored(cls, data: Mapping[str, Any]) -> StageRecord:
         """A saved record; one saved before a field was added gets its default."""
         known = {f.name for f in fields(cls)} - _TRANSIENT
         if not isinstance(data, Mapping) or not set(data) <= known or "stage" not in data:

@@ -14,7 +14,7 @@ is tried on its site simulator the same way (:class:`~smartllm_local.executor.si
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 from ..domain import Domain
 from ..executor.dry_run import DryRun, notional_robot

@@ -9,8 +9,8 @@ table, and PNG figures.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 from ..errors import UserError
 from ..files import check_output_folder, write_atomic

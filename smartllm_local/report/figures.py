@@ -3,8 +3,8 @@ standard deviation over seeds as error bars, and the time each stage takes."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import matplotlib
 

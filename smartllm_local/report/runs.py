@@ -7,9 +7,10 @@ A folder is one run (``benchmark run --out DIR``) or one run per seed (``--seeds
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from ..errors import UserError
 from ..results import Line, read_results
@@ -77,7 +78,7 @@ class Run:
     def task_ids(self) -> frozenset[str]:
         return frozenset(line["id"] for line in self.seeds[0]) if self.seeds else frozenset()
 
-    def restricted(self, ids: frozenset[str]) -> "Run":
+    def restricted(self, ids: frozenset[str]) -> Run:
         """The same run with only the lines of tasks ``ids``."""
         return replace(self, seeds=[[line for line in lines if line["id"] in ids] for lines in self.seeds])
 

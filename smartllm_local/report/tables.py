@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import csv
 import io
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
-from ..results import (PAPER_METRICS, REFUSERS, STAGE_NAMES, category_groups, mean_sd, metric_mean, refusals,
-                       stage_costs)
+from ..results import PAPER_METRICS, REFUSERS, STAGE_NAMES, category_groups, mean_sd, metric_mean, refusals, stage_costs
 from ..tasks import CATEGORIES
 from .runs import Run
 

@@ -11,8 +11,9 @@ axis-aligned bounding box, which is what decides whether it is in reach.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import Any
 
 AGENT_HEIGHT = 0.9009995460510254  # AI2-THOR's default agent position y above the floor
 _AGENT_RADIUS = 0.15
@@ -31,7 +32,7 @@ class Box:
     y1: float
 
     @classmethod
-    def of(cls, obj: dict[str, Any]) -> "Box":
+    def of(cls, obj: dict[str, Any]) -> Box:
         aabb = obj.get("axisAlignedBoundingBox") or {}
         center = aabb.get("center") or obj["position"]
         size = aabb.get("size") or {"x": 0.0, "y": 0.0, "z": 0.0}

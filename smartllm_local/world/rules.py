@@ -21,7 +21,8 @@ decay back to room temperature over time; the symbolic world has no clock).
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any
 
 from .object_types import COLD_SOURCES, HEAT_SOURCES, SLICE_RESULTS, TYPE_PROPERTIES, WATER_BASINS
 

@@ -266,7 +266,8 @@ def _read_dump(src: Path) -> dict[str, Any]:
     except OSError as exc:
         raise SceneDataError(f"cannot read the AI2-THOR scene data at {src} ({exc}); {_INSTALL_HINT}") from exc
     except ValueError as exc:
-        raise SceneDataError(f"{problem} ({exc}); reinstall it with: pip install --force-reinstall '{SCENE_DATA_REQUIREMENT}'") from exc
+        raise SceneDataError(f"{problem} ({exc}); reinstall it with: "
+                             f"pip install --force-reinstall '{SCENE_DATA_REQUIREMENT}'") from exc
     for key, _, _ in ROOM_BLOCKS:
         scenes = dump.get(key) if isinstance(dump, dict) else None
         if not isinstance(scenes, list) or len(scenes) != SCENES_PER_BLOCK or not all(

@@ -14,8 +14,9 @@ from __future__ import annotations
 import copy
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from . import rules
 from .navigation import Box, ReachableGrid
@@ -137,9 +138,11 @@ class Simulator:
         name = action.get("action")
         handler = self._handlers.get(name) if isinstance(name, str) else None
         if handler is None:
-            return ActionResult(False, f"Invalid action: {name!r} is not an action this AI2-THOR stand-in knows", "InvalidAction")
+            return ActionResult(False, f"Invalid action: {name!r} is not an action this AI2-THOR stand-in knows",
+                                "InvalidAction")
         if not 0 <= agent_id < len(self.agents):
-            return ActionResult(False, f"Invalid agentId {agent_id}: the scene has {len(self.agents)} agent(s)", "InvalidArgument")
+            return ActionResult(False, f"Invalid agentId {agent_id}: the scene has {len(self.agents)} agent(s)",
+                                "InvalidArgument")
         try:
             result = handler(agent_id, action)
         except ActionFailed as failure:
@@ -248,8 +251,8 @@ class Simulator:
             pos = {"x": agent.x, "y": agent.y, "z": agent.z}
         try:
             x, z = float(pos["x"]), float(pos["z"])
-        except (KeyError, TypeError, ValueError):
-            raise ActionFailed(f"Teleport position must have numeric x and z, got {pos!r}", "InvalidArgument")
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ActionFailed(f"Teleport position must have numeric x and z, got {pos!r}", "InvalidArgument") from exc
         cell = self.grid.snap(x, z)
         if cell is None and not action.get("forceAction"):
             raise ActionFailed(f"Teleport failed: ({x:.2f}, {z:.2f}) is not a reachable position in {self.scene_name}")
@@ -570,6 +573,7 @@ class Simulator:
         shift = sign * min(0.05 * float(action.get("moveMagnitude") or 5.0), 0.5)
         yaw = math.radians(agent.yaw)
         pos = obj["position"]
-        self._move_object(obj, {"x": pos["x"] + shift * math.sin(yaw), "y": pos["y"], "z": pos["z"] + shift * math.cos(yaw)})
+        self._move_object(obj, {"x": pos["x"] + shift * math.sin(yaw), "y": pos["y"],
+                                "z": pos["z"] + shift * math.cos(yaw)})
         return ActionResult()
 

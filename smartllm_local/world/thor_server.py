@@ -20,10 +20,10 @@ import sys
 import traceback
 from typing import Any, BinaryIO
 
+from ..errors import UnknownFloorPlanError
 from .metadata import MetadataEncoder
 from .scenes import all_floor_plans, floor_plan_name
 from .simulator import DEFAULT_VISIBILITY_DISTANCE, ActionResult, Simulator
-from ..errors import UnknownFloorPlanError
 
 METADATA = 1
 ACTION = 2
@@ -73,9 +73,11 @@ class ThorStandIn:
             )
         active = agent_id if valid_agent else 0
         self.encoder.last_results[active] = (str(name), result)
-        if self.sim is sim_before and valid_agent and self.sim.generation == generation and name not in _FULL_EVENT_ACTIONS:
+        if (self.sim is sim_before and valid_agent and self.sim.generation == generation
+                and name not in _FULL_EVENT_ACTIONS):
             moved = self._view(self.sim, active) != view
-            body = self.encoder.encode_patch(self.sim, agent_id=active, sequence_id=self.sequence_id, with_objects=moved)
+            body = self.encoder.encode_patch(self.sim, agent_id=active, sequence_id=self.sequence_id,
+                                             with_objects=moved)
             return METADATA_PATCH, body
         return METADATA, self.encoder.encode(self.sim, active_agent=active, sequence_id=self.sequence_id)
 
@@ -117,11 +119,13 @@ class ThorStandIn:
     def _initialize(self, action: dict[str, Any]) -> ActionResult:
         count = action.get("agentCount", 1)
         if not isinstance(count, int) or isinstance(count, bool) or not 1 <= count <= MAX_AGENTS:
-            return ActionResult(False, f"agentCount must be an integer from 1 to {MAX_AGENTS}, got {count!r}", "InvalidArgument")
+            return ActionResult(False, f"agentCount must be an integer from 1 to {MAX_AGENTS}, got {count!r}",
+                                "InvalidArgument")
         visibility = action.get("visibilityDistance", DEFAULT_VISIBILITY_DISTANCE)
         grid = action.get("gridSize", 0.25)
         if not isinstance(visibility, (int, float)) or visibility <= 0:
-            return ActionResult(False, f"visibilityDistance must be a positive number, got {visibility!r}", "InvalidArgument")
+            return ActionResult(False, f"visibilityDistance must be a positive number, got {visibility!r}",
+                                "InvalidArgument")
         if not isinstance(grid, (int, float)) or not 0.05 <= grid <= 1.0:
             return ActionResult(False, f"gridSize must be between 0.05 and 1.0, got {grid!r}", "InvalidArgument")
         self._build(agent_count=count, visibility=float(visibility), grid=float(grid))

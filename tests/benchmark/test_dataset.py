@@ -7,10 +7,10 @@ from __future__ import annotations
 
 from collections import Counter
 
+from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import read_plan
 from smartllm_local.plan_language.ir import Call, NewThread, ParamList, RobotGroup, SkillCall, Start, WholeTeam, bind
 from smartllm_local.scoring import condition_holds
-from smartllm_local.domain import load_domain
 from smartllm_local.world.scenes import load_scene, scene_info
 
 PLANS = load_domain().plans_dir()

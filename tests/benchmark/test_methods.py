@@ -7,12 +7,12 @@ import json
 
 import numpy as np
 
+from smartllm_local.domain import load_domain
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.baselines import allocate_by, random_chooser, rule_chooser
 from smartllm_local.planner.feasibility import function_needs
 from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.domain import load_domain
 
 CATALOGUE = load_domain().catalogue
 PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObject"]

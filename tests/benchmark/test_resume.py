@@ -15,12 +15,12 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.domain import load_domain
 from smartllm_local.errors import SmartLLMError
 from smartllm_local.evaluation import run_benchmark
 from smartllm_local.planner.pipeline import Planner, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord
-from smartllm_local.domain import load_domain
 from smartllm_local.run_store import RunStore
 from smartllm_local.tasks import find_task, load_tasks
 

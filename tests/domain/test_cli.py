@@ -97,7 +97,8 @@ def test_domain_new_writes_a_domain_that_checks_and_runs(tmp_path):
 def test_domain_check_reports_a_broken_domain_at_its_line(tmp_path):
     cli("domain", "new", "mine", cwd=tmp_path)
     toml = tmp_path / "mine" / "domain.toml"
-    toml.write_text(toml.read_text().replace('skills = ["GoToLocation", "ClickPicture", "Patrol"]\nvisibility_area = 300',
+    toml.write_text(toml.read_text().replace('skills = ["GoToLocation", "ClickPicture", "Patrol"]\n'
+                                             'visibility_area = 300',
                                              'skills = ["GoToLocation", "Fly"]\nvisibility_area = 300'))
     result = cli("domain", "check", "mine", cwd=tmp_path)
     line = next(k for k, text in enumerate(toml.read_text().splitlines(), 1) if text == 'name = "rover"')
@@ -178,9 +179,11 @@ def test_an_ai2thor_domain_of_your_own_runs_its_own_skill_names(tmp_path):
     assert made.returncode == 0, made.stderr
     assert (tmp_path / "lab" / "reference_plans" / "kitchen-01.py").is_file()
     toml = tmp_path / "lab" / "domain.toml"
-    text = toml.read_text().replace('world = "ai2thor"\n', 'world = "ai2thor"\n\n[skills.Grab]\naction = "PickupObject"\n'
+    text = toml.read_text().replace('world = "ai2thor"\n',
+                                    'world = "ai2thor"\n\n[skills.Grab]\naction = "PickupObject"\n'
                                     'arguments = ["pickupable"]\n', 1)
-    toml.write_text(text.replace('name = "robot1"\nskills = ["GoToObject", ', 'name = "robot1"\nskills = ["GoToObject", '
+    toml.write_text(text.replace('name = "robot1"\nskills = ["GoToObject", ',
+                                 'name = "robot1"\nskills = ["GoToObject", '
                                  '"Grab", ', 1))
     (tmp_path / "grab.py").write_text("GoToObject(robots[0], 'Apple')\nGrab(robots[0], 'Apple')\n")
     (tmp_path / "apple.json").write_text('[{"name": "Apple", "state": "PICKED"}]')

@@ -40,7 +40,8 @@ def test_a_ground_robot_cannot_reach_the_roof_and_stays_where_it_was():
 def test_a_picture_needs_the_object_within_camera_range():
     site = world(4)
     far = act(site, "ClickPicture", "MainGate", 0)
-    assert not far.success and far.error == "MainGate is 80 m from rover1, beyond its camera_range of 10 m: go to it first"
+    assert not far.success and far.error == ("MainGate is 80 m from rover1, beyond its camera_range of 10 m: "
+                                             "go to it first")
     assert not state(site, "MainGate")["isPhotographed"]
     assert act(site, "GoToLocation", "MainGate", 0).success and act(site, "ClickPicture", "MainGate", 0).success
     assert state(site, "MainGate")["isPhotographed"]
@@ -65,7 +66,8 @@ def test_patrol_covers_a_region_only_with_enough_pooled_visibility():
     site = world(1, 2, 4)
     alone = act(site, "Patrol", "SolarFarm", 0)
     assert not alone.success
-    assert alone.error == "SolarFarm has an area of 2800; drone1 pool visibility_area 1500: patrol it with a larger team"
+    assert alone.error == ("SolarFarm has an area of 2800; drone1 pool visibility_area 1500: "
+                           "patrol it with a larger team")
     assert not state(site, "SolarFarm")["isCovered"]
     assert act(site, "Patrol", "SolarFarm", 0, 1).success  # 1500 + 1500
     assert state(site, "SolarFarm")["isCovered"]

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import textwrap
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
+from smartllm_local.domain import load_domain
 from smartllm_local.executor import Execution, run_plan
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.domain import load_domain
 from smartllm_local.scoring import Scores, parse_goals, score_execution
 
 CATALOGUE = load_domain().catalogue

@@ -64,7 +64,8 @@ def test_validate_a_refusal_and_a_decomposed_plan(files):
 
 
 def test_validate_reports_every_problem_as_file_line_col_reason(files):
-    (files / "bad.py").write_text("def f():\n    GoToObject(robots[3], 'Banana')\n    open('x')\nf()\n", encoding="utf-8")
+    (files / "bad.py").write_text("def f():\n    GoToObject(robots[3], 'Banana')\n    open('x')\nf()\n",
+                                  encoding="utf-8")
     result = cli("validate", "bad.py", cwd=files)
     assert result.returncode == 2 and "Traceback" not in result.stderr
     lines = result.stderr.splitlines()
@@ -137,7 +138,8 @@ def test_execute_writes_the_trace(files):
                  "--trace", "out/trace.json", "--json", cwd=files)
     assert result.returncode == 0, result.stderr
     trace = json.loads((files / "out" / "trace.json").read_text(encoding="utf-8"))
-    assert (trace["floor_plan"], trace["robots"], trace["transitions"], trace["ticks"]) == ("FloorPlan6", [1, 2, 3], 0, 8)
+    assert (trace["floor_plan"], trace["robots"], trace["transitions"],
+            trace["ticks"]) == ("FloorPlan6", [1, 2, 3], 0, 8)
     actions = trace["actions"]
     assert len(actions) == 8
     for entry in actions:

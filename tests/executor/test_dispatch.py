@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 from smartllm_local.executor.dispatch import dispatch_plan, load_dispatch
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.domain import load_domain
 
 from . import lab_robots
 from .test_cli import SCRIPT

@@ -179,7 +179,8 @@ t2.start()
 
 
 def test_a_subtask_that_only_sleeps_counts_as_a_group(c):
-    ex = run("def rest():\n    time.sleep(2)\ndef go(r):\n    GoToObject(r[0], 'Apple')\nrest()\ngo([robots[0]])\n", [1], c)
+    ex = run("def rest():\n    time.sleep(2)\ndef go(r):\n    GoToObject(r[0], 'Apple')\n"
+             "rest()\ngo([robots[0]])\n", [1], c)
     assert ex.starts == [("rest", 0), ("go", 2)]
     assert ex.transitions == 1 and len(ex.trace) == 1
 

@@ -136,8 +136,8 @@ def test_switch_off_and_on(c):
     assert one(ex, "LightSwitch")["isToggled"] is False
     assert [e.action for e in ex.trace] == ["Teleport", "ToggleObjectOff"]
     assert scores(ex, [{"name": "LightSwitch", "state": "OFF"}]).GCR == 1.0
-    ex = run("GoToObject(robots[0], 'LightSwitch')\nSwitchOff(robots[0], 'LightSwitch')\nSwitchOn(robots[0], 'LightSwitch')\n"
-             "SwitchOn(robots[0], 'LightSwitch')\n", [1], c)
+    ex = run("GoToObject(robots[0], 'LightSwitch')\nSwitchOff(robots[0], 'LightSwitch')\n"
+             "SwitchOn(robots[0], 'LightSwitch')\nSwitchOn(robots[0], 'LightSwitch')\n", [1], c)
     assert one(ex, "LightSwitch")["isToggled"] is True
     assert [e.success for e in ex.trace] == [True, True, True, False]
     s = scores(ex, [{"name": "LightSwitch", "state": "ON"}])
@@ -212,7 +212,8 @@ def test_push_and_pull(c):
     start = next(o for o in load_scene("FloorPlan6") if o["objectId"] == target)["position"]
     shift = math.hypot(moved["x"] - start["x"], moved["z"] - start["z"])
     assert shift == pytest.approx(0.25, abs=1e-6)
-    back = run("GoToObject(robots[0], 'Stool')\nPushObject(robots[0], 'Stool')\nPullObject(robots[0], 'Stool')\n", [1], c)
+    back = run("GoToObject(robots[0], 'Stool')\nPushObject(robots[0], 'Stool')\n"
+               "PullObject(robots[0], 'Stool')\n", [1], c)
     final = next(o for o in back.final_objects if o["objectId"] == target)["position"]
     assert (final["x"], final["z"]) == pytest.approx((start["x"], start["z"]), abs=1e-6)
     assert [e.action for e in back.trace] == ["Teleport", "PushObject", "PullObject"]

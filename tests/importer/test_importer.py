@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 from smartllm_local.importer import MAX_LINE_CHARS, import_smartllm
-from smartllm_local.domain import load_domain
 from smartllm_local.tasks import check_task, load_tasks
 
 FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "smartllm_final_test"
@@ -44,7 +44,8 @@ EXPECTED_NOTES = [
     "FloorPlan303.json:3: FloorPlan303-3: repaired: state 'None' -> null; 'garbage' -> GarbageCan",
     "FloorPlan500.json: skipped: unknown floor plan '500': valid floor plans are FloorPlan1-30 (kitchens), "
     "FloorPlan201-230 (living rooms), FloorPlan301-330 (bedrooms), FloorPlan401-430 (bathrooms)",
-    "floorplan_kitchen.json: skipped: not named FloorPlan<N>.json or FloorPlan<N>pddl.json (the floor plan comes from the file name)",
+    "floorplan_kitchen.json: skipped: not named FloorPlan<N>.json or FloorPlan<N>pddl.json "
+    "(the floor plan comes from the file name)",
 ]
 
 EXPECTED_IDS = [

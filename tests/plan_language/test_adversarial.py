@@ -19,11 +19,11 @@ from pathlib import Path
 import pytest
 
 import smartllm_local
+from smartllm_local.domain import load_domain
 from smartllm_local.errors import PlanError
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan, read_plan
 from smartllm_local.plan_language.parse import MAX_CALL_DEPTH, MAX_NESTING, MAX_SOURCE_CHARS
-from smartllm_local.domain import load_domain
 
 # (id, plan with MARKER for the marker file's path, line, col, part of the reason)
 REJECTED = [
@@ -79,7 +79,8 @@ REJECTED = [
      1, 12, 'robot index must be a non-negative integer, as in robots[0]'),
     ('dunder_function_name', "def __getattr__():\n    GoToObject(robots[0], 'Cup')\n__getattr__()\n",
      1, 1, "a plan function cannot be named '__getattr__' (a skill, 'robots' or a dunder name)"),
-    ('dunder_function_thread', "def __init__():\n    GoToObject(robots[0], 'Cup')\nt = threading.Thread(target=__init__)\nt.start()\n",
+    ('dunder_function_thread', "def __init__():\n    GoToObject(robots[0], 'Cup')\n"
+     "t = threading.Thread(target=__init__)\nt.start()\n",
      1, 1, "a plan function cannot be named '__init__' (a skill, 'robots' or a dunder name)"),
     ('dunder_parameter', "def f(__builtins__):\n    GoToObject(__builtins__[0], 'Cup')\nf([robots[0]])\n",
      1, 1, "f: a parameter cannot be named '__builtins__'"),
@@ -107,7 +108,8 @@ REJECTED = [
      1, 1, 'recursion is not allowed: f -> f'),
     ('mutual_recursion', 'def f():\n    g()\ndef g():\n    f()\nf()\n',
      1, 1, 'recursion is not allowed: f -> g -> f'),
-    ('recursion_through_thread', "def f(r):\n    GoToObject(r[0], 'Cup')\n    g(r)\ndef g(r):\n    f(r)\nt = threading.Thread(target=g, args=([robots[0]],))\nt.start()\n",
+    ('recursion_through_thread', "def f(r):\n    GoToObject(r[0], 'Cup')\n    g(r)\ndef g(r):\n    f(r)\n"
+     "t = threading.Thread(target=g, args=([robots[0]],))\nt.start()\n",
      1, 1, 'recursion is not allowed: f -> g -> f'),
     ('sleep_huge_power', 'time.sleep(10**9)\n',
      1, 12, 'time.sleep needs a literal number of seconds'),
@@ -313,7 +315,8 @@ def test_a_two_megabyte_plan_is_refused_before_parsing(marker):
     assert len(source) > 2_000_000
     with pytest.raises(PlanError) as info:
         parse_plan(source)
-    assert info.value.problems == [(1, 1, f"the plan is {len(source)} characters long; the limit is {MAX_SOURCE_CHARS}")]
+    assert info.value.problems == [(1, 1, f"the plan is {len(source)} characters long; "
+                                          f"the limit is {MAX_SOURCE_CHARS}")]
     assert not marker.exists()
 
 
@@ -352,7 +355,8 @@ ACCEPTED_WITH_PAYLOAD_TEXT = [
     "# __import__('os').system('touch MARKER')\ndef f():\n    \"\"\"open('MARKER', 'w')\"\"\"\n"
     "    GoToObject(robots[0], 'Cup')  # exec(\"open('MARKER', 'w')\")\nf()\n",
     # names that are builtins' or modules' names elsewhere are just plan names here
-    "def system(os):\n    GoToObject(os[0], 'Cup')\nt = threading.Thread(target=system, args=([robots[0]],))\nt.start()\nt.join()\n",
+    "def system(os):\n    GoToObject(os[0], 'Cup')\n"
+    "t = threading.Thread(target=system, args=([robots[0]],))\nt.start()\nt.join()\n",
 ]
 
 

@@ -16,6 +16,7 @@ from smartllm_local.plan_language.ir import (
     ParamList,
     ParamRobot,
     RobotGroup,
+    RobotIndexError,
     SkillCall,
     Sleep,
     Start,
@@ -23,7 +24,6 @@ from smartllm_local.plan_language.ir import (
     WholeTeam,
     bind,
     resolve_robots,
-    RobotIndexError,
 )
 from smartllm_local.plan_language.parse import MAX_CALL_DEPTH, MAX_EXPANDED_STEPS, parse_plan
 from smartllm_local.skills import DEFAULT_SKILLS
@@ -177,7 +177,8 @@ def test_helper_functions_run_inline_and_top_level_calls_are_sequential_subtasks
 @pytest.mark.parametrize("call, objects", [
     ("ThrowObject(robots[0], 'Fork', 'GarbageCan')", ("Fork", "GarbageCan")),
     ("ThrowObject(robots[0], 'Fork')", ("Fork",)),
-    ("PutObject(robots[0], '  Fork ', 'Sink|+01.38|+00.81|-01.27|SinkBasin')", ("Fork", "Sink|+01.38|+00.81|-01.27|SinkBasin")),
+    ("PutObject(robots[0], '  Fork ', 'Sink|+01.38|+00.81|-01.27|SinkBasin')",
+     ("Fork", "Sink|+01.38|+00.81|-01.27|SinkBasin")),
 ])
 def test_object_arguments(call, objects):
     plan = plan_of(call + "\n")
@@ -474,7 +475,8 @@ def test_unknown_objects_with_scene_types():
             PutObject(robots[0], 'Apple', 'Fridge')
         f()
         """
-    assert only_problem(source, scene_types={"Apple", "Fridge"}) == (2, 5, "GoToObject: there is no 'Banana' in this scene")
+    assert only_problem(source, scene_types={"Apple", "Fridge"}) == (
+        2, 5, "GoToObject: there is no 'Banana' in this scene")
     parse_plan(textwrap.dedent(source).replace("Banana", "fridge"), scene_types={"Apple", "Fridge"})
     found = problems_of(source, scene_types={"Apple"})
     assert found == [(2, 5, "GoToObject: there is no 'Banana' in this scene"),
@@ -506,7 +508,8 @@ def test_every_problem_is_reported_sorted_with_the_source_name():
     ("import threading as th\n", (1, 1, "import threading as th is not allowed: import modules under their own names")),
     ("from threading import Thread as T\n",
      (1, 1, "from threading import ... is not allowed: plans may import threading, time and skills only")),
-    ("from skills import Fly\n", (1, 1, "Fly is not a skill; the skills are " + ", ".join(s.name for s in DEFAULT_SKILLS))),
+    ("from skills import Fly\n",
+     (1, 1, "Fly is not a skill; the skills are " + ", ".join(s.name for s in DEFAULT_SKILLS))),
     ("if x:\n    pass\n", (1, 1, "conditions are not part of the plan language (at the top level of a plan)")),
     ("t = threading.Thread(f)\n", (1, 5, "threading.Thread takes target= and args= keywords only")),
     ("t = threading.Thread(target=f, daemon=True)\n",

@@ -10,9 +10,9 @@ from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.coalition import LINE, CoalitionConstraint, needs_clause
 from smartllm_local.planner.constraints import Forced
 from smartllm_local.planner.feasibility import Need
-from smartllm_local.planner.plan_constraint import PlanConstraint
 from smartllm_local.planner.generation import BudgetError, accepts, run_constraint, sample_output
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
+from smartllm_local.planner.plan_constraint import PlanConstraint
 from smartllm_local.planner.prompts import load_examples
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.skills import DEFAULT_SKILL_SET
@@ -152,7 +152,8 @@ def test_coalition_lines_reason_before_they_name_the_team():
 
 def test_a_coalition_line_may_reason_at_length():
     """Up to 40 words of analysis (before, a line's reason held at most 144 characters)."""
-    words = ("robots[0] opens the fridge but cannot lift anything, while robots[1] lifts and carries the apple " * 4).split()
+    words = ("robots[0] opens the fridge but cannot lift anything, "
+             "while robots[1] lifts and carries the apple " * 4).split()
 
     def line(count: int) -> str:
         return (f"# SubTask 1 (f): needs GoToObject, OpenObject, PickupObject, lifting 0.2 kg; "
@@ -281,7 +282,8 @@ def test_a_sub_task_no_team_can_do_admits_only_a_refusal():
     team = _robots(25, 23)
     constraint = CoalitionConstraint(["f", "g"], team, needs=[switch, switch])
     assert constraint.minimum_budget() < 200
-    assert accepts(CoalitionConstraint(["f", "g"], team, needs=[switch, switch]), "# INFEASIBLE: no one can switch on\n")
+    assert accepts(CoalitionConstraint(["f", "g"], team, needs=[switch, switch]),
+                   "# INFEASIBLE: no one can switch on\n")
     assert not accepts(CoalitionConstraint(["f", "g"], team, needs=[switch, switch]),
                        _line("f", "robots[0]", switch) + _line("g", "robots[1]", switch, k=2))
 

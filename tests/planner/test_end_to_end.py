@@ -13,9 +13,9 @@ import json
 import subprocess
 import sys
 
+from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.pipeline import Planner
-from smartllm_local.domain import load_domain
 from smartllm_local.tasks import load_tasks
 
 

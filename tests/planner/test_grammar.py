@@ -6,7 +6,8 @@ import random
 
 import llguidance
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from smartllm_local.planner.grammar import Grammar, GrammarError, Ref, alt, chars, opt, rep, seq
 

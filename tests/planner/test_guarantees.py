@@ -8,22 +8,22 @@ from __future__ import annotations
 
 import random
 import re
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import pytest
 
+from smartllm_local.domain import load_domain
+from smartllm_local.errors import SmartLLMError
 from smartllm_local.importer import import_smartllm
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.coalition import CoalitionConstraint
-from smartllm_local.planner.feasibility import function_needs
-from smartllm_local.errors import SmartLLMError
 from smartllm_local.planner.constraints import Constraint, Forced
+from smartllm_local.planner.feasibility import function_needs
 from smartllm_local.planner.generation import BudgetError, GuaranteeError, accepts, run_constraint
 from smartllm_local.planner.plan_constraint import PlanConstraint
 from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.domain import load_domain
 from smartllm_local.skills import DEFAULT_SKILL_SET, SkillSet
 from smartllm_local.tasks import check_task, load_tasks
 
@@ -34,9 +34,10 @@ CATALOGUE = load_domain().catalogue
 PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObject"]
 
 
-@lru_cache(maxsize=None)
+@cache
 def all_tasks() -> tuple:
-    imported = [check_task(data, CATALOGUE, data["id"])[0] for data in import_smartllm(FIXTURE, catalogue=CATALOGUE).tasks]
+    imported = [check_task(data, CATALOGUE, data["id"])[0]
+                for data in import_smartllm(FIXTURE, catalogue=CATALOGUE).tasks]
     assert imported and all(imported)
     return tuple(load_tasks()) + tuple(imported)
 

@@ -56,7 +56,8 @@ def test_sampling_is_reproducible_and_stays_in_the_grammar(smollm2):
     hot = Sampling(temperature=1.5, seed=7)
     first = smollm2.generate(context, grammar=grammar, max_tokens=40, sampling=hot)
     again = smollm2.generate(context, grammar=grammar, max_tokens=40, sampling=hot)
-    other = [smollm2.generate(context, grammar=grammar, max_tokens=40, sampling=Sampling(1.5, s)).text for s in range(5)]
+    other = [smollm2.generate(context, grammar=grammar, max_tokens=40, sampling=Sampling(1.5, s)).text
+             for s in range(5)]
     assert first.text == again.text
     assert len(set(other)) > 1
     assert all(grammar.matches(t) for t in [first.text, *other])

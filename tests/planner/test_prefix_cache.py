@@ -12,11 +12,11 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.pipeline import Planner
 from smartllm_local.planner.prefix_cache import PrefixStore, default_store_folder, open_store, state_key
-from smartllm_local.domain import load_domain
 from smartllm_local.tasks import find_task, load_tasks
 from tests.test_cli_errors import cli, one_line_error
 

@@ -6,6 +6,7 @@ import re
 
 import pytest
 
+from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 from smartllm_local.planner.pipeline import OWN_PART, Planner, PlannerConfig, write_artifacts
 from smartllm_local.planner.prompts import (
@@ -14,7 +15,6 @@ from smartllm_local.planner.prompts import (
     strip_comments,
     strip_summary,
 )
-from smartllm_local.domain import load_domain
 
 from .fakes import FakeBackend
 
@@ -92,7 +92,8 @@ def test_ablations_change_the_prompts(catalogue):
 def test_strip_helpers():
     code = "# SubTask 1: x (skills: GoToObject)\n# order\n\ndef subtask1_x():\n    # go\n    GoToObject('Apple')\n"
     assert strip_summary(code) == "def subtask1_x():\n    # go\n    GoToObject('Apple')\n"
-    assert strip_comments(code) == "# SubTask 1: x (skills: GoToObject)\n# order\n\ndef subtask1_x():\n    GoToObject('Apple')\n"
+    assert strip_comments(code) == ("# SubTask 1: x (skills: GoToObject)\n# order\n\n"
+                                    "def subtask1_x():\n    GoToObject('Apple')\n")
 
 
 def test_examples_are_dropped_from_the_last_when_the_context_is_short(catalogue):

@@ -6,14 +6,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
+from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.backends.repetition import LoopGuard, current_line, draw
 from smartllm_local.planner.coalition import CoalitionConstraint
 from smartllm_local.planner.constraints import COMMENT_CHARS, Choose, text_run
 from smartllm_local.planner.grammar import Grammar, Matcher, alt, opt, seq
-
-from smartllm_local.planner.backends.base import Sampling
 
 DOMAINS = Path(__file__).resolve().parents[2] / "domains"
 GUARD = LoopGuard()

@@ -19,9 +19,9 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.models import resolve_gguf
-from smartllm_local.domain import load_domain
 from tests.llama_server import llama_server
 from tests.test_cli_errors import cli, one_line_error
 
@@ -50,10 +50,10 @@ class Server:
             try:
                 urllib.request.urlopen(f"{self.url}{ready}", timeout=2).read()
                 return
-            except OSError:
+            except OSError as exc:
                 if self.process.poll() is not None or time.monotonic() > deadline:
                     self.stop()
-                    raise RuntimeError(f"{command[0]} did not start: {log.read_text()[-2000:]}")
+                    raise RuntimeError(f"{command[0]} did not start: {log.read_text()[-2000:]}") from exc
                 time.sleep(0.5)
 
     def answered(self, request: str = "POST /v1/completions") -> int:
@@ -107,7 +107,8 @@ def test_two_workers_plan_over_two_servers_and_every_stage_validates(tmp_path):
         parse_plan(plan, form="allocated", skills=catalogue.skills, team_size=len(result["robots"]))
     assert set(lines(out)) == set(TASKS)
     manifest = json.loads((out / "run.json").read_text())
-    assert manifest["identity"]["arguments"]["backend"] == "server" and "workers" not in manifest["identity"]["arguments"]
+    assert (manifest["identity"]["arguments"]["backend"] == "server"
+            and "workers" not in manifest["identity"]["arguments"])
 
 
 def test_a_server_killed_mid_run_fails_its_tasks_with_a_clear_error_and_the_run_ends(server, tmp_path):

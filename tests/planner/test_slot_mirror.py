@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import random
 
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from smartllm_local.planner.backends.base import keep_whole, shared_prefix
 from smartllm_local.planner.backends.slot_mirror import SlotMirror
@@ -53,7 +54,10 @@ class InProcess:
 @given(st.integers(0, 2**32))
 def test_at_every_request_for_a_line_the_slot_holds_the_prompt_as_the_in_process_cache_does(seed):
     rng = random.Random(seed)
-    token = lambda: rng.randint(1, 4)  # few tokens: the server's writing often coincides with forced text
+
+    def token() -> int:  # few tokens: the server's writing often coincides with forced text
+        return rng.randint(1, 4)
+
     server, local = ServerCache(), InProcess()
 
     def evaluate(prompt: list[int]) -> None:  # as the backend does: a request, and the mirror told of it

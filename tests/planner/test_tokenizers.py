@@ -19,16 +19,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from smartllm_local.domain import load_domain
 from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
 from smartllm_local.planner.chat import prompt_tokens
 from smartllm_local.planner.grammar import Grammar, Matcher, alt, seq
 from smartllm_local.planner.models import embedded_model_path
-from smartllm_local.planner.prompts import (PromptOptions, allocation_prompt, coalition_prompt, decomposition_prompt,
-                                            examples_for, load_examples)
+from smartllm_local.planner.prompts import (
+    PromptOptions,
+    allocation_prompt,
+    coalition_prompt,
+    decomposition_prompt,
+    examples_for,
+    load_examples,
+)
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
-from smartllm_local.domain import load_domain
 from smartllm_local.tasks import load_tasks
 
 from .fakes import Script

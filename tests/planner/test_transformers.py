@@ -11,6 +11,7 @@ import tempfile
 import pytest
 import torch
 
+from smartllm_local.domain import load_domain
 from smartllm_local.errors import BackendUnavailableError
 from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.backends.base import Sampling
@@ -19,7 +20,6 @@ from smartllm_local.planner.grammar import Grammar, alt
 from smartllm_local.planner.models import embedded_model_path
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.domain import load_domain
 
 from .test_repetition import check_loop_guard
 

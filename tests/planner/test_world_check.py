@@ -7,6 +7,7 @@ import random
 
 import pytest
 
+from smartllm_local.domain import load_domain
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.coalition import CoalitionConstraint
@@ -17,7 +18,6 @@ from smartllm_local.planner.plan_constraint import PlanConstraint
 from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.planner.world_check import WorldCheck
-from smartllm_local.domain import load_domain
 from smartllm_local.tasks import load_tasks
 from smartllm_local.world.controller import open_controller
 

@@ -100,7 +100,8 @@ def test_broken_counts():
 
 def test_a_slice_counts_as_its_whole_for_states():
     assert holds({"name": "Potato", "state": "COOKED"},
-                 [obj("Potato|1", isCooked=False), obj("Potato|1|PotatoSliced_0", "PotatoSliced", isCooked=True)]) == [True]
+                 [obj("Potato|1", isCooked=False),
+                  obj("Potato|1|PotatoSliced_0", "PotatoSliced", isCooked=True)]) == [True]
     assert holds({"name": "PotatoSliced", "state": "COOKED"},
                  [obj("Potato|1|PotatoSliced_0", "PotatoSliced", isCooked=True)]) == [True]
 
@@ -159,7 +160,8 @@ def test_no_substring_matching():
 
 def test_each_condition_counts_once_even_with_several_matching_receptacles():
     objects = [
-        obj("Cabinet|1", contains=["Cup|1"]), obj("Cabinet|2", contains=["Cup|2"]), obj("Cabinet|3", contains=["Cup|3"]),
+        obj("Cabinet|1", contains=["Cup|1"]), obj("Cabinet|2", contains=["Cup|2"]),
+        obj("Cabinet|3", contains=["Cup|3"]),
         obj("Cup|1"), obj("Cup|2"), obj("Cup|3"),
     ]
     s = score(objects, parse_goals([{"name": "Cabinet", "contains": ["Cup"]}]), attempted=3, succeeded=3, transitions=0)

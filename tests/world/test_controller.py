@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import json
 import os
 import random
 import shutil
@@ -10,9 +12,6 @@ import sys
 import textwrap
 import time
 from pathlib import Path
-
-import contextlib
-import json
 
 import msgpack
 import pytest
@@ -269,8 +268,9 @@ def _fake_build(tmp_path: Path, body: str) -> Path:
             import os, struct, sys, time, msgpack
             open(os.environ["PID_FILE"], "w").write(str(os.getpid()))
             def greet(out):
-                agent = {"sceneName": "", "screenWidth": 300, "screenHeight": 300, "thirdPartyCameras": [], "sequenceId": 0,
-                         "lastActionSuccess": True, "errorMessage": "", "errorCode": "", "actionReturn": None}
+                agent = {"sceneName": "", "screenWidth": 300, "screenHeight": 300, "thirdPartyCameras": [],
+                         "sequenceId": 0, "lastActionSuccess": True, "errorMessage": "", "errorCode": "",
+                         "actionReturn": None}
                 body = msgpack.packb({"agents": [agent], "thirdPartyCameras": [], "activeAgentId": 0, "sequenceId": 0})
                 out.write(struct.pack("!BI", 1, len(body)) + body + struct.pack("!BI", 255, 0)); out.flush()
             """

@@ -128,14 +128,17 @@ def test_untangling_keeps_only_the_innermost_holders():
 
 def test_untangling_keeps_a_pickupable_in_a_fixed_receptacle_and_drops_fixed_in_fixed():
     objects = [
-        {"objectId": "Plate|1", "pickupable": True, "parentReceptacles": ["Counter|1"], "receptacleObjectIds": ["Counter|1"]},
-        {"objectId": "Counter|1", "pickupable": False, "parentReceptacles": ["Plate|1"], "receptacleObjectIds": ["Plate|1"]},
+        {"objectId": "Plate|1", "pickupable": True, "parentReceptacles": ["Counter|1"],
+         "receptacleObjectIds": ["Counter|1"]},
+        {"objectId": "Counter|1", "pickupable": False, "parentReceptacles": ["Plate|1"],
+         "receptacleObjectIds": ["Plate|1"]},
         {"objectId": "Cabinet|a", "parentReceptacles": ["Cabinet|b"], "receptacleObjectIds": ["Cabinet|b"]},
         {"objectId": "Cabinet|b", "parentReceptacles": ["Cabinet|a"], "receptacleObjectIds": ["Cabinet|a"]},
         {"objectId": "Cup|1", "pickupable": True, "parentReceptacles": ["Cabinet|a"], "receptacleObjectIds": None},
     ]
     by_id = {o["objectId"]: o for o in scenes.untangle_containment(objects)}
-    assert by_id["Plate|1"]["parentReceptacles"] == ["Counter|1"] and by_id["Counter|1"]["receptacleObjectIds"] == ["Plate|1"]
+    assert (by_id["Plate|1"]["parentReceptacles"] == ["Counter|1"]
+            and by_id["Counter|1"]["receptacleObjectIds"] == ["Plate|1"])
     assert by_id["Counter|1"]["parentReceptacles"] is None and by_id["Plate|1"]["receptacleObjectIds"] is None
     assert by_id["Cabinet|a"]["parentReceptacles"] is None and by_id["Cabinet|b"]["parentReceptacles"] is None
     assert by_id["Cup|1"]["parentReceptacles"] == ["Cabinet|a"]

@@ -7,7 +7,7 @@ import pytest
 from smartllm_local.world.navigation import Box, facing_yaw
 from smartllm_local.world.simulator import Simulator
 
-from .helpers import act, carry, ok, oid, put
+from .helpers import act, carry, oid, ok, put
 
 
 @pytest.fixture

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 from ...errors import UserError
 from ..models import checkpoint_folder, resolve_gguf
@@ -13,8 +14,8 @@ from .repetition import LoopGuard
 
 BACKENDS = ("llamacpp", "transformers", "server")
 
-__all__ = ["BACKENDS", "Backend", "Generated", "LoopGuard", "Sampling", "check_server_options", "load_backend", "load_backends",
-           "model_location"]
+__all__ = ["BACKENDS", "Backend", "Generated", "LoopGuard", "Sampling", "check_server_options", "load_backend",
+           "load_backends", "model_location"]
 
 
 def load_backend(

@@ -7,8 +7,9 @@ an optional grammar for the text it may write next.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Callable, Protocol, Sequence
+from typing import Protocol
 
 from ...errors import ModelError
 from ..grammar import Grammar

@@ -48,7 +48,7 @@ class Connection:
                 answer = conn.getresponse()
                 raw = answer.read()
                 break
-            except (socket.timeout, TimeoutError) as exc:
+            except TimeoutError as exc:
                 self._drop()
                 raise ServerError(f"the server at {self.url} gave no answer in {self.timeout:g} s "
                                   "(stalled or overloaded); raise --server-timeout for a slow model") from exc

@@ -9,8 +9,9 @@ grammar with its requests is not recognized rather than trusted: its plans would
 from __future__ import annotations
 
 import re
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Callable, Protocol, Sequence
+from typing import Any, Protocol
 
 from ...errors import UserError
 from .connection import Connection

@@ -8,8 +8,9 @@ a continuation.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 from ...errors import BackendUnavailableError, ModelError
 from .base import continuation_tokens
@@ -30,7 +31,7 @@ class HFVocabulary:
         self.bos_token, self.eos_token = tokenizer.bos_token or "", tokenizer.eos_token or ""
 
     @classmethod
-    def load(cls, folder: Path) -> "HFVocabulary":
+    def load(cls, folder: Path) -> HFVocabulary:
         """The tokenizer of a checkpoint folder (its tokenizer files suffice), offline."""
         try:
             import llguidance.hf  # noqa: F401  (needed by the constructor: fail here, with the fix)

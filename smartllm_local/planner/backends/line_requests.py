@@ -13,7 +13,7 @@ the in-process backend's tokens, and evaluates them in the same batches, request
 
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 from ..grammar import Grammar, Matcher
 from .base import Generated, Sampling

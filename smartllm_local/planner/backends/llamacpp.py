@@ -36,8 +36,8 @@ import contextlib
 import ctypes
 import io
 import os
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 
@@ -314,7 +314,8 @@ class LlamaCppBackend(PrefixReuse):
                     if guard is not None and guard.loops(line + self._text(token)):
                         # A loop: end the free text it runs in (the grammar's shortest way on), or else
                         # take the best token that does not close the loop.
-                        new = self._forced_tokens(matcher.shortest_way(), sampler, way=True) if matcher is not None else []
+                        new = (self._forced_tokens(matcher.shortest_way(), sampler, way=True)
+                               if matcher is not None else [])
                         token = token if new else self._pick(
                             logits, sampler, sampling, rng, lambda t: guard.loops(line + self._text(t)))
                         loops += 1

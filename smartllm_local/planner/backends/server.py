@@ -24,7 +24,7 @@ fails with that message and a benchmark run goes on.
 from __future__ import annotations
 
 import time
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

@@ -13,7 +13,7 @@ each, the last with the request itself.
 
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 from .base import keep_whole, shared_prefix
 
@@ -56,7 +56,8 @@ class SlotMirror:
 
     # ------------------------------------------------------ the server's side
 
-    def served(self, prompt: Sequence[int], evaluated_written: Sequence[int] = (), evaluated: int | None = None) -> None:
+    def served(self, prompt: Sequence[int], evaluated_written: Sequence[int] = (),
+               evaluated: int | None = None) -> None:
         """A request's prompt was evaluated from the first token the slot did not hold (its last token if it
         held all; ``evaluated``, where the server says how many it evaluated), then each written token that
         the server went on from, alone."""

@@ -31,8 +31,9 @@ import importlib.util
 import logging
 import math
 import os
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,8 @@ from ..grammar import Grammar, GrammarError, Matcher
 from ..models import EMBEDDED, embedded_model_path, is_gguf
 from ..prefix_cache import MemoryStates, PrefixReuse
 from .base import Generated, Sampling, shared_prefix
-from .hf_vocabulary import EXTRA as _EXTRA, HFVocabulary
+from .hf_vocabulary import EXTRA as _EXTRA
+from .hf_vocabulary import HFVocabulary
 from .repetition import TRIES, current_line, draw
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
