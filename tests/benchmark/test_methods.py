@@ -13,6 +13,9 @@ from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.baselines import allocate_by, random_chooser, rule_chooser
 from smartllm_local.planner.feasibility import function_needs
 from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.tasks import SMARTLLM_CATEGORIES
+
+from .conftest import SAMPLE
 
 CATALOGUE = load_domain().catalogue
 PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObject"]
@@ -101,14 +104,12 @@ def test_the_reference_method_is_the_ceiling_and_needs_no_model(runs):
     assert json.loads((out / "run.json").read_text())["identity"]["model"] == {}
 
 
-def test_every_benchmark_task_goes_through_all_stages_and_executes(runs, all_tasks):
-    """Gemma-3 over all 47 tasks (`benchmark run`, the real model, llama.cpp and Controller): every stage's
-    output is a valid plan or a refusal, every plan that is not a refusal executes and is scored, and the
-    run records each task's stages, artifacts and own time."""
-    out, proc = runs["gemma"]
+def check_every_task(out, tasks) -> None:
+    """A real model's run over ``tasks``: every stage's output is a valid plan or a refusal, every plan that is
+    not a refusal executes and is scored, and the run records each task's stages, artifacts and own time."""
     lines = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
-    assert [line["id"] for line in lines] == [t.id for t in all_tasks] and len(lines) >= 42
-    for task, line in zip(all_tasks, lines):
+    assert [line["id"] for line in lines] == [t.id for t in tasks]
+    for task, line in zip(tasks, lines):
         assert not line.get("error"), (task.id, line.get("error"))
         folder = out / task.id
         parse_plan((folder / "allocated.py").read_text(), form="allocated", team_size=len(task.robots))
@@ -123,8 +124,18 @@ def test_every_benchmark_task_goes_through_all_stages_and_executes(runs, all_tas
         assert all(text.startswith("# SubTask ") for text in (folder / "coalition.txt").read_text().splitlines())
         if task.feasible:
             assert 0.0 <= line["Exe"] <= 1.0 and line["SR"] in (0.0, 1.0), task.id
+    feasible = sum(t.feasible for t in tasks)
     summary = (out / "summary.txt").read_text()
-    assert "all feasible      40      0" in summary and "infeasible" in summary
+    assert f"all feasible {feasible:7d}      0" in summary and "infeasible" in summary
+
+
+def test_a_task_of_each_category_goes_through_all_stages_and_executes(runs, all_tasks):
+    """Gemma-3 (`benchmark run`, the real model, llama.cpp and Controller) over a task of each category and an
+    infeasible one; the heavy suite runs every task (test_whole_benchmark.py)."""
+    out, _ = runs["gemma"]
+    sample = [t for t in all_tasks if t.id in SAMPLE]
+    assert {t.category for t in sample} == set(SMARTLLM_CATEGORIES) and not all(t.feasible for t in sample)
+    check_every_task(out, sample)
 
 
 def test_a_baseline_over_seeds_with_the_real_model(runs):

@@ -140,13 +140,13 @@ def test_a_folder_without_a_run_is_exit_2(tmp_path, make, message):
 def test_progress_is_plain_lines_in_a_log(runs):
     run, proc = runs["gemma"]
     steps = [line for line in proc.stderr.splitlines() if line.startswith("[")]
-    # a step per stage and per execution of each of the 47 tasks, then the end
-    assert steps[0] == "[0/188] decomposition kitchen-01"
-    assert any(line.startswith("[141/188] execution kitchen-01") for line in steps)
-    assert steps[-1].startswith("[188/188] done; SR so far ") and steps[-1].endswith("over 40 feasible task(s)")
+    # a step per stage and per execution of each of the 5 tasks (every stage of every task first), then the end
+    assert steps[0] == "[0/20] decomposition kitchen-01"
+    assert any(line.startswith("[15/20] execution kitchen-01") for line in steps)
+    assert steps[-1].startswith("[20/20] done; SR so far ") and steps[-1].endswith("over 4 feasible task(s)")
     # the running SR is the tables' mean: an error or a refusal counts 0
     lines = [json.loads(x) for x in (run / "results.jsonl").read_text().splitlines()]
-    sr = sum(line.get("SR") or 0.0 for line in lines if line["feasible"]) / 40
+    sr = sum(line.get("SR") or 0.0 for line in lines if line["feasible"]) / 4
     assert f"SR so far {sr:.2f} over" in steps[-1]
 
 

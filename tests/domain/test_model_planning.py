@@ -1,5 +1,6 @@
-"""Both tiny models plan the whole patrol benchmark through the CLI: every output validates, every action
-of every executed plan succeeds on the site, and the run reports like a household one."""
+"""Both tiny models plan patrol tasks through the CLI (a task of each kind by default, the whole patrol benchmark
+in the heavy suite): every output validates, every action of every executed plan succeeds on the site, and the
+run reports like a household one."""
 
 from __future__ import annotations
 
@@ -23,13 +24,17 @@ def cli(*args: str | Path, cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run([SCRIPT, *map(str, args)], cwd=cwd, capture_output=True, text=True, timeout=1200)
 
 
-@pytest.mark.parametrize("model", ["smollm2", "gemma3-270m"])
-def test_a_tiny_model_plans_every_patrol_task_and_every_action_succeeds(model, tmp_path):
+#: A patrol task of each category and an infeasible one, for the default suite; the heavy suite plans all 15.
+SAMPLE = ("patrol-01", "patrol-04", "patrol-08", "patrol-12", "patrol-inf-01")
+
+
+def _plans_and_every_action_succeeds(model: str, tmp_path: Path, tasks: list[str]) -> None:
+    chosen = [a for t in tasks for a in ("--task", t)]
     ran = cli("benchmark", "run", "--domain", "patrol", "--model", model, "--threads", "2", "--prefix-cache", "off",
-              "--out", "run", cwd=tmp_path)
+              "--out", "run", *chosen, cwd=tmp_path)
     assert ran.returncode == 0, ran.stderr[-2000:]
     lines = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
-    assert len(lines) == 15
+    assert len(lines) == len(tasks)
     assert [line["id"] for line in lines if line.get("error")] == []  # every stage's output validated
     executed = [line for line in lines if line["feasible"] and not line["refused"]]
     assert executed and all(line["Exe"] == 1.0 for line in executed), [(x["id"], x["Exe"]) for x in executed]
@@ -38,6 +43,17 @@ def test_a_tiny_model_plans_every_patrol_task_and_every_action_succeeds(model, t
         read_plan(tmp_path / "run" / line["id"] / "allocated.py", form="allocated", skills=PATROL.catalogue.skills,
                   team_size=team, scene_types=set(PATROL.places))
     print(f"\n{model} on patrol:\n" + (tmp_path / "run" / "summary.txt").read_text())
+
+
+@pytest.mark.parametrize("model", ["smollm2", "gemma3-270m"])
+def test_a_tiny_model_plans_a_patrol_task_of_each_kind_and_every_action_succeeds(model, tmp_path):
+    _plans_and_every_action_succeeds(model, tmp_path, list(SAMPLE))
+
+
+@pytest.mark.heavy
+@pytest.mark.parametrize("model", ["smollm2", "gemma3-270m"])
+def test_a_tiny_model_plans_every_patrol_task_and_every_action_succeeds(model, tmp_path):
+    _plans_and_every_action_succeeds(model, tmp_path, [t.id for t in TASKS])
 
 
 def test_plan_a_patrol_task_and_execute_it(tmp_path):

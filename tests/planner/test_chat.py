@@ -175,13 +175,10 @@ def test_a_bad_chat_template_mode_is_a_one_line_error(tmp_path, command):
     assert not (tmp_path / "out").exists()
 
 
-def test_the_transformers_backend_reads_the_template_and_tokenizes_as_llama_cpp_does(smollm2):
-    hf = load_backend("transformers", "smollm2", n_ctx=4096)
-    try:
-        assert hf.chat_template == smollm2.chat_template
-        body = "# say <|im_end|> now\n"
-        text, tokens, _ = prompt_tokens(hf, body, chat_format(hf, "auto")[0])
-        assert (text, tokens, ()) == prompt_tokens(smollm2, body, chat_format(smollm2, "auto")[0])
-        assert tokens.count(special(hf, "<|im_end|>")[0]) == 2  # the system and user turns' ends, not the body's
-    finally:
-        hf.close()
+def test_the_transformers_backend_reads_the_template_and_tokenizes_as_llama_cpp_does(smollm2, hf_smollm2):
+    hf = hf_smollm2
+    assert hf.chat_template == smollm2.chat_template
+    body = "# say <|im_end|> now\n"
+    text, tokens, _ = prompt_tokens(hf, body, chat_format(hf, "auto")[0])
+    assert (text, tokens, ()) == prompt_tokens(smollm2, body, chat_format(smollm2, "auto")[0])
+    assert tokens.count(special(hf, "<|im_end|>")[0]) == 2  # the system and user turns' ends, not the body's

@@ -1,5 +1,6 @@
 """Planning against a real model server on loopback: llama-cpp-python's ``python -m llama_cpp.server``
-serving the embedded SmolLM2, driven through the CLI as a lab would drive its GPU box.
+serving the embedded SmolLM2, driven through the CLI as a lab would drive its GPU box; and llama.cpp's own
+``llama-server``, built from source, in the heavy suite (``python -m pytest -m heavy``).
 
 A server that dies or stalls in the middle of a run costs the tasks it was serving an error, within the
 timeout, and the run goes on to its end.
@@ -76,7 +77,16 @@ class Server:
 
 @pytest.fixture
 def server(tmp_path):
+    """A server of a test's own, which it may stop or kill."""
     running = Server(tmp_path / "server.log", threads=2)
+    yield running
+    running.stop()
+
+
+@pytest.fixture(scope="module")
+def shared_server(tmp_path_factory):
+    """A server the tests that only plan through it share."""
+    running = Server(tmp_path_factory.mktemp("server") / "server.log", threads=2)
     yield running
     running.stop()
 
@@ -85,6 +95,22 @@ def lines(folder: Path) -> dict[str, dict]:
     return {line["id"]: line for line in map(json.loads, (folder / "results.jsonl").read_text().splitlines())}
 
 
+def test_a_task_decomposed_through_a_server_validates_and_executes(shared_server, tmp_path):
+    """A decomposition written line by line through llama_cpp.server (robots by the rule) is a valid plan, which
+    executes; every stage through two servers at once is in the heavy suite."""
+    out = tmp_path / "run"
+    run = cli("benchmark", "run", "--method", "decomp-rule", "--backend", "server", "--endpoint", shared_server.url,
+              "--out", out, "--task", TASKS[0])
+    assert run.returncode == 0, run.stderr
+    assert shared_server.answered() > 0
+    line = lines(out)[TASKS[0]]
+    assert not line.get("error") and line["tokens"]["decomposition"]["generated"] > 0, line
+    if not line["refused"]:
+        parse_plan((out / TASKS[0] / "decomposed.py").read_text(), form="decomposed")
+        assert line["Exe"] is not None
+
+
+@pytest.mark.heavy
 def test_two_workers_plan_over_two_servers_and_every_stage_validates(tmp_path):
     servers = [Server(tmp_path / f"server-{n}.log") for n in range(2)]  # one core each: they run side by side
     try:
@@ -177,10 +203,10 @@ def test_server_options_are_checked_before_anything_runs(tmp_path):
                        "http://127.0.0.1:1", "--server-timeout", "0"), "--server-timeout")
 
 
-def test_a_vocabulary_that_is_not_the_served_models_is_refused(server):
+def test_a_vocabulary_that_is_not_the_served_models_is_refused(shared_server):
     gemma = resolve_gguf("gemma3-270m")
     one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--backend", "server", "--endpoint",
-                       server.url, "--model", gemma), "tokenizes text differently", "--model")
+                       shared_server.url, "--model", gemma), "tokenizes text differently", "--model")
 
 
 def _llama_server(tmp_path: Path, *args: str) -> tuple[Server, Path]:
@@ -193,6 +219,7 @@ def _llama_server(tmp_path: Path, *args: str) -> tuple[Server, Path]:
     return server, log
 
 
+@pytest.mark.heavy
 def test_llama_server_plans_token_for_token_what_the_in_process_backend_plans(tmp_path):
     """Greedy plans through llama.cpp's own server (flash attention off, as in-process) are the in-process
     backend's, stage for stage and token for token, prefix reuse and the loop guard included."""
@@ -222,6 +249,7 @@ def test_llama_server_plans_token_for_token_what_the_in_process_backend_plans(tm
     assert remote["kitchen-02"]["tokens"]["decomposition"]["reused"] > 2000  # the slot held the examples
 
 
+@pytest.mark.heavy
 def test_two_workers_plan_on_two_llama_server_slots(tmp_path):
     server, log = _llama_server(tmp_path, "-c", "8192", "-np", "2")
     try:

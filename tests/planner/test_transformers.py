@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import logging
-import os
 import subprocess
 import sys
-import tempfile
 
 import pytest
 import torch
@@ -21,33 +19,8 @@ from smartllm_local.planner.models import embedded_model_path
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
 from smartllm_local.planner.scene_context import scene_objects
 
+from .conftest import LOAD_STDERR
 from .test_repetition import check_loop_guard
-
-LOAD_STDERR: dict[str, str] = {}
-
-
-def _load_capturing_stderr(**kwargs):
-    """Load SmolLM2, keeping what the load writes on file descriptor 2 (tqdm bars, warnings)."""
-    sys.stderr.flush()
-    saved = os.dup(2)
-    with tempfile.TemporaryFile(mode="w+b") as sink:
-        os.dup2(sink.fileno(), 2)
-        try:
-            backend = load_backend("transformers", "smollm2", **kwargs)
-        finally:
-            sys.stderr.flush()
-            os.dup2(saved, 2)
-            os.close(saved)
-        sink.seek(0)
-        LOAD_STDERR["text"] = sink.read().decode(errors="replace")
-    return backend
-
-
-@pytest.fixture(scope="module")
-def hf_smollm2():
-    backend = _load_capturing_stderr(n_ctx=4096)
-    yield backend
-    backend.close()
 
 
 def test_loads_on_the_cpu_in_float32_without_a_progress_bar(hf_smollm2):

@@ -26,6 +26,7 @@ from tests.test_cli_errors import cli, one_line_error
 from tests.vllm_server import ENVIRONMENT, SERVE, smollm2_checkpoint, vllm_python
 
 TASKS = ("kitchen-01", "living-01")
+pytestmark = pytest.mark.heavy  # installs vLLM into an environment of its own (minutes on a clean clone)
 
 
 @pytest.fixture(scope="module")
