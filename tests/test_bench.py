@@ -1,4 +1,5 @@
-"""``smartllm-local bench`` with the real SmolLM2, llama.cpp and the stand-in: its figures hang together."""
+"""``smartllm-local bench`` with the real SmolLM2, llama.cpp and the stand-in: its figures hang together (seven plans
+of two tasks, minutes: in the heavy suite)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from smartllm_local.tasks import load_tasks
 from tests.test_cli_errors import cli, one_line_error
 
 
+@pytest.mark.heavy
 def test_bench_measures_decoding_reuse_and_the_executor(tmp_path):
     out = tmp_path / "bench.json"
     proc = cli("bench", "--models", "smollm2", "--sample", "2", "--no-benchmark", "--out", out)

@@ -139,7 +139,8 @@ def table_three(runs: Sequence[Run]) -> Table | None:
     table.notes.append("Left out of the prompts: comments (the examples' comments), summary (the decomposition's "
                        "closing summary), coalition (the coalition-formation stage).")
     if any(len(run.task_ids) != len(common) for run in runs if (run.model, run.method) in studied):
-        table.notes.append(f"Over the {len(common)} tasks every row's run has (some runs have more).")
+        tasks = "task" if len(common) == 1 else "tasks"
+        table.notes.append(f"Over the {len(common)} {tasks} every row's run has (some runs have more).")
     return table
 
 

@@ -24,8 +24,9 @@ from smartllm_local.planner.stages import StageRecord
 from smartllm_local.run_store import RunStore
 from smartllm_local.tasks import find_task, load_tasks
 
-TASKS = ("kitchen-01", "bedroom-inf-01")
-COMMAND = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--threads", "2",
+TASKS = ("kitchen-01", "bedroom-inf-01", "kitchen-02")
+# The model decomposes; robots are the rule's (every stage through the model resumes alike, and costs minutes).
+COMMAND = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--method", "decomp-rule", "--threads", "2",
            *(a for t in TASKS for a in ("--task", t))]
 
 
@@ -64,7 +65,7 @@ def test_a_run_killed_mid_stage_resumes_to_the_uninterrupted_result(tmp_path):
     resumed = tmp_path / "resumed"
     proc = subprocess.Popen([*COMMAND, "--out", str(resumed)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             text=True, start_new_session=True)
-    marker = resumed / TASKS[0] / "coalition" / "record.json"
+    marker = resumed / TASKS[0] / "decomposition" / "record.json"
     deadline = time.monotonic() + 600
     while not marker.is_file() and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.2)
@@ -86,7 +87,7 @@ def test_a_run_killed_mid_stage_resumes_to_the_uninterrupted_result(tmp_path):
 
     # Everything done: a third start only reports, and other settings are refused (exit 2).
     third = subprocess.run([*COMMAND, "--out", str(resumed)], capture_output=True, text=True, timeout=900)
-    assert third.returncode == 0 and "2 of 2 tasks done" in third.stderr
+    assert third.returncode == 0 and "3 of 3 tasks done" in third.stderr
     assert _lines(resumed) == _lines(whole)
     other = subprocess.run([*COMMAND, "--out", str(resumed), "--seed", "5"], capture_output=True, text=True,
                            timeout=300)
@@ -107,7 +108,7 @@ def test_ctrl_c_stops_cleanly_and_leaves_no_process(tmp_path):
     proc.send_signal(signal.SIGINT)
     _, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 130, stderr
-    assert "interrupted: 0 of 2 tasks scored; the same command resumes the run" in stderr
+    assert "interrupted: 0 of 3 tasks scored; the same command resumes the run" in stderr
     assert "Traceback" not in stderr
     assert not [c for c in children if Path(f"/proc/{c}").exists()], children
     assert marker.is_file() and not (out / "results.jsonl").exists()

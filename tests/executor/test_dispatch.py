@@ -180,7 +180,7 @@ def test_plan_dispatch_runs_the_model_s_plan_on_the_lab_s_functions(tmp_path, ca
     env = {**os.environ, "PYTHONPATH": str(root), "LAB_ROBOTS_LOG": str(tmp_path / "calls.jsonl")}
 
     def plan(*args: str) -> subprocess.CompletedProcess:
-        return subprocess.run([SCRIPT, "plan", "--task", "kitchen-01", "--prefix-cache", "off", *args], cwd=tmp_path,
+        return subprocess.run([SCRIPT, "plan", "--task", "kitchen-01", *args], cwd=tmp_path,
                               env=env, capture_output=True, text=True, timeout=600)
 
     run = plan("--dispatch", "all.toml", "--json")

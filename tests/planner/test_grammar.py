@@ -120,7 +120,7 @@ def test_after_real_stage_lines_llama_cpp_reads_the_grammar_and_forces_the_same_
     lines = guarantees.collect_lines(random.Random(7), ["kitchen-01", "living-01", "bathroom-01"])
     assert len(lines) > 100
     for grammar, line in lines:
-        for cut in range(0, len(line) + 1, 3):
+        for cut in range(0, len(line) + 1, 5):
             after = grammar.after(line[:cut])
             whole = Matcher(grammar)
             assert whole.advance(line[:cut]) and after.matches(line[cut:])

@@ -114,19 +114,19 @@ def _steps(plan_text: str) -> list[str]:
 
 @pytest.mark.parametrize("kind", WRITERS)
 def test_every_task_every_writer_gives_valid_plans_within_budget(kind):
-    """Thousands of plans per stage: 47 benchmark tasks and the imported ones, four writers, many
-    seeds and budgets from the smallest each constraint accepts up to the default and beyond."""
+    """Hundreds of plans per stage and writer: 47 benchmark tasks and the imported ones, many seeds and budgets
+    from the smallest each constraint accepts up to the default and beyond."""
     rng = random.Random(f"guarantee-{kind}")
     tasks = all_tasks()
     counts = {"decomposition": 0, "coalition": 0, "allocation": 0}
     for task in tasks:
-        for budget in (300, 450, 600, 800, 1024, 1300, 1600, 2000, 2600, 4000):
+        for budget in (300, 450, 800, 1300, 2600):
             for _ in range(2):
                 try:
                     _check_all_stages(task, kind, rng, budget, counts)
                 except BudgetError:
                     assert budget <= 450, f"{task.id}: budget {budget} rejected"
-    assert counts["decomposition"] >= 1000 and counts["allocation"] >= 500, counts
+    assert counts["decomposition"] >= 500 and counts["allocation"] >= 250, counts
 
 
 def test_a_comment_inside_a_function_cannot_read_as_a_refusal():

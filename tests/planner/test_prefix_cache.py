@@ -125,10 +125,9 @@ def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone(
         assert record.reused_tokens > record.shared_tokens and record.prompt_tokens - record.reused_tokens < 12
 
 
-def test_a_second_process_starts_from_the_stored_examples_and_a_damaged_store_is_rebuilt(tmp_path):
-    """SmolLM2 through the CLI: the second ``plan`` evaluates none of the examples, nor the scene's objects
-    in its decomposition, and writes the same plan; with every entry cut short, the third evaluates them
-    again, writes the same plan, and stores them anew."""
+def _planned(tmp_path):
+    """SmolLM2 plans kitchen-01 through the CLI with a store of its own: (allocated plan, stage records) of each
+    run, named."""
     states = tmp_path / "states"
 
     def plan(name: str) -> tuple[str, dict[str, dict]]:
@@ -137,6 +136,13 @@ def test_a_second_process_starts_from_the_stored_examples_and_a_damaged_store_is
         stages = json.loads((tmp_path / name / "result.json").read_text())["stages"]
         return json.loads(proc.stdout)["allocated"], stages
 
+    return states, plan
+
+
+def test_a_second_process_starts_from_the_stored_examples(tmp_path):
+    """The second ``plan`` evaluates none of the examples, nor the scene's objects in its decomposition, and
+    writes the same plan."""
+    states, plan = _planned(tmp_path)
     first, cold = plan("first")
     stored = entries(states)
     # The decomposition's examples and scene, and the examples coalition and allocation share.
@@ -147,6 +153,15 @@ def test_a_second_process_starts_from_the_stored_examples_and_a_damaged_store_is
     assert decomposition["prompt_tokens"] - decomposition["reused_tokens"] < 40  # the instruction in its chat turn
     assert warm["coalition"]["reused_tokens"] == warm["coalition"]["shared_tokens"] > 0, warm
     assert cold["allocation"]["prompt_tokens"] - cold["allocation"]["reused_tokens"] < 12  # in the coalition's context
+
+
+@pytest.mark.heavy
+def test_a_damaged_store_is_rebuilt(tmp_path):
+    """With every entry cut short, a process evaluates the examples again, writes the same plan, and stores them
+    anew (a damaged entry is never trusted: test_a_damaged_entry_is_deleted_and_never_trusted, by default)."""
+    states, plan = _planned(tmp_path)
+    first, _ = plan("first")
+    stored = entries(states)
     for path in stored:
         path.write_bytes(path.read_bytes()[:1000])
     third, rebuilt = plan("third")

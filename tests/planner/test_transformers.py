@@ -39,6 +39,20 @@ def test_constraints_bite_through_llguidance(hf_smollm2):
     assert forced.text in (" London.\n", " Rome.\n")
 
 
+def test_a_decomposition_is_a_valid_plan_and_its_prompt_state_is_kept(hf_smollm2):
+    """A decomposition through the transformers backend; decomposing again evaluates only the instruction (in
+    its chat turn), and writes what it wrote from an empty cache. Every stage is in the heavy suite."""
+    planner = Planner(hf_smollm2, load_domain().catalogue, PlannerConfig(budgets={"decomposition": 400}))
+    result = PlanResult("Turn off the light.", "FloorPlan6", [1])
+    first = planner.decompose(result, scene_objects(6))
+    assert not first.error and (first.refusal is not None or result.stages[0].plan is not None), first.error
+    again = planner.decompose(PlanResult("Turn off the light.", "FloorPlan6", [1]), scene_objects(6))
+    assert again.reused_tokens > again.shared_tokens == first.shared_tokens > 0
+    assert again.prompt_tokens - again.reused_tokens < 40
+    assert first.reused_tokens == 0 and again.output == first.output
+
+
+@pytest.mark.heavy
 def test_a_task_planned_through_all_stages(hf_smollm2):
     config = PlannerConfig(budgets={"decomposition": 600, "coalition": 300, "allocation": 700})
     planner = Planner(hf_smollm2, load_domain().catalogue, config)
