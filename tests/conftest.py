@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
 
 import pytest
 
@@ -28,3 +32,24 @@ def smollm2():
     backend = load_backend("llamacpp", "smollm2", n_ctx=8192)
     yield backend
     backend.close()
+
+
+@dataclass(frozen=True)
+class Planned:
+    out: Path  # the plan command's --out folder
+    states: Path  # its prefix store, empty before it ran
+    stdout: str
+
+
+@pytest.fixture(scope="session")
+def kitchen01(tmp_path_factory) -> Planned:
+    """SmolLM2 plans and executes kitchen-01 through the CLI (``plan --task kitchen-01 --execute --out``), with a
+    prefix store of its own: the one such run, which the tests of its artifacts, of the prefix store across
+    processes and of the chat template read."""
+    root = tmp_path_factory.mktemp("kitchen-01")
+    states, out = root / "states", root / "run"
+    proc = subprocess.run([sys.executable, "-m", "smartllm_local", "plan", "--task", "kitchen-01", "--execute",
+                           "--prefix-cache", str(states), "--out", str(out)],
+                          capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    return Planned(out, states, proc.stdout)

@@ -96,23 +96,17 @@ def kitchen09():
     return find_task(load_tasks(), "kitchen-09")
 
 
-def test_a_real_decomposition_in_the_chat_template_is_a_valid_plan(smollm2, tmp_path):
-    """kitchen-01 (SmolLM2 refuses kitchen-09 outright in its chat template: a refusal is valid but shows little)."""
-    task = find_task(load_tasks(), "kitchen-01")
-    recording = Recording(smollm2)
-    planner = Planner(recording, load_domain().catalogue)
-    assert planner.chat_status == APPLIED
-    result = _result(task)
-    record = planner.decompose(result, scene_objects(task.floor_plan))
+def test_a_real_decomposition_in_the_chat_template_is_a_valid_plan(smollm2, kitchen01):
+    """The session's plan of kitchen-01 (SmolLM2 refuses kitchen-09 outright in its chat template: a refusal is
+    valid but shows little): its prompt was a user turn, its output the assistant's, and a valid plan."""
+    prompt = (kitchen01.out / "decomposition" / "prompt.txt").read_text()
+    assert prompt.startswith("<|im_start|>system\n") and prompt.endswith("<|im_start|>assistant\n")
+    tokens = smollm2.tokenize(prompt, special=True)
     header = smollm2.tokenize("<|im_start|>assistant\n", special=True)
-    prompt = recording.contexts[0][: record.prompt_tokens]
-    assert prompt[:1] == special(smollm2, "<|im_start|>") and prompt[-len(header):] == header
-    assert record.prompt.startswith("<|im_start|>system\n") and record.prompt.endswith("<|im_start|>assistant\n")
-    assert not record.error and record.refusal is None, record.error or record.refusal
-    assert parse_plan(record.output, form="decomposed").functions
-    write_artifacts(result, tmp_path)
-    stages = json.loads((tmp_path / "result.json").read_text())["stages"]
-    assert stages["decomposition"]["chat_template"] == APPLIED
+    assert tokens[:1] == special(smollm2, "<|im_start|>") and tokens[-len(header):] == header
+    assert parse_plan((kitchen01.out / "decomposed.py").read_text(), form="decomposed").functions
+    result = json.loads((kitchen01.out / "result.json").read_text())
+    assert result["stages"]["decomposition"]["chat_template"] == APPLIED and result["refusal"] is None
 
 
 class _Seen(Exception):

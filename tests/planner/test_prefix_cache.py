@@ -125,26 +125,27 @@ def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone(
         assert record.reused_tokens > record.shared_tokens and record.prompt_tokens - record.reused_tokens < 12
 
 
-def _planned(tmp_path):
+def _planned(tmp_path, states=None):
     """SmolLM2 plans kitchen-01 through the CLI with a store of its own: (allocated plan, stage records) of each
     run, named."""
-    states = tmp_path / "states"
+    states = states or tmp_path / "states"
 
     def plan(name: str) -> tuple[str, dict[str, dict]]:
-        proc = cli("plan", "--task", "kitchen-01", "--prefix-cache", states, "--out", tmp_path / name, "--json")
+        proc = cli("plan", "--task", "kitchen-01", "--prefix-cache", states, "--out", tmp_path / name)
         assert proc.returncode == 0, proc.stderr
         stages = json.loads((tmp_path / name / "result.json").read_text())["stages"]
-        return json.loads(proc.stdout)["allocated"], stages
+        return (tmp_path / name / "allocated.py").read_text(), stages
 
     return states, plan
 
 
-def test_a_second_process_starts_from_the_stored_examples(tmp_path):
-    """The second ``plan`` evaluates none of the examples, nor the scene's objects in its decomposition, and
-    writes the same plan."""
-    states, plan = _planned(tmp_path)
-    first, cold = plan("first")
-    stored = entries(states)
+def test_a_second_process_starts_from_the_stored_examples(kitchen01, tmp_path):
+    """After the session's plan of kitchen-01 (a store of its own, empty before), a second ``plan`` evaluates none
+    of the examples, nor the scene's objects in its decomposition, and writes the same plan."""
+    _, plan = _planned(tmp_path, kitchen01.states)
+    first = (kitchen01.out / "allocated.py").read_text()
+    cold = json.loads((kitchen01.out / "result.json").read_text())["stages"]
+    stored = entries(kitchen01.states)
     # The decomposition's examples and scene, and the examples coalition and allocation share.
     assert len(stored) == 3 and cold["decomposition"]["reused_tokens"] == cold["coalition"]["reused_tokens"] == 0
     second, warm = plan("second")
