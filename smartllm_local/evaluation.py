@@ -66,7 +66,9 @@ class TaskOutcome:
         if self.result is not None:
             data["tokens"] = {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens,
                                         "generated": r.generated_tokens, "seconds": round(r.seconds, 2),
-                                        "prompt_seconds": round(r.prompt_seconds, 2)}
+                                        "prompt_seconds": round(r.prompt_seconds, 2),
+                                        "choices": r.choices, "refused": r.refused, "logprob": round(r.logprob, 3),
+                                        "completed_lines": r.completed_lines}
                               for r in self.result.stages}
             if self.result.notices:
                 data["notices"] = self.result.notices

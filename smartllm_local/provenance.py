@@ -8,6 +8,7 @@ the user's cache, keyed by the file's path, size and modification time.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -27,16 +28,8 @@ _CHUNK = 1 << 20
 def sha256_file(path: str | Path, cache: Path | None = None) -> str:
     """The file's sha256 (hex), from the cache when the file has not changed since it was digested."""
     path = Path(path).resolve()
-    stat = path.stat()
-    key = f"{path}|{stat.st_size}|{stat.st_mtime_ns}"
-    store = (cache or cache_root()) / "digests.json"
-    try:
-        known = json.loads(store.read_text())
-        if not isinstance(known, dict):
-            known = {}
-    except (OSError, ValueError):
-        known = {}  # missing or damaged: digest again, never trust it
-    digest = known.get(key)
+    known = _known_digests(cache)
+    digest = known.get(_digest_key(path))
     if isinstance(digest, str) and len(digest) == 64:
         return digest
     hasher = hashlib.sha256()
@@ -44,12 +37,34 @@ def sha256_file(path: str | Path, cache: Path | None = None) -> str:
         while chunk := handle.read(_CHUNK):
             hasher.update(chunk)
     digest = hasher.hexdigest()
-    known[key] = digest
-    try:
-        write_atomic(store, json.dumps(known, indent=0, sort_keys=True))
-    except Exception:  # a read-only cache only costs the next run a digest
-        pass
+    remember_digest(path, digest, cache)
     return digest
+
+
+def remember_digest(path: str | Path, digest: str, cache: Path | None = None) -> None:
+    """Keep a digest just computed while writing ``path`` (so it is not read again to digest it)."""
+    path = Path(path).resolve()
+    known = _known_digests(cache)
+    known[_digest_key(path)] = digest
+    with contextlib.suppress(Exception):  # a read-only cache only costs the next run a digest
+        write_atomic(_digest_store(cache), json.dumps(known, indent=0, sort_keys=True))
+
+
+def _digest_store(cache: Path | None) -> Path:
+    return (cache or cache_root()) / "digests.json"
+
+
+def _digest_key(path: Path) -> str:
+    stat = path.stat()
+    return f"{path}|{stat.st_size}|{stat.st_mtime_ns}"
+
+
+def _known_digests(cache: Path | None) -> dict[str, Any]:
+    try:
+        known = json.loads(_digest_store(cache).read_text())
+    except (OSError, ValueError):
+        return {}  # missing or damaged: digest again, never trust it
+    return known if isinstance(known, dict) else {}
 
 
 def file_record(path: str | Path) -> dict[str, Any]:

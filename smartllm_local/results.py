@@ -103,6 +103,28 @@ def stage_costs(lines: Sequence[Line]) -> dict[str, dict[str, float]]:
     return costs
 
 
+def bending(lines: Sequence[Line]) -> dict[str, dict[str, float | int | None]]:
+    """How far the grammar bent the model, per stage, over the lines that recorded it: the share of the model's
+    choices where its likeliest token was refused, the mean log-probability of what it chose (under the
+    unconstrained model), and the lines the planner completed after the model ended the sequence."""
+    found: dict[str, dict[str, float | int | None]] = {}
+    for stage in STAGE_NAMES:
+        ran = [line["tokens"][stage] for line in lines if "choices" in line.get("tokens", {}).get(stage, {})]
+        choices = sum(r["choices"] for r in ran)
+        if choices:
+            found[stage] = {"choices": choices, "refused_share": sum(r["refused"] for r in ran) / choices,
+                            "mean_logprob": sum(r["logprob"] for r in ran) / choices,
+                            "completed_lines": sum(r.get("completed_lines", 0) for r in ran)}
+    return found
+
+
+def bending_line(lines: Sequence[Line]) -> str:
+    """The bending measure as summary.txt gives it (empty where no line recorded it)."""
+    parts = [f"{stage} {b['refused_share']:.1%} of {b['choices']:,} refused, log-prob {b['mean_logprob']:.3f}"
+             for stage, b in bending(lines).items()]
+    return "model's likeliest token refused: " + "; ".join(parts) if parts else ""
+
+
 def summary_table(lines: Sequence[Line]) -> str:
     """Mean metrics per category (feasible tasks) and the refusal rate on infeasible ones."""
     rows = [f"{'category':<14}{'tasks':>6}{'errors':>7}" + "".join(f"{m:>7}" for m in METRICS) + f"{'refused':>9}"]
@@ -117,7 +139,8 @@ def summary_table(lines: Sequence[Line]) -> str:
         who = ", ".join(f"{counts[f'by {k}']} by {k}" for k in REFUSERS if counts[f"by {k}"] or k != "rule")
         rows.append(f"{'infeasible':<14}{counts['tasks']:>6}{counts['errors']:>7}"
                     f"   correctly refused {counts['refused']}/{counts['tasks']} ({who})")
-    return "\n".join(rows)
+    bent = bending_line(lines)
+    return "\n".join(rows + ([bent] if bent else []))
 
 
 def variability_table(runs: Sequence[Sequence[Line]]) -> str:

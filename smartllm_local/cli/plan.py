@@ -17,7 +17,7 @@ from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..files import check_output_folder, write_atomic
 from ..methods import METHODS, make_method
 from ..planner.backends import BACKENDS, LoopGuard, Sampling, check_server_options, load_backends, model_location
-from ..planner.chat import CHAT_TEMPLATE_MODES, check_mode
+from ..planner.chat import CHAT_TEMPLATE_MODES, mode_for
 from ..planner.models import DEFAULT_MODEL, EMBEDDED
 from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
 from ..planner.prefix_cache import open_store
@@ -52,7 +52,7 @@ class ModelOptions:
                  no_grammar: bool, free_teams: bool = False, chat_template: str = "auto",
                  free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None,
                  endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None,
-                 no_loop_guard: bool = False):
+                 no_loop_guard: bool = False, *, no_token_alignment: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -61,7 +61,7 @@ class ModelOptions:
             raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
         if n_ctx < 512:
             raise UserError("--n-ctx must be at least 512 tokens")
-        check_mode(chat_template)
+        chat_template = mode_for(model, chat_template)
         self.endpoints = [e.strip() for e in endpoint.split(",") if e.strip()] if endpoint else []
         check_server_options(backend, self.endpoints, workers)
         if server_timeout is not None and not (math.isfinite(server_timeout) and server_timeout > 0):
@@ -73,7 +73,8 @@ class ModelOptions:
         if backend == "llamacpp":  # a cache folder that can never be one fails before the model loads
             open_store(prefix_cache)
         self.config = PlannerConfig(
-            sampling=Sampling(temperature=temperature, seed=seed, loop_guard=None if no_loop_guard else LoopGuard()),
+            sampling=Sampling(temperature=temperature, seed=seed, loop_guard=None if no_loop_guard else LoopGuard(),
+                              aligned=not no_token_alignment),
             grammar=not no_grammar,
             free_teams=free_teams,
             prompts=PromptOptions(comments=not no_comments, summary=not no_summary, coalition=not no_coalition),
@@ -121,7 +122,8 @@ _FREE_TEAMS = typer.Option(False, "--free-teams", help="Let the model pick any t
 _CHAT_TEMPLATE = typer.Option("auto", "--chat-template", help=(
     f"{' or '.join(CHAT_TEMPLATE_MODES)}. auto: a model whose file carries a chat template (an instruct "
     "model) gets each stage's prompt as the user turn and writes its output as the assistant turn; "
-    "base models get raw text. none: raw text for every model."))
+    "base models, and the embedded Qwen2.5-Coder models (measured better so), get raw text. on: the "
+    "model's template wherever it has one. none: raw text for every model."))
 _FREE_ALLOCATION = typer.Option(False, "--free-allocation", help=(
     "Let the allocation stage rewrite every step (as the paper's prompts allow), rather than write the "
     "decomposition's steps itself and leave the model only the robots and the orchestration."))
@@ -131,6 +133,10 @@ _NO_WORLD_CHECK = typer.Option(False, "--no-world-check", help=(
 _NO_LOOP_GUARD = typer.Option(False, "--no-loop-guard", help=(
     "Let free text (summaries, comments, a coalition's reasoning) repeat itself to its length limit, rather "
     "than end it where it starts saying one thing a third time over (see the README's \"Loops in free text\")."))
+_NO_TOKEN_ALIGNMENT = typer.Option(False, "--no-token-alignment", help=(
+    "Write text the grammar forces whole, end each line at its newline and let the model end only where the "
+    "grammar may, rather than leave forced text's last token, line ends and the end of sequence to the model "
+    "(for measuring what that changes; see the README's \"Line ends and forced text\")."))
 _PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
     "Where the examples' key/value states are kept between runs, so a later run on the same model starts "
     "from them (default: the user's cache, $XDG_CACHE_HOME/smartllm-local/prefix-states, at most 4 GiB); "
@@ -170,6 +176,7 @@ def plan_command(
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
     no_loop_guard: bool = _NO_LOOP_GUARD,
+    no_token_alignment: bool = _NO_TOKEN_ALIGNMENT,
     prefix_cache: str | None = _PREFIX_CACHE,
     endpoint: str | None = _ENDPOINT,
     server_timeout: float | None = _SERVER_TIMEOUT,
@@ -178,7 +185,8 @@ def plan_command(
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check, prefix_cache, endpoint, 1, server_timeout, no_loop_guard)
+                           no_world_check, prefix_cache, endpoint, 1, server_timeout, no_loop_guard,
+                           no_token_alignment=no_token_alignment)
     if out is not None:
         check_output_folder(out, "--out")
     dom = load_domain(domain, catalogue=catalogue)
@@ -282,6 +290,7 @@ def benchmark_run(
     free_allocation: bool = _FREE_ALLOCATION,
     no_world_check: bool = _NO_WORLD_CHECK,
     no_loop_guard: bool = _NO_LOOP_GUARD,
+    no_token_alignment: bool = _NO_TOKEN_ALIGNMENT,
     prefix_cache: str | None = _PREFIX_CACHE,
     endpoint: str | None = _ENDPOINT,
     workers: int = typer.Option(1, "--workers", help=(
@@ -294,7 +303,8 @@ def benchmark_run(
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
                            no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check, prefix_cache, endpoint, workers, server_timeout, no_loop_guard)
+                           no_world_check, prefix_cache, endpoint, workers, server_timeout, no_loop_guard,
+                           no_token_alignment=no_token_alignment)
     check_output_folder(out, "--out")
     dom = load_domain(domain, catalogue=catalogue)
     cat = dom.catalogue

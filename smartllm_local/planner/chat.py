@@ -21,9 +21,10 @@ from jinja2 import TemplateError
 
 from ..errors import ModelError, UserError
 from .backends.base import Backend
+from .models import DEFAULT_MODEL, RAW_COMPLETION
 from .prompts import Prompt
 
-CHAT_TEMPLATE_MODES = ("auto", "none")
+CHAT_TEMPLATE_MODES = ("auto", "on", "none")
 
 #: What a stage record says about the template (``chat_template`` in timings.json and result.json).
 APPLIED, BASE_MODEL, OFF = "applied", "none (base model)", "off"
@@ -94,11 +95,19 @@ def check_mode(mode: str) -> None:
         raise UserError(f"--chat-template must be one of {', '.join(CHAT_TEMPLATE_MODES)}, not {mode!r}")
 
 
+def mode_for(model: str | None, mode: str) -> str:
+    """The mode a model is planned with: ``auto`` is ``none`` for the embedded models measured better raw
+    (``on`` gives them their template)."""
+    check_mode(mode)
+    return "none" if mode == "auto" and (model or DEFAULT_MODEL) in RAW_COMPLETION else mode
+
+
 def chat_format(backend: Backend, mode: str) -> tuple[ChatFormat | None, str]:
     """The chat format a planner applies with ``--chat-template mode``, and what to record about it.
 
-    ``auto`` applies the model's template when it has one; a base model (no template) gets its
-    prompts as raw text, as does every model with ``none``.
+    ``auto`` and ``on`` apply the model's template when it has one (``auto`` is first resolved by
+    :func:`mode_for`); a base model (no template) gets its prompts as raw text, as does every model with
+    ``none``.
     """
     check_mode(mode)
     if mode == "none":

@@ -19,6 +19,7 @@ from ..robots import Robot
 from .constraints import REASON_CHARS, Choose, Constraint, Forced, longest, refusal_line, robot_list, text_run
 from .feasibility import Need, feasible_teams
 from .grammar import Node, Ref, alt, chars, opt, rep, seq
+from .line_ends import COMMENT_NEXT
 
 # A word of free text: letters and punctuation, never the ";" that ends a part of the line.
 WORD_CHARS = REASON_CHARS - {" ", ";"}
@@ -130,7 +131,8 @@ class CoalitionConstraint(Constraint):
             options["line"] = seq(self.heads[k], _words(Ref("need-word"), need_words), ";", *tail)
         else:
             options["line"] = seq(*tail)
-        return self._choose(self.rules, options)
+        # Another line follows (its "# SubTask"), or the output ends.
+        return self._choose(self.rules, options, {"line": COMMENT_NEXT} if k + 1 < len(self.names) else {})
 
     def _advance(self, kind: str, piece: str) -> None:
         if kind == "forced":

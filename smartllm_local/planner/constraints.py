@@ -37,7 +37,7 @@ from __future__ import annotations
 import string
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import combinations, permutations
 
 from .grammar import Grammar, Node, alt, chars, opt, rep, seq
@@ -69,10 +69,13 @@ class Forced:
 
 @dataclass(frozen=True)
 class Choose:
-    """The model writes the next line; ``grammar`` admits exactly the allowed lines."""
+    """The model writes the next line; ``grammar`` admits exactly the allowed lines. ``follows`` says, for a
+    kind of line, what may start the text after it in the same token (blank lines where it says nothing; see
+    :mod:`.line_ends`)."""
 
     grammar: Grammar
     options: dict[str, Grammar]  # the kinds of line allowed, in order of precedence
+    follows: dict[str, Node] = field(default_factory=dict)
 
     def kind_of(self, line: str) -> str:
         """Which kind of line the model wrote (the first whose grammar admits it)."""
@@ -105,7 +108,12 @@ def robot_list(team_size: int, need: int, separator: str, *, ordered: bool = Fal
 
 
 def text_run(charset: frozenset[str], length: int) -> Node:
-    return rep(chars(charset), 1, length)
+    """Free text of 1 to ``length`` characters, which does not start with a space: it follows forced text
+    that ends in one, and a model writes its words with their leading space (`` put``), so that space is the
+    model's own token and never doubled."""
+    if " " not in charset:
+        return rep(chars(charset), 1, length)
+    return seq(chars(charset - {" "}), rep(chars(charset), 0, length - 1))
 
 
 def comment_text(length: int) -> Node:
@@ -168,12 +176,14 @@ class Constraint(ABC):
     def minimum_budget(self) -> int:
         """The fewest tokens that always suffice to complete an output from the start."""
 
-    def _choose(self, rules: dict[str, Node], options: dict[str, Node]) -> Choose:
+    def _choose(self, rules: dict[str, Node], options: dict[str, Node],
+                follows: dict[str, Node] | None = None) -> Choose:
         grammar = Grammar({**rules, "root": alt(*options.values())})
         text = grammar.to_gbnf()
         if not self.grammars or self.grammars[-1] != text:
             self.grammars.append(text)
-        self._offered = Choose(grammar, {k: Grammar({**rules, "root": v}) for k, v in options.items()})
+        self._offered = Choose(grammar, {k: Grammar({**rules, "root": v}) for k, v in options.items()},
+                               {k: v for k, v in (follows or {}).items() if k in options})
         return self._offered
 
 

@@ -62,6 +62,7 @@ from .constraints import (
 )
 from .feasibility import Step, call_demand
 from .grammar import Node, Ref, alt, chars, rep, seq
+from .line_ends import COMMENT_NEXT, INDENTED_NEXT
 from .orchestration import Orchestration
 from .scene_context import SceneObjects
 from .world_check import Call, WorldCheck
@@ -75,6 +76,11 @@ STEP_LINE = re.compile(r"^    (\w+)\((.*)\)\n$")
 _RELEASE = ("PutObject", "DropHandObject", "ThrowObject")
 
 Candidate = tuple[Skill, tuple[str, ...]]
+#: What may start the text after a line of each kind, in its last token (see :mod:`.line_ends`): a summary
+#: line is followed by another or by the order line, a header and a body line by an indented line (or a blank
+#: one, ending the function where it may end).
+FOLLOWS: dict[str, Node] = {"summary": COMMENT_NEXT, "header": INDENTED_NEXT, "goto": INDENTED_NEXT,
+                            "action": INDENTED_NEXT, "comment": INDENTED_NEXT, "sleep": INDENTED_NEXT}
 
 
 @dataclass
@@ -379,10 +385,10 @@ class PlanConstraint(Orchestration, Constraint):
         }.get(self.phase)
         return handler(remaining) if handler else None
 
-    def _choose(self, rules: dict[str, Node], options: dict[str, Node]) -> Choose:
+    def _choose(self, rules: dict[str, Node], options: dict[str, Node]) -> Choose:  # type: ignore[override]
         if self.allocated:
             rules = {**rules, "robot-arg": alt(*self.robot_args)}
-        return super()._choose(rules, options)
+        return super()._choose(rules, options, FOLLOWS)
 
     def _refusal(self, remaining: int) -> Node | None:
         cap = min(refusal_text_len(), remaining - len("# INFEASIBLE: \n"))

@@ -18,10 +18,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import GrammarMismatchError, PlanError, UserError
-from .backends.base import Backend, Sampling
+from .backends.base import Backend, Generated, Sampling
 from .chat import ChatFormat, prompt_tokens
-from .constraints import Choose, Constraint
-from .generation import BudgetError, GuaranteeError, run_constraint
+from .constraints import Constraint
+from .generation import BudgetError, GuaranteeError, Line, Report, TokenWriter, Written, run_tokens
+from .grammar import Matcher
 from .prompts import Example, Prompt
 
 STOP_STRINGS = {
@@ -59,6 +60,11 @@ class StageRecord:
     world_tries: int = 0  # calls the world check tried
     dead_ends: int = 0  # lines for which it found nothing that succeeds
     loops_ended: int = 0  # loops in free text the loop guard ended (see backends.repetition)
+    choices: int = 0  # tokens the model chose (not forced), where the backend measures them
+    refused: int = 0  # of those, where the model's likeliest token was one the grammar refused
+    logprob: float = 0.0  # their log-probabilities under the unconstrained model, summed
+    completed_lines: int = 0  # lines the planner completed after the model ended the sequence
+    spilled: int = 0  # line ends where the model's token ran on into the next line
     error: str = ""
     plan: object = None  # the parsed plan of a plan stage
     context: list[int] = field(default_factory=list)  # the tokens the stage ended with, for the next to go on from
@@ -76,6 +82,20 @@ class StageRecord:
             raise ValueError("not a saved stage record")
         return cls(**data)
 
+    def note(self, result: Generated) -> None:
+        """Count how far the grammar bent the model in a backend's answer."""
+        self.choices += result.choices
+        self.refused += result.refused
+        self.logprob += result.logprob
+
+    def bending(self) -> dict[str, float | int | None]:
+        """The share of the model's choices where its likeliest token was refused, and the mean log-probability
+        of what it chose, under the unconstrained model (None where the backend does not measure them)."""
+        if not self.choices:
+            return {"choices": 0, "refused_share": None, "mean_logprob": None}
+        return {"choices": self.choices, "refused_share": round(self.refused / self.choices, 4),
+                "mean_logprob": round(self.logprob / self.choices, 4)}
+
     @property
     def tokens_per_second(self) -> float:
         return self.generated_tokens / self.seconds if self.seconds else 0.0
@@ -91,6 +111,8 @@ class StageRecord:
             "examples": self.examples, "dropped_examples": self.dropped, "capped_by_budget": self.capped,
             "world_check": {"tries": self.world_tries, "dead_ends": self.dead_ends},
             "loops_ended": self.loops_ended,
+            "bending": self.bending(),
+            "completed_lines": self.completed_lines, "spilled_line_ends": self.spilled,
         }
 
 
@@ -152,46 +174,65 @@ def run_stage(
     record.prompt_seconds = time.perf_counter() - started
     if constraint is None:
         result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,
-                                  stop=STOP_STRINGS[record.stage], rng=rng)  # type: ignore[call-arg]
+                                  stop=STOP_STRINGS[record.stage], rng=rng)
         record.generated_tokens = len(result.tokens)
         record.loops_ended = result.loops
+        record.note(result)
         record.raw = record.output = result.text.rstrip() + "\n"
         record.seconds = time.perf_counter() - started
         return
-
-    def write(choose: Choose, remaining: int) -> tuple[str, int]:
-        try:
-            result = backend.generate(context, grammar=choose.grammar, max_tokens=choose.grammar.max_length() + 1,
-                                      sampling=sampling, rng=rng)  # type: ignore[call-arg]
-        except GrammarMismatchError as exc:
-            raise exc.in_stage(record.stage) from exc
-        if not choose.grammar.matches(result.text):
-            raise GrammarMismatchError(result.text, "the backend wrote it as a line, the stage's grammar does not "
-                                       "allow it", record.stage)
-        context.extend(result.tokens)
-        record.generated_tokens += len(result.tokens) + (result.stop == "eos")
-        record.loops_ended += result.loops
-        return result.text, len(result.tokens) + (result.stop == "eos")
-
-    def force(text: str) -> int:
-        tokens = backend.tokenize_continuation(text)  # one batch, whatever the tokenizer family
-        context.extend(tokens)
-        record.forced_tokens += len(tokens)
-        return len(tokens)
-
+    writer = _StageWriter(record, backend, context, sampling, rng)
+    report = Report()
     record.context = context
     try:
-        record.raw = record.output = run_constraint(constraint, write, force, output_budget)
+        record.output = run_tokens(constraint, writer, output_budget, report, open_ends=sampling.aligned)
     except BudgetError as exc:
         raise UserError(f"{record.stage}: {exc}") from exc
     except GuaranteeError as exc:
         raise GuaranteeError(f"{record.stage} stage: {exc}") from exc
     finally:
         record.seconds = time.perf_counter() - started
+        record.raw = writer.raw
         record.grammars = list(dict.fromkeys(constraint.grammars))
         record.capped = list(constraint.capped)
         record.world_tries, record.dead_ends = constraint.world_counts()
+        record.completed_lines, record.spilled = report.completed_lines, report.spilled
     record.refusal = constraint.refusal
+
+
+class _StageWriter(TokenWriter):
+    """The backend as a stage's writer: each line generated under its grammar, in the stage's context."""
+
+    def __init__(self, record: StageRecord, backend: Backend, context: list[int], sampling: Sampling,
+                 rng: np.random.Generator):
+        self.record, self.backend, self.context, self.sampling, self.rng = record, backend, context, sampling, rng
+        self.raw = ""  # what was written, as it was written (the output is that, normalized)
+
+    def write(self, line: Line, remaining: int) -> Written:
+        record = self.record
+        try:
+            result = self.backend.generate(self.context, grammar=line.grammar, max_tokens=line.grammar.max_length() + 1,
+                                           sampling=self.sampling, rng=self.rng, lines=line.lines)
+        except GrammarMismatchError as exc:
+            raise exc.in_stage(record.stage) from exc
+        if not Matcher(line.grammar).advance(result.text):
+            raise GrammarMismatchError(result.text, "the backend wrote it as a line, the stage's grammar does not "
+                                       "allow it", record.stage)
+        self.context.extend(result.tokens)
+        self.raw += result.text
+        ended = result.stop == "eos"
+        record.generated_tokens += len(result.tokens) - result.forced + ended
+        record.forced_tokens += result.forced
+        record.loops_ended += result.loops
+        record.note(result)
+        return Written(result.text, len(result.tokens) + ended, ended=ended and result.text.count("\n") < line.lines)
+
+    def force(self, text: str) -> int:
+        tokens = self.backend.tokenize_continuation(text)  # one batch, whatever the tokenizer family
+        self.context.extend(tokens)
+        self.raw += text
+        self.record.forced_tokens += len(tokens)
+        return len(tokens)
 
 
 def check_output(record: StageRecord, validate: Callable[[str], object]) -> object | None:

@@ -20,7 +20,7 @@ from ..run_store import RESULTS, RUN_FILE
 _VARIANTS = (
     ("no_comments", "no comments"), ("no_summary", "no summary"), ("no_coalition", "no coalition"),
     ("free_allocation", "free allocation"), ("no_world_check", "no world check"), ("no_grammar", "no grammar"),
-    ("free_teams", "free teams"), ("no_loop_guard", "no loop guard"),
+    ("free_teams", "free teams"), ("no_loop_guard", "no loop guard"), ("no_token_alignment", "no token alignment"),
 )
 ABLATIONS = ("no_comments", "no_summary", "no_coalition")
 
@@ -53,6 +53,9 @@ class Run:
     def variant(self) -> str:
         """The switches that set this run apart from the default SMART-LLM ("" for none)."""
         tags = [label for key, label in _VARIANTS if self.arguments.get(key)]
+        chat = self.arguments.get("chat_template")
+        if chat in ("on", "none"):  # set by hand: auto is the default
+            tags.append(f"chat template {chat}")
         temperature = self.arguments.get("temperature") or 0
         if temperature:
             tags.append(f"T={temperature:g}")

@@ -10,7 +10,17 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..results import PAPER_METRICS, REFUSERS, STAGE_NAMES, category_groups, mean_sd, metric_mean, refusals, stage_costs
+from ..results import (
+    PAPER_METRICS,
+    REFUSERS,
+    STAGE_NAMES,
+    bending,
+    category_groups,
+    mean_sd,
+    metric_mean,
+    refusals,
+    stage_costs,
+)
 from ..tasks import CATEGORIES
 from .runs import Run
 
@@ -196,11 +206,33 @@ def stage_table(runs: Sequence[Run]) -> Table:
     return table
 
 
+def bending_table(runs: Sequence[Run]) -> Table:
+    columns = ["Method", "Model", "Variant"]
+    for stage in STAGE_NAMES:
+        columns += [f"{stage} refused %", f"{stage} log-prob", f"{stage} completed"]
+    table = Table("bending", "How far the grammar bent the model: its likeliest token refused, and the mean "
+                  "log-probability of what it chose", columns)
+    for run in runs:
+        found = bending(run.lines)
+        row = _who(run)
+        for stage in STAGE_NAMES:
+            b = found.get(stage, {})
+            share = b.get("refused_share")
+            row += [None if share is None else 100 * share, b.get("mean_logprob"), b.get("completed_lines")]
+        table.rows.append(row)
+    table.notes += ["refused %: the share of the model's own choices (tokens it picked, not text the planner "
+                    "forced) where its likeliest token was one the grammar refused; log-prob: the mean "
+                    "log-probability of the tokens it picked, under the unconstrained model (free generation "
+                    "is the yardstick); completed: lines the planner completed after the model ended the "
+                    "sequence. n/a where a backend does not measure them (servers) or a method has no stage."]
+    return table
+
+
 def _whole(value: float | None) -> int | None:
     return None if value is None else round(value)
 
 
 def all_tables(runs: Sequence[Run]) -> list[Table]:
     tables = [table_one(runs), table_two(runs), table_three(runs), refusal_table(runs), efficiency_table(runs),
-              stage_table(runs)]
+              stage_table(runs), bending_table(runs)]
     return [table for table in tables if table is not None]

@@ -14,6 +14,7 @@ from pathlib import Path
 import matplotlib.image
 import pytest
 
+from smartllm_local.report.runs import Run
 from smartllm_local.tasks import SMARTLLM_CATEGORIES as CATEGORIES
 
 CLI = [sys.executable, "-m", "smartllm_local", "benchmark", "report"]
@@ -67,6 +68,15 @@ def test_table_one_is_recomputed_from_the_lines_and_the_reference_scores_one_eve
     assert all(float(rows[0][f"{c} {m}"]) == 1.0 for c in CATEGORIES for m in METRICS)
     assert "## Table I: success by task category" in proc.stdout
     assert "**The runs cover different tasks**" in (out / "report.md").read_text()
+
+
+def test_a_variant_names_each_switch_set_by_hand():
+    def variant(**arguments):
+        return Run(Path("run"), [{"identity": {"arguments": arguments}}]).variant
+
+    assert variant() == variant(chat_template="auto") == ""  # the default, whatever it gives a model
+    assert variant(chat_template="none", no_token_alignment=True) == "no token alignment, chat template none"
+    assert variant(chat_template="on", temperature=0.7) == "chat template on, T=0.7"
 
 
 def test_table_two_gives_the_spread_over_seeds(runs, report):

@@ -36,7 +36,7 @@ class FakeBackend:
     def prefill(self, context, shared: int) -> int:
         return 0
 
-    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None) -> Generated:
+    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None, lines=1) -> Generated:
         self.calls += 1
         if grammar is None:
             return Generated([0], "# INFEASIBLE: fake\n" if self.refuse else "", "eos")

@@ -14,7 +14,7 @@ from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner import pipeline
 from smartllm_local.planner.backends import load_backend
-from smartllm_local.planner.chat import APPLIED, BASE_MODEL, OFF, chat_format, prompt_tokens
+from smartllm_local.planner.chat import APPLIED, BASE_MODEL, OFF, chat_format, mode_for, prompt_tokens
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult, write_artifacts
 from smartllm_local.planner.prompts import Prompt
 from smartllm_local.planner.scene_context import scene_objects
@@ -165,8 +165,16 @@ def test_a_base_model_falls_back_to_the_raw_prompt_and_says_so(kitchen09, monkey
 ])
 def test_a_bad_chat_template_mode_is_a_one_line_error(tmp_path, command):
     one_line_error(cli(*command, "--chat-template", "chatml", cwd=tmp_path),
-                   "--chat-template must be one of auto, none, not 'chatml'")
+                   "--chat-template must be one of auto, on, none, not 'chatml'")
     assert not (tmp_path / "out").exists()
+
+
+def test_auto_plans_the_qwen_models_raw_and_every_other_model_in_its_template():
+    """The measured choice (README, Figures): Qwen2.5-Coder plans better as raw completion; none stays none."""
+    for qwen in ("qwen2.5-coder-1.5b", "qwen2.5-coder-0.5b"):
+        assert mode_for(qwen, "auto") == "none" and mode_for(qwen, "none") == "none" and mode_for(qwen, "on") == "on"
+    for other in (None, "smollm2", "gemma3-270m", "/models/qwen2.5-coder-1.5b-instruct-q4_k_m.gguf"):
+        assert mode_for(other, "auto") == "auto"
 
 
 def test_the_transformers_backend_reads_the_template_and_tokenizes_as_llama_cpp_does(smollm2, hf_smollm2):

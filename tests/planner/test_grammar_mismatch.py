@@ -45,19 +45,34 @@ def test_forced_text_llama_cpp_refuses_is_an_error_not_an_abort(smollm2):
         smollm2.generate(context, grammar=STRICT, max_tokens=30, sampling=Sampling())
 
 
+class Lying:
+    """The real backend, told another grammar than the one a stage gives it (its rules, as ``grammar`` tells
+    them to llama.cpp)."""
+
+    def __init__(self, backend, grammar: Diverging):
+        self._backend, self._gbnf = backend, grammar.to_gbnf()
+
+    def __getattr__(self, name):
+        return getattr(self._backend, name)
+
+    def generate(self, context, *, grammar, **kwargs):
+        told = Diverging(grammar.rules["root"], self._gbnf)
+        return self._backend.generate(context, grammar=told, **kwargs)
+
+
 @pytest.mark.parametrize("grammar, text", [(LAX, "Paris|London"), (STRICT, "GoToObject")])
 def test_a_stage_names_itself_and_the_text(smollm2, grammar, text):
     record = StageRecord("decomposition")
     with pytest.raises(GrammarMismatchError, match=f"^decomposition stage: .*({text})"):
-        run_stage(record, smollm2, Fitted("", smollm2.tokenize("The capital of France is", bos=True)),
-                  Script("# SubTask 1:", grammar), output_budget=100, sampling=Sampling(), rng=np.random.default_rng(0))
+        run_stage(record, Lying(smollm2, grammar), Fitted("", smollm2.tokenize("The capital of France is", bos=True)),
+                  Script(grammar), output_budget=100, sampling=Sampling(), rng=np.random.default_rng(0))
     assert record.output == ""
 
 
 class Stray(FakeBackend):
     """A backend that writes a line the grammar never offered."""
 
-    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None) -> Generated:
+    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None, lines=1) -> Generated:
         return Generated([0, 0], "oops\n", "line")
 
 

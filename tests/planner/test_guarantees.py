@@ -20,14 +20,21 @@ from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.coalition import CoalitionConstraint
 from smartllm_local.planner.constraints import Constraint, Forced
 from smartllm_local.planner.feasibility import function_needs
-from smartllm_local.planner.generation import BudgetError, GuaranteeError, accepts, run_constraint
+from smartllm_local.planner.generation import (
+    BudgetError,
+    GuaranteeError,
+    TokenWriter,
+    accepts,
+    run_constraint,
+    run_tokens,
+)
 from smartllm_local.planner.plan_constraint import PlanConstraint
 from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.skills import DEFAULT_SKILL_SET, SkillSet
 from smartllm_local.tasks import check_task, load_tasks
 
-from .writers import WRITERS, writer
+from .writers import WRITERS, TokenAdversary, writer
 
 FIXTURE = Path(__file__).parent.parent / "fixtures" / "smartllm_final_test"
 CATALOGUE = load_domain().catalogue
@@ -46,9 +53,17 @@ def _team_skills(team) -> SkillSet:
     return SkillSet(s for s in CATALOGUE.skills.values() if any(s.name in r.skills for r in team))
 
 
+def _drive(constraint, make_writer, kind: str, rng: random.Random, budget: int) -> str:
+    """A stage's output from a line writer (``writer``) or a token writer (``TokenAdversary``)."""
+    made = make_writer(kind, rng)
+    if isinstance(made, TokenWriter):
+        return run_tokens(constraint, made, budget)
+    return run_constraint(constraint, made, len, budget)
+
+
 def _decompose(scene, kind, rng, budget, make_writer=writer):
     constraint = PlanConstraint(scene, CATALOGUE.skills)
-    text = run_constraint(constraint, make_writer(kind, rng), len, budget)
+    text = _drive(constraint, make_writer, kind, rng, budget)
     plan = parse_plan(text, form="decomposed", skills=CATALOGUE.skills, scene_types=scene.types)
     return constraint, text, plan
 
@@ -64,7 +79,7 @@ def _check_all_stages(task, kind: str, rng: random.Random, budget: int, counts: 
     names = [f.name for f in plan.functions]
     needs = function_needs(plan, scene, PICKUPS)
     coalition = CoalitionConstraint(names, team, needs=[needs[n] for n in names])
-    lines = run_constraint(coalition, make_writer(kind, rng), len, coalition.minimum_budget() + 200)
+    lines = _drive(coalition, make_writer, kind, rng, coalition.minimum_budget() + 200)
     counts["coalition"] += 1
     assert all(re.match(r"^# (SubTask \d+ \(|INFEASIBLE: )", line) for line in lines.splitlines()), lines
     if coalition.refusal is not None:
@@ -77,7 +92,7 @@ def _check_all_stages(task, kind: str, rng: random.Random, budget: int, counts: 
         else:
             allocator = PlanConstraint(scene, _team_skills(team), team=team, function_names=names)
             limit = max(budget, allocator.minimum_budget())
-        allocated = run_constraint(allocator, make_writer(kind, rng), len, limit)
+        allocated = _drive(allocator, make_writer, kind, rng, limit)
         counts["allocation"] += 1
         result = parse_plan(allocated, form="allocated", skills=CATALOGUE.skills, team_size=len(team),
                             scene_types=scene.types)
@@ -127,6 +142,31 @@ def test_every_task_every_writer_gives_valid_plans_within_budget(kind):
                 except BudgetError:
                     assert budget <= 450, f"{task.id}: budget {budget} rejected"
     assert counts["decomposition"] >= 500 and counts["allocation"] >= 250, counts
+
+
+@pytest.mark.parametrize("kind", WRITERS)
+def test_writers_that_write_as_models_do_give_valid_plans_within_budget(kind):
+    """The same guarantee with writers that write tokens as a model does (:class:`TokenAdversary`): past a
+    line's newline into blank lines, an indentation or a ``#``, with spaces before it, ending the sequence
+    mid-line, every token a character; forced text carried into the next line. Every output parses and
+    validates within its budget, a summary's text never starts with a second space, and the model's ends and
+    spills were exercised."""
+    rng = random.Random(f"tokens-{kind}")
+    counts = {"decomposition": 0, "coalition": 0, "allocation": 0}
+    made: list[TokenAdversary] = []
+
+    def adversary(kind: str, rng: random.Random) -> TokenAdversary:
+        made.append(TokenAdversary(kind, rng))
+        return made[-1]
+
+    for task in all_tasks():
+        for budget in (300, 1024):
+            try:
+                _check_all_stages(task, kind, rng, budget, counts, adversary)
+            except BudgetError:
+                assert budget <= 450, f"{task.id}: budget {budget} rejected"
+    assert counts["decomposition"] >= 100 and counts["allocation"] >= 50, counts
+    assert sum(w.ended for w in made) > 20 and sum(w.spilled for w in made) > 200
 
 
 def test_a_comment_inside_a_function_cannot_read_as_a_refusal():

@@ -126,3 +126,37 @@ def test_the_other_embedded_model_runs_too():
 
 def test_the_loop_guard_ends_free_text_that_loops(smollm2):
     check_loop_guard(smollm2)
+
+
+def test_forced_text_ends_with_the_models_own_token_and_a_word_keeps_its_space(smollm2):
+    """Token healing: the planner writes forced text up to its last token, and the model writes on from there
+    under the grammar, so the space that ends ``# SubTask 1: `` comes with the model's next word (`` put``),
+    as the model tokenizes it, never doubled."""
+    from smartllm_local.planner.constraints import SUMMARY_CHARS, text_run
+
+    line = "# SubTask 1: put the apple in the fridge\n"
+    context = smollm2.tokenize(line * 4, bos=True)
+    grammar = Grammar({"root": seq("# SubTask 1: ", text_run(SUMMARY_CHARS, 40), "\n")})
+    out = smollm2.generate(context, grammar=grammar, max_tokens=grammar.max_length() + 1, sampling=Sampling())
+    assert out.text == line and out.tokens == smollm2.tokenize(line)
+    pieces = [smollm2.detokenize([t]) for t in out.tokens]
+    assert " put" in pieces and out.forced == pieces.index(" put") and out.choices == len(pieces) - out.forced
+    # unaligned (--no-token-alignment), the space is forced and the model's word comes without its own
+    whole = smollm2.generate(context, grammar=grammar, max_tokens=grammar.max_length() + 1,
+                             sampling=Sampling(aligned=False))
+    assert whole.tokens != out.tokens and " put" not in [smollm2.detokenize([t]) for t in whole.tokens]
+
+
+def test_the_end_of_sequence_is_the_models_choice_where_the_grammar_cannot_end(smollm2):
+    """The model ends the sequence where it would, though the line is not complete (the planner completes it
+    then); with its likeliest token refused at each step, each such step is counted."""
+    from smartllm_local.planner.chat import chat_format, prompt_tokens
+
+    chat, _ = chat_format(smollm2, "auto")
+    _, context, _ = prompt_tokens(smollm2, "Answer with one word: is the sky blue?", chat)
+    grammar = Grammar({"root": seq(rep(chars("abcdefghijklmnopqrstuvwxyzY"), 1, 30), "\n")})
+    out = smollm2.generate(context, grammar=grammar, max_tokens=40, sampling=Sampling())
+    assert out.stop == "eos" and out.text and "\n" not in out.text and grammar.after(out.text)
+    assert out.choices == len(out.tokens) + 1 and out.logprob < 0
+    free = smollm2.generate(context, grammar=None, max_tokens=40, sampling=Sampling())
+    assert free.stop == "eos" and 0 < out.refused <= out.choices

@@ -121,8 +121,12 @@ def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone(
     assert decomposition[1].prompt_tokens - decomposition[1].reused_tokens < 30  # the instruction alone
     assert coalition[1].reused_tokens == (coalition[1].shared_tokens if coalition[0].examples == coalition[1].examples
                                           else 0)
-    for record in (allocation, after.stages[2]):  # the coalition's context, then the line that opens it
-        assert record.reused_tokens > record.shared_tokens and record.prompt_tokens - record.reused_tokens < 12
+    for record, coalition in ((allocation, alone.stages[1]), (after.stages[2], after.stages[1])):
+        # the coalition's context as it was evaluated (what it wrote, not the end of sequence it chose), then
+        # the line that opens the allocation, and any lines the coalition's completion forced after that end
+        assert record.reused_tokens >= coalition.prompt_tokens + coalition.generated_tokens - 1
+        if not coalition.completed_lines:
+            assert record.prompt_tokens - record.reused_tokens < 12
 
 
 def _planned(tmp_path, states=None):

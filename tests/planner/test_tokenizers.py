@@ -113,17 +113,22 @@ def test_a_prompt_starts_with_bos_only_where_the_model_uses_one(vocab):
     assert vocab.detokenize(tokens) == (" " + prompt if vocab.family in SENTENCEPIECE else prompt)
 
 
-def test_the_grammars_forced_text_goes_in_one_batch(vocab):
-    """The decision generate takes, without generating: the forced text's tokens, all at once, accepted
-    by llama.cpp's grammar; then the choice is the model's (nothing forced)."""
+def test_the_grammars_forced_text_goes_in_one_batch_but_its_last_token(vocab):
+    """The decision generate takes, without generating: the forced text's tokens, all at once, accepted by
+    llama.cpp's grammar, but the last, which the model writes (token healing); whole, unaligned."""
     forced = "    GoToObject(robot_list[0], '"
     grammar = Grammar({"root": seq(forced, alt("Apple", "Bread"), "')\n")})
     matcher = Matcher(grammar)
-    sampler = vocab._grammar_sampler(grammar)
+    whole = vocab.tokenize_continuation(forced)
+    for heal, expected in ((True, whole[:-1]), (False, whole)):
+        sampler = vocab._grammar_sampler(grammar)
+        try:
+            assert vocab._forced_tokens(matcher.forced(), sampler, heal=heal) == expected
+        finally:
+            vocab._lib.llama_sampler_free(sampler)
+    assert matcher.advance(forced)
+    sampler = vocab._grammar_sampler(Grammar({"root": seq(alt("Apple", "Bread"), "')\n")}))
     try:
-        tokens = vocab._forced_tokens(matcher.forced(), sampler)
-        assert vocab.detokenize(tokens) == forced
-        assert matcher.advance(forced)
         assert vocab._forced_tokens(matcher.forced(), sampler) == []
     finally:
         vocab._lib.llama_sampler_free(sampler)
@@ -142,24 +147,28 @@ class GrammarWriter:
     def prefill(self, context, shared: int) -> int:
         return 0  # a vocabulary cannot evaluate
 
-    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None) -> Generated:
-        self.contexts.append(list(context))
-        text = grammar.sample(random.Random(0))
+    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None, lines=1) -> Generated:
+        self.contexts.append((list(context), grammar))
+        text = grammar.sample(random.Random(0), "shortest")
         return Generated(self.vocab.tokenize_continuation(text), text, "line")
 
 
-def test_a_stage_writes_forced_text_in_one_batch_without_generating(vocab):
+def test_forced_text_goes_into_the_next_line_and_what_ends_a_stage_in_one_batch(vocab):
+    """Forced text is written with the line the model writes next (its last token is the model's: token
+    healing); what the stage forces after its last line goes into the context in one batch, for every
+    tokenizer family."""
     head, tail = "def subtask1_wash_apple(robot_list):\n", "\nt1.start()\n"
-    line = Grammar({"root": "    GoToObject(robot_list[0], 'Apple')\n"})
+    step = "    GoToObject(robot_list[0], 'Apple')\n"
     backend = GrammarWriter(vocab)
     prompt = vocab.tokenize("# Your plan:\n", bos=True)
     record = StageRecord("allocation")
-    run_stage(record, backend, Fitted("", prompt), Script(head, line, tail), output_budget=200, sampling=Sampling(),
-              rng=np.random.default_rng(0))
-    assert record.output == head + "    GoToObject(robot_list[0], 'Apple')\n" + tail
-    assert len(backend.contexts) == 1  # generation for the offered line only, none for forced text
-    assert vocab.detokenize(backend.contexts[0][len(prompt):]) == head
-    assert record.forced_tokens == len(vocab.tokenize_continuation(head)) + len(vocab.tokenize_continuation(tail))
+    run_stage(record, backend, Fitted("", prompt), Script(head, Grammar({"root": step}), tail), output_budget=200,
+              sampling=Sampling(), rng=np.random.default_rng(0))
+    assert record.output == head + step + tail
+    (context, grammar), = backend.contexts  # one generation: the offered line, the head before it
+    assert context == prompt and grammar.matches(head + step) and not grammar.matches(step)
+    assert vocab.detokenize(record.context[len(prompt):]) == head + step + tail
+    assert record.forced_tokens == len(vocab.tokenize_continuation(tail))
 
 
 def test_a_hugging_face_vocabulary_spells_llama2_continuations_exactly(tmp_path):

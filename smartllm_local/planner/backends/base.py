@@ -11,6 +11,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
+import numpy as np
+
 from ...errors import ModelError
 from ..grammar import Grammar
 from .repetition import LoopGuard
@@ -19,11 +21,15 @@ from .repetition import LoopGuard
 @dataclass(frozen=True)
 class Sampling:
     """Decoding settings; temperature 0 is greedy, the seed makes sampling reproducible, and
-    ``loop_guard`` (None: off) keeps a line from ending in text said three times over."""
+    ``loop_guard`` (None: off) keeps a line from ending in text said three times over. ``aligned``: forced
+    text ends with the model's own token, line ends are open and the end of sequence is always the model's
+    choice (off, for measuring its effect: forced text is written whole, a line ends at its newline, and
+    the model may end only where the grammar may)."""
 
     temperature: float = 0.0
     seed: int = 0
     loop_guard: LoopGuard | None = LoopGuard()
+    aligned: bool = True
 
 
 @dataclass
@@ -32,6 +38,10 @@ class Generated:
     text: str
     stop: str  # "line" (a grammar line completed), "eos", "stop" (a stop string), "length"
     loops: int = 0  # loops the loop guard ended
+    forced: int = 0  # of ``tokens``, those the backend wrote itself (text the grammar forces), not the model
+    choices: int = 0  # tokens the model chose (the end of sequence included)
+    refused: int = 0  # of those, the ones where its likeliest token was one the grammar refused
+    logprob: float = 0.0  # the sum of the chosen tokens' log-probabilities under the model, unconstrained
 
 
 class Backend(Protocol):
@@ -70,13 +80,16 @@ class Backend(Protocol):
         max_tokens: int,
         sampling: Sampling,
         stop: Sequence[str] = (),
+        rng: np.random.Generator | None = None,
+        lines: int = 1,
     ) -> Generated:
         """Continue ``context``.
 
-        With a grammar (every line grammar admits one line ending in a newline,
-        or the empty string), generation stops as soon as a line is complete or
-        the model ends the sequence. Without one, it stops at a stop string
-        (which is not included), the end of sequence, or ``max_tokens``.
+        With a grammar, generation stops after the token that writes the ``lines``-th newline (its text may run
+        on past it, as the grammar admits), or where the model ends the sequence, which is always its choice
+        (the text is then a beginning of what the grammar admits). Text the grammar forces is written up to its
+        last token, which the model writes (token healing). Without a grammar, it stops at a stop string (which
+        is not included), the end of sequence, or ``max_tokens``. ``rng`` draws the samples (temperature > 0).
         """
 
     def close(self) -> None:

@@ -16,6 +16,9 @@ from typing import Any, Protocol
 from ...errors import UserError
 from .connection import Connection
 
+#: A written token's log-probability under the unconstrained model, and the likeliest tokens there, with theirs.
+TokenProbs = tuple[float, list[tuple[int, float]]]
+
 
 @dataclass(frozen=True)
 class Reply:
@@ -23,6 +26,7 @@ class Reply:
     tokens: list[int] | None  # the ids written, where the server says them
     finish: str  # "eos", "length" or "stop"
     evaluated: int | None = None  # prompt tokens the server evaluated (not taken from its cache), if it says
+    probs: list[TokenProbs] | None = None  # per token written, where the server was asked for them
 
 
 @dataclass(frozen=True)
@@ -55,14 +59,19 @@ class Dialect(Protocol):
     serves_vocabulary: bool
     #: Its answers say how much of the prompt came from its cache, so a prompt's reuse can be recorded.
     reports_cache: bool
+    #: It says, for each token it writes, the likeliest tokens of the unconstrained model (before the grammar):
+    #: the model's end of sequence is then its choice, and how far the grammar bent it is measured.
+    reports_top: bool
 
     def recognize(self, get: Get) -> Served | None:
         """What the server at the other end says about itself, if it is this dialect's (:class:`Unsupported`
         where it is, but cannot be planned against)."""
 
     def completion(self, prompt: list[int] | str, grammar: str | None, max_tokens: int, temperature: float,
-                   seed: int, stop: Sequence[str], slot: int, banned: Sequence[int]) -> tuple[str, dict[str, Any]]:
-        """The path and body of a completion request (``banned``: tokens it must not write)."""
+                   seed: int, stop: Sequence[str], slot: int, banned: Sequence[int],
+                   top: int = 0) -> tuple[str, dict[str, Any]]:
+        """The path and body of a completion request (``banned``: tokens it must not write; ``top``: how many of
+        the likeliest tokens to report for each token written, where it reports them)."""
 
     def reply(self, answer: dict[str, Any]) -> Reply:
         """What a completion's answer says."""
@@ -87,7 +96,7 @@ class LlamaServer:
     """llama.cpp's ``llama-server``: token ids in and out, one slot per worker, its prompt cache on."""
 
     name = "llama-server"
-    takes_tokens = mirrors_slots = serves_vocabulary = reports_cache = True
+    takes_tokens = mirrors_slots = serves_vocabulary = reports_cache = reports_top = True
 
     def recognize(self, get):
         props = get("/props")
@@ -96,18 +105,24 @@ class LlamaServer:
         return Served(props.get("model_path") or None, props["default_generation_settings"].get("n_ctx"),
                       int(props.get("total_slots") or 1), props)
 
-    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot, banned):
+    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot, banned, top=0):
         body = {"prompt": prompt, "n_predict": max_tokens, "temperature": temperature, "seed": seed,
                 "stop": list(stop), "cache_prompt": True, "id_slot": slot, "return_tokens": True,
                 "logit_bias": [[t, False] for t in banned], "repeat_penalty": 1.0, **_PLAIN}
         if grammar is not None:
             body["grammar"] = grammar
+        if top:  # from the logits before any sampler, the grammar's included (post_sampling_probs off)
+            body.update(n_probs=top, post_sampling_probs=False)
         return "/completion", body
 
     def reply(self, answer):
         finish = {"eos": "eos", "limit": "length", "word": "stop"}.get(answer.get("stop_type", ""), "length")
         evaluated = (answer.get("timings") or {}).get("prompt_n")
-        return Reply(answer["content"], list(answer.get("tokens") or []), finish, evaluated)
+        probs = None
+        if "completion_probabilities" in answer:
+            probs = [(float(p["logprob"]), [(int(t["id"]), float(t["logprob"])) for t in p["top_logprobs"]])
+                     for p in answer["completion_probabilities"]]
+        return Reply(answer["content"], list(answer.get("tokens") or []), finish, evaluated, probs)
 
     def tokenize(self, text):
         return "/tokenize", {"content": text, "add_special": False}
@@ -120,7 +135,7 @@ class Vllm:
 
     name = "vLLM"
     takes_tokens = reports_cache = True
-    mirrors_slots = serves_vocabulary = False
+    mirrors_slots = serves_vocabulary = reports_top = False
 
     def recognize(self, get):
         model = _first_model(get)
@@ -135,7 +150,7 @@ class Vllm:
                               "(structured_outputs came with 0.12): upgrade vLLM there")
         return Served(model.get("root") or model.get("id"), model.get("max_model_len"))
 
-    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot, banned):
+    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot, banned, top=0):
         body = {"prompt": prompt, "max_tokens": max_tokens, "temperature": temperature, "seed": seed,
                 "stop": list(stop), "return_token_ids": True, "repetition_penalty": 1.0,
                 "logit_bias": {str(t): -100.0 for t in banned}, **_PLAIN}  # -100: OpenAI's floor, which vLLM keeps
@@ -168,7 +183,7 @@ class LlamaCppPythonServer:
     and out."""
 
     name = "llama-cpp-python"
-    takes_tokens = mirrors_slots = serves_vocabulary = reports_cache = False
+    takes_tokens = mirrors_slots = serves_vocabulary = reports_cache = reports_top = False
 
     def recognize(self, get):
         model = _first_model(get)
@@ -176,7 +191,7 @@ class LlamaCppPythonServer:
             return None
         return Served(model.get("id"))
 
-    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot, banned):
+    def completion(self, prompt, grammar, max_tokens, temperature, seed, stop, slot, banned, top=0):
         body = {"prompt": prompt, "max_tokens": max_tokens, "temperature": temperature, "seed": seed,
                 "stop": list(stop), "logit_bias": {str(t): -1e30 for t in banned}, "repeat_penalty": 1.0, **_PLAIN}
         if grammar is not None:

@@ -29,6 +29,7 @@ class HFVocabulary:
         template = getattr(tokenizer, "chat_template", None)  # a dict where a checkpoint names several
         self.chat_template = template.get("default") if isinstance(template, dict) else template
         self.bos_token, self.eos_token = tokenizer.bos_token or "", tokenizer.eos_token or ""
+        self.end_tokens = frozenset({tokenizer.eos_token_id} if tokenizer.eos_token_id is not None else ())
 
     @classmethod
     def load(cls, folder: Path) -> HFVocabulary:

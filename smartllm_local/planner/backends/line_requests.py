@@ -17,11 +17,13 @@ from collections.abc import Callable, Sequence
 
 from ..grammar import Grammar, Matcher
 from .base import Generated, Sampling
+from .dialects import TokenProbs
 from .repetition import TRIES, current_line
 
 #: Asks the server to go on: (context, the grammar of what may come next, at most this many tokens, tokens
-#: it must not write) -> the tokens it wrote (none: it ended the sequence).
-Ask = Callable[[list[int], Grammar, int, Sequence[int]], list[int]]
+#: it must not write) -> the tokens it wrote (none: it ended the sequence), and their probabilities where the
+#: server reports them.
+Ask = Callable[[list[int], Grammar, int, Sequence[int]], tuple[list[int], list[TokenProbs] | None]]
 
 
 #: Tokens a server is first asked for at once in a line. It writes on (its answers past the next forced text
@@ -39,42 +41,85 @@ class LineRequests:
 
     def __init__(self, context: Sequence[int], grammar: Grammar, sampling: Sampling, ask: Ask,
                  spell: Callable[[str], list[int]], text_of: Callable[[int], str],
-                 taken: Callable[[list[int]], None] = lambda tokens: None):
+                 taken: Callable[[list[int]], None] = lambda tokens: None, end_tokens: frozenset[int] = frozenset()):
         """``spell`` gives forced text's tokens, ``text_of`` one token's text; ``taken`` is told each batch the
-        in-process backend would evaluate (a forced text, a way out, a chosen token)."""
+        in-process backend would evaluate (a forced text, a way out, a chosen token). ``end_tokens``: those
+        that end the sequence, which the model may choose where the server reports its likeliest tokens
+        (greedy decoding: where one of them is likelier than the token the grammar let it write)."""
         self.context, self.grammar, self.ask = list(context), grammar, ask
         self.guard = sampling.loop_guard
-        self.spell, self.text_of, self.taken = spell, text_of, taken
+        self.greedy = sampling.temperature <= 0
+        self.heal = sampling.aligned
+        self.spell, self.text_of, self.taken, self.end_tokens = spell, text_of, taken, end_tokens
         self.matcher = Matcher(grammar)
         self.out: list[int] = []
-        self.text, self.loops = "", 0
+        self.text = ""
+        self.measured = Generated([], "", "")
 
-    def write(self, max_tokens: int) -> Generated:
+    def write(self, max_tokens: int, lines: int = 1) -> Generated:
+        """The line (``lines`` newlines), as the in-process backend writes it."""
         stretch = FIRST_ASK
         while len(self.out) < max_tokens:
-            forced = self.matcher.forced()
-            if len(forced) >= 2:  # as in-process: one character is left to the model
-                self._take(self.spell(forced))
+            forced = self._forced()
+            if forced:
+                self._take(forced)
+                self.measured.forced += len(forced)
             else:
-                answer = self._ask(min(max_tokens - len(self.out), stretch), ())
+                answer, probs = self._ask(min(max_tokens - len(self.out), stretch), ())
                 if not answer:
                     return self._done("eos")
-                for token in answer:
+                for k, token in enumerate(answer):
+                    seen = probs[k] if probs else None
+                    end = self._end(token, seen)
+                    if end is not None:
+                        self._measure(end, seen)
+                        return self._done("eos")
                     if self.guard is not None and self.guard.loops(current_line(self.text) + self.text_of(token)):
-                        self.loops += 1
+                        self.measured.loops += 1
                         way = self.matcher.shortest_way()
-                        self._take(self.spell(way) if way else [self._instead(token)])
+                        if way:
+                            written = self.spell(way)
+                            self.measured.forced += len(written)
+                        else:
+                            written = [self._instead(token)]
+                        self._take(written)
                         break
+                    self._measure(token, seen)
                     self._take([token])
-                    if self.text.endswith("\n") or len(self.out) >= max_tokens or len(self.matcher.forced()) >= 2:
+                    if self.text.count("\n") >= lines or len(self.out) >= max_tokens or self._forced():
                         break
                 else:
                     stretch *= 2  # kept whole: the model is in a long stretch of its own
-            if self.text.endswith("\n"):
+            if self.text.count("\n") >= lines:
                 return self._done("line")
         return self._done("length")
 
-    def _ask(self, max_tokens: int, banned: Sequence[int]) -> list[int]:
+    def _end(self, token: int, probs: TokenProbs | None) -> int | None:
+        """The end-of-sequence token the model would rather have written than ``token``, if any (greedy
+        decoding, where the server reports the likeliest tokens): ending is always the model's choice."""
+        if probs is None or not self.greedy or not self.heal:
+            return None
+        return next((t for t, p in probs[1] if t in self.end_tokens and p > probs[0]), None)
+
+    def _measure(self, chosen: int, probs: TokenProbs | None) -> None:
+        """How far the grammar bent the model at a token it chose, as in-process: whether its likeliest token was
+        refused (it would have been chosen), and the chosen token's log-probability."""
+        if probs is None:
+            return
+        logprob, top = probs
+        self.measured.choices += 1
+        self.measured.refused += bool(top) and top[0][0] != chosen
+        self.measured.logprob += next((p for t, p in top if t == chosen), logprob)
+
+    def _forced(self) -> list[int]:
+        """As in-process: the tokens of the text the grammar forces but the last, which the model writes
+        (unless decoding is not aligned); one character is left to the model altogether."""
+        forced = self.matcher.forced()
+        if len(forced) < 2:
+            return []
+        return self.spell(forced)[:-1] if self.heal else self.spell(forced)
+
+    def _ask(self, max_tokens: int, banned: Sequence[int]) -> tuple[list[int], list[TokenProbs] | None]:
         return self.ask(self.context + self.out, self.grammar.after(self.text), max_tokens, banned)
 
     def _instead(self, looping: int) -> int:
@@ -83,8 +128,10 @@ class LineRequests:
         banned = [looping]
         line = current_line(self.text)
         while len(banned) < TRIES:
-            answer = self._ask(1, banned)
+            answer, probs = self._ask(1, banned)
             if not answer or not self.guard.loops(line + self.text_of(answer[0])):  # type: ignore[union-attr]
+                if answer:
+                    self._measure(answer[0], probs[0] if probs else None)
                 return answer[0] if answer else looping
             banned.append(answer[0])
         return looping
@@ -98,5 +145,6 @@ class LineRequests:
         self.taken(tokens)
 
     def _done(self, stop: str) -> Generated:
-        return Generated(self.out, self.text, stop, self.loops)
-
+        found = self.measured
+        return Generated(self.out, self.text, stop, found.loops, found.forced, found.choices, found.refused,
+                         found.logprob)

@@ -107,12 +107,15 @@ class LlamaCppBackend(PrefixReuse):
         self._tokens: list[int] = []  # what the key/value cache holds
         self._alone: list[bool] = []  # which of them were evaluated alone (a lone token computes otherwise)
         self._states = MemoryStates()
+        self._ends = True  # whether the end of sequence is always admitted (Sampling.aligned)
         self.prefix_store = prefix_store
         self._settings = {"backend": self.name, "llama_cpp": getattr(llama_cpp, "__version__", ""), "n_ctx": n_ctx,
                           "n_batch": n_batch, "n_gpu_layers": n_gpu_layers}
         self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
         self._pieces: dict[tuple[int, bool], bytes] = {}
+        self._eog = np.array([bool(llama_cpp.llama_vocab_is_eog(self._vocab, t)) for t in range(self.n_vocab)])
+        self.end_tokens = frozenset(int(t) for t in np.flatnonzero(self._eog))  # llama.cpp's end-of-generation
         self._full = np.zeros(self.n_vocab, dtype=[("id", np.intc), ("logit", np.single), ("p", np.single)])
         self._few = np.zeros(_TOP, dtype=self._full.dtype)
         self.n_gpu_layers = n_gpu_layers
@@ -247,15 +250,18 @@ class LlamaCppBackend(PrefixReuse):
         self._apply(sampler, self._full, self.n_vocab)
         masked = np.full(self.n_vocab, -np.inf, dtype=np.float32)
         masked[self._full["id"]] = self._full["logit"]
+        if self._ends:
+            masked[self._eog] = logits[self._eog]  # the end of sequence is always the model's to choose
         return masked
 
     def _pick(self, logits: np.ndarray, sampler, sampling: Sampling, rng: np.random.Generator,
               avoid: Callable[[int], bool] | None = None) -> int:
         """The next token, greedy or sampled, among those the grammar admits and, where any of them is
-        left, those ``avoid`` does not refuse."""
+        left, those ``avoid`` does not refuse. The end of sequence is always admitted: where the model
+        ends, the planner completes the output (see :mod:`..generation`)."""
         if sampling.temperature <= 0:
             best = int(np.argmax(logits))
-            if (sampler is None or self._allowed(sampler, best)) and not (avoid and avoid(best)):
+            if (self._admits(sampler, best)) and not (avoid and avoid(best)):
                 return best
             top = np.argpartition(-logits, _TOP)[:_TOP]
             top = top[np.argsort(-logits[top], kind="stable")]
@@ -263,6 +269,8 @@ class LlamaCppBackend(PrefixReuse):
             self._few["logit"] = logits[top]
             if sampler is not None:
                 self._apply(sampler, self._few, _TOP)
+                if self._ends:
+                    self._few["logit"][self._eog[top]] = logits[top][self._eog[top]]
             admitted = self._few["id"][np.isfinite(self._few["logit"])]
             if not len(admitted) or (avoid and len(admitted) < TRIES and all(avoid(int(t)) for t in admitted)):
                 masked = self._masked(sampler, logits)
@@ -275,12 +283,15 @@ class LlamaCppBackend(PrefixReuse):
         probs = np.exp(scaled - scaled.max())
         probs /= probs.sum()
         token = int(rng.choice(self.n_vocab, p=probs))
-        if (sampler is None or self._allowed(sampler, token)) and not (avoid and avoid(token)):
+        if self._admits(sampler, token) and not (avoid and avoid(token)):
             return token
         masked = self._masked(sampler, logits).astype(np.float64) / sampling.temperature if sampler else scaled
         if not np.isfinite(masked).any():
             raise GrammarError("the grammar admits no token here")
         return draw(np.exp(masked - masked[np.isfinite(masked)].max()), rng, avoid, TRIES)
+
+    def _admits(self, sampler, token: int) -> bool:
+        return sampler is None or (self._ends and bool(self._eog[token])) or self._allowed(sampler, token)
 
     # ------------------------------------------------------------ generation
 
@@ -293,63 +304,86 @@ class LlamaCppBackend(PrefixReuse):
         sampling: Sampling,
         stop: Sequence[str] = (),
         rng: np.random.Generator | None = None,
+        lines: int = 1,
     ) -> Generated:
         rng = rng or np.random.default_rng(sampling.seed)
         if len(context) + max_tokens > self.n_ctx:
             max_tokens = self.n_ctx - len(context) - 1
         self._sync(context)
+        self._ends = sampling.aligned
         sampler = self._grammar_sampler(grammar) if grammar is not None else None
         matcher = Matcher(grammar) if grammar is not None else None
-        guard, loops = sampling.loop_guard, 0
-        out: list[int] = []
-        text = ""
+        guard = sampling.loop_guard
+        out = Generated([], "", "length")
         decoder = codecs.getincrementaldecoder("utf-8")("replace")
         try:
-            while len(out) < max_tokens:
-                new = self._forced_tokens(matcher.forced(), sampler) if matcher is not None else []
+            while len(out.tokens) < max_tokens:
+                new = self._forced_tokens(matcher.forced(), sampler, heal=sampling.aligned) if matcher else []
+                forced = len(new)
                 if not new:
                     logits = self._logits()
                     token = self._pick(logits, sampler, sampling, rng)
-                    line = current_line(text)
+                    line = current_line(out.text)
                     if guard is not None and guard.loops(line + self._text(token)):
                         # A loop: end the free text it runs in (the grammar's shortest way on), or else
                         # take the best token that does not close the loop.
-                        new = (self._forced_tokens(matcher.shortest_way(), sampler, way=True)
-                               if matcher is not None else [])
+                        new = self._forced_tokens(matcher.shortest_way(), sampler, way=True) if matcher else []
+                        forced = len(new)
                         token = token if new else self._pick(
                             logits, sampler, sampling, rng, lambda t: guard.loops(line + self._text(t)))
-                        loops += 1
+                        out.loops += 1
+                    if not new:
+                        self._measure(out, logits, token, sampler)
                 if not new:
-                    if self._lib.llama_vocab_is_eog(self._vocab, token):
-                        return Generated(out, text + decoder.decode(b"", final=True), "eos", loops)
+                    if self._eog[token]:
+                        out.text += decoder.decode(b"", final=True)
+                        out.stop = "eos"
+                        return out
                     if sampler is not None:
                         self._lib.llama_sampler_accept(sampler, token)
                     new = [token]
-                out.extend(new)
+                out.tokens.extend(new)
+                out.forced += forced
                 self._evaluate(new)
                 piece = decoder.decode(b"".join(self._piece(t) for t in new))
                 if matcher is not None and not matcher.advance(piece):
-                    raise GrammarMismatchError(text + piece, "llama.cpp's grammar let the model write it, "
+                    raise GrammarMismatchError(out.text + piece, "llama.cpp's grammar let the model write it, "
                                                "the planner's grammar does not allow it")
-                text += piece
-                if sampler is not None and text.endswith("\n"):
-                    return Generated(out, text, "line", loops)
+                out.text += piece
+                if sampler is not None and out.text.count("\n") >= lines:
+                    out.stop = "line"
+                    return out
                 for s in stop:
-                    if s in text:
-                        return Generated(out, text[: text.index(s)], "stop", loops)
-            return Generated(out, text + decoder.decode(b"", final=True), "length", loops)
+                    if s in out.text:
+                        out.text, out.stop = out.text[: out.text.index(s)], "stop"
+                        return out
+            out.text += decoder.decode(b"", final=True)
+            return out
         finally:
             if sampler is not None:
                 self._lib.llama_sampler_free(sampler)
 
-    def _forced_tokens(self, forced: str, sampler, way: bool = False) -> list[int]:
-        """The tokens of text the planner's grammar forces, all in one batch, accepted by llama.cpp's grammar.
+    def _measure(self, out: Generated, logits: np.ndarray, token: int, sampler) -> None:
+        """How far the grammar bent the model at a token it chose: whether its likeliest token was refused,
+        and the chosen token's log-probability under the unconstrained model."""
+        best = int(np.argmax(logits))
+        out.choices += 1
+        out.refused += best != token and not self._admits(sampler, best)
+        top = float(logits[best])
+        out.logprob += float(logits[token]) - top - float(np.log(np.exp(logits - top, dtype=np.float64).sum()))
+
+    def _forced_tokens(self, forced: str, sampler, *, way: bool = False, heal: bool = True) -> list[int]:
+        """The tokens of text the planner's grammar forces, all in one batch, accepted by llama.cpp's grammar;
+        with ``heal``, all but the last, which the model writes itself (it may run on into what follows: token
+        healing). A loop guard's ``way`` out is written whole.
 
         Each is checked before llama.cpp accepts it: accepting a token its grammar refuses aborts the process.
         """
         if len(forced) < 2 and not way:  # one character costs no more sampled than forced
             return []
         tokens = self.tokenize_continuation(forced)
+        if heal and not way:
+            tokens = tokens[:-1]
         for token in tokens:
             if not self._allowed(sampler, token):
                 raise GrammarMismatchError(forced, "the planner's grammar forces it, llama.cpp's grammar refuses it")

@@ -39,6 +39,10 @@ from .vocabulary import RemoteVocabulary, Vocabulary, check_vocabulary, served_v
 
 __all__ = ["DEFAULT_TIMEOUT", "ServerBackend", "ServerError", "connect"]
 
+#: The likeliest tokens a server that reports them is asked for with each token it writes: as many as the
+#: in-process backend looks at before it masks the whole vocabulary.
+TOP = 64
+
 
 class ServerBackend:
     """A model behind an HTTP server, one worker's view of it (its slot, its connection)."""
@@ -92,6 +96,7 @@ class ServerBackend:
         sampling: Sampling,
         stop: Sequence[str] = (),
         rng: np.random.Generator | None = None,
+        lines: int = 1,
     ) -> Generated:
         """A line is written as the in-process backend writes it (:class:`LineRequests`); free text in one
         request."""
@@ -104,11 +109,12 @@ class ServerBackend:
         if slot is not None:
             slot.sync(context)
 
-        def ask(prompt: list[int], rest: Grammar | None, limit: int, banned: Sequence[int] = ()) -> list[int]:
+        def ask(prompt: list[int], rest: Grammar, limit: int, banned: Sequence[int] = ()):
             if slot is not None:
                 slot.prepare(prompt)
-            return self._tokens(self._request(prompt, None if rest is None else rest.to_gbnf(), limit, sampling,
-                                              stop if rest is None else (), int(rng.integers(2**31 - 1)), banned))
+            reply = self._request(prompt, rest.to_gbnf(), limit, sampling, (), int(rng.integers(2**31 - 1)), banned,
+                                  TOP if self.dialect.reports_top else 0)
+            return self._tokens(reply), reply.probs
 
         if grammar is None:
             if slot is not None:
@@ -117,14 +123,15 @@ class ServerBackend:
             return Generated(self._tokens(reply), reply.text, reply.finish)
         try:
             return LineRequests(context, grammar, sampling, ask, self.vocabulary.tokenize_continuation,
-                                self._text_of, slot.take if slot is not None else lambda tokens: None).write(max_tokens)
+                                self._text_of, slot.take if slot is not None else lambda tokens: None,
+                                self.vocabulary.end_tokens).write(max_tokens, lines)
         except WrongLine as exc:
             raise ServerError(f"the server at {self.connection.url} wrote {str(exc)!r}, which the line's grammar "
                               "does not allow: it ignores or mis-applies grammars") from exc
 
     def _request(self, prompt: list[int], grammar: str | None, max_tokens: int, sampling: Sampling,
-                 stop: Sequence[str], seed: int, banned: Sequence[int] = ()) -> Reply:
-        reply = self._complete(prompt, grammar, max_tokens, sampling, stop, seed, banned)
+                 stop: Sequence[str], seed: int, banned: Sequence[int] = (), top: int = 0) -> Reply:
+        reply = self._complete(prompt, grammar, max_tokens, sampling, stop, seed, banned, top)
         if self._slot is not None:
             # The server evaluated each token it wrote, alone, before writing the next (the last one too where
             # it went on to end the sequence).
@@ -144,10 +151,10 @@ class ServerBackend:
         return text
 
     def _complete(self, context: list[int], grammar: str | None, max_tokens: int, sampling: Sampling,
-                  stop: Sequence[str], seed: int, banned: Sequence[int] = ()) -> Reply:
+                  stop: Sequence[str], seed: int, banned: Sequence[int] = (), top: int = 0) -> Reply:
         prompt: list[int] | str = context if self.dialect.takes_tokens else self._text(context)
         path, body = self.dialect.completion(prompt, grammar, max_tokens, sampling.temperature, seed, stop,
-                                             self.slot, banned)
+                                             self.slot, banned, top)
         started = time.perf_counter()
         status, answer = self.connection.call("POST", path, body)
         if status != 200 or not isinstance(answer, dict):

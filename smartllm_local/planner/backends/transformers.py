@@ -246,7 +246,7 @@ class TransformersBackend(PrefixReuse):
         return sum(t.nbytes for layer in state.layers for t in (layer.keys, layer.values) if t is not None)
 
     def generate(self, context: Sequence[int], *, grammar: Grammar | None, max_tokens: int, sampling: Sampling,
-                 stop: Sequence[str] = (), rng: np.random.Generator | None = None) -> Generated:
+                 stop: Sequence[str] = (), rng: np.random.Generator | None = None, lines: int = 1) -> Generated:
         torch, llg = self._torch, self._llg
         rng = rng or np.random.default_rng(sampling.seed)
         max_tokens = min(max_tokens, self.n_ctx - len(context) - 1)
@@ -258,48 +258,77 @@ class TransformersBackend(PrefixReuse):
             if matcher.is_error():
                 raise GrammarError(f"llguidance rejected a grammar: {matcher.get_error()}")
             mask = llg.torch.allocate_token_bitmask(1, self.n_vocab)  # on the CPU: llguidance fills it there
-        guard, loops = sampling.loop_guard, 0
-        out: list[int] = []
-        text = ""
-        while len(out) < max_tokens:
-            logits = self._logits[: self.n_vocab].clone().unsqueeze(0)
-            if matcher is not None:
-                # llguidance's own apply function goes through torch.compile (seconds per call): unpack here.
-                llg.torch.fill_next_token_bitmask(matcher, mask, 0)
-                bits = np.unpackbits(mask.numpy().view(np.uint8), bitorder="little")[: self.n_vocab]
-                blocked = torch.from_numpy(bits == 0).to(logits.device)
-                logits[0, blocked] = -float("inf")
-            token = self._pick(logits[0], sampling, rng)
-            new = [token]
-            line = current_line(text)
-            if guard is not None and guard.loops(line + self.detokenize([token])):
-                # A loop (see LoopGuard): end the free text it runs in, or else avoid the looping token.
-                way = ""
-                if grammar is not None:
-                    follow = Matcher(grammar)
-                    way = follow.shortest_way() if follow.advance(text) else ""
-                loops += 1
-                if way:
-                    new = self.tokenize_continuation(way)
-                else:
-                    new = [self._pick(logits[0], sampling, rng, lambda t: guard.loops(line + self.detokenize([t])))]
-            if new[0] == self.eos or (matcher is not None and matcher.is_stopped()):
-                return Generated(out, self.detokenize(out), "eos", loops)
+        guard = sampling.loop_guard
+        follow = Matcher(grammar) if grammar is not None else None  # the planner's own reading of the text
+        out = Generated([], "", "length")
+        while len(out.tokens) < max_tokens:
+            new = self._forced_tokens(follow, sampling) if follow is not None else []
+            out.forced += len(new)
+            if not new:
+                raw = self._logits[: self.n_vocab]
+                logits = raw.clone().unsqueeze(0)
+                if matcher is not None:
+                    # llguidance's own apply function goes through torch.compile (seconds per call): unpack here.
+                    llg.torch.fill_next_token_bitmask(matcher, mask, 0)
+                    bits = np.unpackbits(mask.numpy().view(np.uint8), bitorder="little")[: self.n_vocab]
+                    blocked = torch.from_numpy(bits == 0).to(logits.device)
+                    logits[0, blocked] = -float("inf")
+                    if sampling.aligned:
+                        logits[0, self.eos] = raw[self.eos]  # the end of sequence is always the model's to choose
+                token = self._pick(logits[0], sampling, rng)
+                new = [token]
+                line = current_line(out.text)
+                if guard is not None and guard.loops(line + self.detokenize([token])):
+                    # A loop (see LoopGuard): end the free text it runs in, or else avoid the looping token.
+                    way = follow.shortest_way() if follow is not None else ""
+                    out.loops += 1
+                    if way:
+                        new = self.tokenize_continuation(way)
+                        out.forced += len(new)
+                    else:
+                        new = [self._pick(logits[0], sampling, rng,
+                                          lambda t: guard.loops(line + self.detokenize([t])))]
+                if len(new) == 1 and new[0] == token:
+                    self._measure(out, raw, token, logits[0])
+                if new[0] == self.eos or (matcher is not None and matcher.is_stopped()):
+                    out.text, out.stop = self.detokenize(out.tokens), "eos"
+                    return out
             for t in new:
                 if matcher is not None and not matcher.consume_token(t):
-                    raise GrammarError(f"llguidance refused token {t}: {matcher.get_error()}")
-            out.extend(new)
+                    raise GrammarMismatchError(out.text + self.detokenize(new), "the planner's grammar forces it, "
+                                               f"llguidance refuses it: {matcher.get_error()}")
+            out.tokens.extend(new)
             self._evaluate(new)
-            text = self.detokenize(out)
-            if matcher is not None and text.endswith("\n"):
-                if not grammar.matches(text):
-                    raise GrammarMismatchError(text, "llguidance let the model write it, the planner's grammar "
-                                               "does not allow it")
-                return Generated(out, text, "line", loops)
+            piece = self.detokenize(new)
+            if follow is not None and not follow.advance(piece):
+                raise GrammarMismatchError(out.text + piece, "llguidance let the model write it, the planner's "
+                                           "grammar does not allow it")
+            out.text = self.detokenize(out.tokens)
+            if matcher is not None and out.text.count("\n") >= lines:
+                out.stop = "line"
+                return out
             for s in stop:
-                if s in text:
-                    return Generated(out, text[: text.index(s)], "stop", loops)
-        return Generated(out, self.detokenize(out), "length", loops)
+                if s in out.text:
+                    out.text, out.stop = out.text[: out.text.index(s)], "stop"
+                    return out
+        out.text = self.detokenize(out.tokens)
+        return out
+
+    def _forced_tokens(self, follow: Matcher, sampling: Sampling) -> list[int]:
+        """As the llama.cpp backend does: the tokens of text the grammar forces, in one batch, but the last, which
+        the model writes (unless decoding is not aligned); one character is left to the model altogether."""
+        forced = follow.forced()
+        if len(forced) < 2:
+            return []
+        tokens = self.tokenize_continuation(forced)
+        return tokens[:-1] if sampling.aligned else tokens
+
+    def _measure(self, out: Generated, raw: Any, token: int, masked: Any) -> None:
+        """Whether the model's likeliest token was refused, and the chosen one's log-probability (unconstrained)."""
+        best = int(self._torch.argmax(raw))
+        out.choices += 1
+        out.refused += best != token and not math.isfinite(float(masked[best]))
+        out.logprob += float(self._torch.log_softmax(raw.double(), dim=-1)[token])
 
     def _pick(self, logits: Any, sampling: Sampling, rng: np.random.Generator,
               avoid: Callable[[int], bool] | None = None) -> int:

@@ -29,6 +29,7 @@ class Vocabulary(Protocol):
     chat_template: str | None
     bos_token: str
     eos_token: str
+    end_tokens: frozenset[int]  # the tokens that end a sequence (llama.cpp's end-of-generation tokens)
     trained_context: int | None  # the context the model was trained on, where the vocabulary says
 
     def tokenize(self, text: str, *, bos: bool = False, special: bool = False) -> list[int]: ...
@@ -49,6 +50,7 @@ class LocalVocabulary:
         self.trained_context = self._llama.trained_context
         self.tokenize, self.detokenize = self._llama.tokenize, self._llama.detokenize
         self.tokenize_continuation, self.text_of = self._llama.tokenize_continuation, self._llama.text_of
+        self.end_tokens = self._llama.end_tokens
 
     def bos_added(self) -> int | None:
         return self._llama.llm.token_bos() if self._llama.adds_bos() else None
@@ -98,6 +100,12 @@ class RemoteVocabulary:
 
     def text_of(self, tokens: Sequence[int]) -> str:
         return self.detokenize(tokens)
+
+    @functools.cached_property
+    def end_tokens(self) -> frozenset[int]:
+        """The served model's end of sequence (the one token its ``eos_token`` is)."""
+        found = self.tokenize(self.eos_token, special=True) if self.eos_token else []
+        return frozenset(found) if len(found) == 1 else frozenset()
 
     @functools.cached_property
     def _bos(self) -> int | None:
