@@ -12,6 +12,9 @@ import pytest
 
 # Scene splits and other derived data go to a per-session folder, never the user's cache.
 os.environ.setdefault("SMARTLLM_CACHE_DIR", os.path.join(os.path.dirname(__file__), "..", ".pytest_cache", "smartllm"))
+# Where a test names no model it plans with the tiny SmolLM2 (the default model plans, at four times the cost);
+# the tests of the default itself clear this.
+os.environ["SMARTLLM_MODEL"] = "smollm2"
 
 
 @pytest.fixture(scope="session")

@@ -18,7 +18,7 @@ from ..files import check_output_folder, write_atomic
 from ..methods import METHODS, make_method
 from ..planner.backends import BACKENDS, LoopGuard, Sampling, check_server_options, load_backends, model_location
 from ..planner.chat import CHAT_TEMPLATE_MODES, mode_for
-from ..planner.models import DEFAULT_MODEL, EMBEDDED
+from ..planner.models import DEFAULT_MODEL, EMBEDDED, default_model
 from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
 from ..planner.prefix_cache import open_store
 from ..planner.prompts import PromptOptions
@@ -38,8 +38,8 @@ from .plans import (
 )
 from .progress import RunProgress
 
-MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded "
-              f"demonstration model: {', '.join(EMBEDDED)} (default: {DEFAULT_MODEL}).")
+MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded model: "
+              f"{', '.join(EMBEDDED)} (default: {DEFAULT_MODEL}, or what SMARTLLM_MODEL names).")
 
 MAX_SEED = 2**32 - 1  # llama.cpp takes an unsigned 32-bit seed
 
@@ -61,7 +61,7 @@ class ModelOptions:
             raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
         if n_ctx < 512:
             raise UserError("--n-ctx must be at least 512 tokens")
-        chat_template = mode_for(model, chat_template)
+        chat_template = mode_for(model if backend == "server" else model or default_model(), chat_template)
         self.endpoints = [e.strip() for e in endpoint.split(",") if e.strip()] if endpoint else []
         check_server_options(backend, self.endpoints, workers)
         if server_timeout is not None and not (math.isfinite(server_timeout) and server_timeout > 0):

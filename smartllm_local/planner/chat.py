@@ -21,7 +21,7 @@ from jinja2 import TemplateError
 
 from ..errors import ModelError, UserError
 from .backends.base import Backend
-from .models import DEFAULT_MODEL, RAW_COMPLETION
+from .models import RAW_COMPLETION
 from .prompts import Prompt
 
 CHAT_TEMPLATE_MODES = ("auto", "on", "none")
@@ -97,9 +97,9 @@ def check_mode(mode: str) -> None:
 
 def mode_for(model: str | None, mode: str) -> str:
     """The mode a model is planned with: ``auto`` is ``none`` for the embedded models measured better raw
-    (``on`` gives them their template)."""
+    (``on`` gives them their template); ``model`` None is one not known here (a server's own)."""
     check_mode(mode)
-    return "none" if mode == "auto" and (model or DEFAULT_MODEL) in RAW_COMPLETION else mode
+    return "none" if mode == "auto" and model in RAW_COMPLETION else mode
 
 
 def chat_format(backend: Backend, mode: str) -> tuple[ChatFormat | None, str]:

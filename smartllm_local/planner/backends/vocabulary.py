@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -54,6 +54,24 @@ class LocalVocabulary:
 
     def bos_added(self) -> int | None:
         return self._llama.llm.token_bos() if self._llama.adds_bos() else None
+
+
+#: Texts llama.cpp ends a generation at wherever they are one token of a vocabulary, besides the model's end of
+#: sequence (its end-of-generation set: ends of turn, and the fill-in-the-middle separators code models have).
+END_OF_TURN_TEXTS = ("<|eot_id|>", "<|eom_id|>", "<|im_end|>", "<|end|>", "<|return|>", "<|call|>", "<end_of_turn>",
+                     "<|endoftext|>", "<|end_of_text|>", "<EOT>", "_<EOT>", "<\uff5cend\u2581of\u2581sentence\uff5c>",
+                     "</s>", "<|fim_pad|>", "<fim-pad>", "<fim_pad>", "<|repo_name|>", "<reponame>",
+                     "<|file_sep|>")
+
+
+def end_tokens_by_rule(tokenize: Callable[..., list[int]], eos_token: str) -> frozenset[int]:
+    """The end-of-generation tokens of a vocabulary known only through its tokenizer, by llama.cpp's rule."""
+    ends = set()
+    for text in {eos_token, *END_OF_TURN_TEXTS} - {""}:
+        found = tokenize(text, special=True)
+        if len(found) == 1:
+            ends.add(found[0])
+    return frozenset(ends)
 
 
 class RemoteVocabulary:
@@ -103,9 +121,9 @@ class RemoteVocabulary:
 
     @functools.cached_property
     def end_tokens(self) -> frozenset[int]:
-        """The served model's end of sequence (the one token its ``eos_token`` is)."""
-        found = self.tokenize(self.eos_token, special=True) if self.eos_token else []
-        return frozenset(found) if len(found) == 1 else frozenset()
+        """The tokens the server ends a generation at, by llama.cpp's rule: the model's end of sequence and
+        each of the end-of-turn texts that is one token of this vocabulary."""
+        return end_tokens_by_rule(self.tokenize, self.eos_token)
 
     @functools.cached_property
     def _bos(self) -> int | None:

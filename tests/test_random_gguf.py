@@ -1,0 +1,69 @@
+"""scripts/random_gguf.py: random-weight Llama-2 shapes for measuring where no model can be downloaded. On the CPU
+the tiny shape is written, loaded by llama.cpp and planned with; the 7B and 70B shapes are checked by their size."""
+
+from __future__ import annotations
+
+import lzma
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+from smartllm_local.domain import load_domain
+from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.backends import load_backend
+from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
+from smartllm_local.planner.pipeline import Planner, PlannerConfig
+
+SCRIPTS = Path(__file__).resolve().parent.parent / "scripts"
+sys.path.insert(0, str(SCRIPTS))
+import random_gguf  # noqa: E402
+
+
+def test_the_shapes_have_llama_2s_sizes():
+    """As written on the lent H200: 3.8 GB (7B) and 38.8 GB (70B) in Q4_0."""
+    def size(shape):
+        return sum(rows * columns // 32 * 18 if rows > 1 else 4 * columns
+                   for _, rows, columns in random_gguf.tensors(random_gguf.SHAPES[shape], 32000))
+    assert 3.7e9 < size("7b") < 3.9e9 and 38.5e9 < size("70b") < 39.0e9
+
+
+def test_a_tiny_shape_loads_in_llama_cpp_and_plans_a_valid_plan(tmp_path):
+    out = tmp_path / "tiny.gguf"
+    done = subprocess.run([sys.executable, str(SCRIPTS / "random_gguf.py"), "--shape", "tiny", "--out", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert not out.with_name(out.name + ".partial").exists()
+    backend = load_backend("llamacpp", str(out), n_ctx=4096, prefix_cache="off")
+    try:
+        assert backend.llm.metadata["llama.block_count"] == "2" and backend.n_vocab == 32000
+        vocab = tmp_path / "vocab.gguf"
+        vocab.write_bytes(lzma.decompress(random_gguf.VOCAB.read_bytes()))
+        llama2 = LlamaCppBackend(vocab, n_ctx=512, vocab_only=True)
+        text = "# SubTask 1: put the apple in the fridge (skills: GoToObject)\n"
+        assert backend.tokenize(text, bos=True) == llama2.tokenize(text, bos=True), "Llama-2's own tokenizer"
+        llama2.close()
+        result = Planner(backend, load_domain().catalogue, PlannerConfig()).plan(
+            "Put the apple in the fridge.", 6, [1, 2])
+        assert result.refusal is not None or parse_plan(result.allocated, form="allocated")
+    finally:
+        backend.close()
+
+
+def test_bad_output_is_refused_with_status_2(tmp_path):
+    done = subprocess.run([sys.executable, str(SCRIPTS / "random_gguf.py"), "--shape", "tiny", "--out",
+                           str(tmp_path / "missing" / "x.gguf")], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "--out" in done.stderr
+
+
+def test_the_gpu_check_runs_on_the_cpu_with_a_tiny_shape(tmp_path):
+    """scripts/gpu_check.sh as a GPU machine runs it, with the tiny shape and the installed llama.cpp: the plan,
+    the numpy-first load and the table."""
+    env = {**os.environ, "PYTHON": sys.executable, "OUT": str(tmp_path), "GGUF_DIR": str(tmp_path)}
+    done = subprocess.run(["bash", str(SCRIPTS / "gpu_check.sh"), "run", "--cpu"], env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    row = next(line for line in done.stdout.splitlines() if line.startswith("| tiny |"))
+    assert re.match(r"\| tiny \| \d+ \| \d+\.\d \(\d+\.\d, [\d,]+\) \|", row), row
+    assert (tmp_path / "tiny" / "decomposition" / "timings.json").is_file()
