@@ -4,13 +4,17 @@
 #   scripts/gpu_check.sh pack          here, with pip's registry: llama-cpp-python's source, trimmed to what a
 #                                      CUDA build needs, and py3.12 wheels of what such a machine lacks, in build/gpu/
 #   scripts/gpu_check.sh run           there (build/gpu carried): build llama-cpp-python with CUDA (about 3.5 min
-#                                      on 16 cores), write random-weight Llama-2-7B and -70B shapes
-#                                      (scripts/random_gguf.py), plan kitchen-01 on each with every layer on the
-#                                      GPU, and print one table
+#                                      on 16 cores) while random-weight Llama-2-7B and -70B shapes are written
+#                                      (scripts/random_gguf.py); then, on each shape with every layer on the GPU,
+#                                      plan kitchen-01 and run `bench` (the prompt path against llama.cpp alone,
+#                                      decoding, prefix reuse), and print one table (scripts/gpu_table.py)
 #   scripts/gpu_check.sh run --cpu     the same on this machine's CPU with a tiny shape and the installed
 #                                      llama-cpp-python: how the script itself is tested where no GPU is lent
 #
-# Each run also plans in a process that imports numpy before llama_cpp (the order that crashed a CUDA build).
+# Each run first loads a model in processes that import numpy before llama_cpp (the order that crashed a CUDA
+# build), in variants that tell its causes apart, with a native backtrace (cuda-gdb) where one crashes.
+# GPU_CHECK_SHAPES (default "7b 70b") names the shapes, in order; GPU_CHECK_SECONDS (default 480) bounds the run:
+# a shape's bench is left out when it would not fit.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -48,7 +52,6 @@ build() {
     local site=$1 tmp
     tmp=$(mktemp -d)
     tar -xzf "$GPU/llama-cpp-python-src.tar.gz" -C "$tmp"
-    "$PY" -m pip install --quiet --no-deps --no-index --target "$site" "$GPU"/wheels/*.whl
     PYTHONPATH=$site CMAKE_BUILD_PARALLEL_LEVEL=$(nproc) \
         CMAKE_ARGS="-DGGML_CUDA=on -DCMAKE_CUDA_ARCHITECTURES=native -DGGML_CUDA_FA=OFF -DLLAVA_BUILD=OFF" \
         "$PY" -m pip install --quiet --no-build-isolation --no-deps --no-index --target "$site" \
@@ -56,50 +59,114 @@ build() {
     rm -rf "$tmp"
 }
 
+# A process that loads a model with llama.cpp's own API, numpy imported first unless PROBE_ORDER says otherwise.
+PROBE='import os, sys
+if os.environ.get("PROBE_ORDER") != "llama-first":
+    import numpy
+if os.environ.get("PROBE_STDCXX_GLOBAL"):
+    import ctypes
+    ctypes.CDLL("libstdc++.so.6", mode=ctypes.RTLD_GLOBAL)
+import llama_cpp
+import numpy
+params = llama_cpp.llama_model_default_params()
+params.n_gpu_layers = int(os.environ.get("PROBE_LAYERS", "0"))
+if os.environ.get("PROBE_NO_EXTRA_BUFTS"):
+    params.use_extra_bufts = False
+llama_cpp.llama_backend_init()
+sys.exit(0 if llama_cpp.llama_model_load_from_file(sys.argv[1].encode(), params) else 3)'
+
+import_order() {
+    local model=$1 layers=$2 rc name vars
+    echo "numpy before llama_cpp, a model loaded (exit 0: loaded; 139: segmentation fault):"
+    while read -r name vars; do
+        rc=0; env $vars "$PY" -c "$PROBE" "$model" </dev/null >/dev/null 2>&1 || rc=$?
+        echo "  $name: exit $rc"
+    done <<VARIANTS
+llama_cpp-first PROBE_ORDER=llama-first
+numpy-first PROBE_ORDER=numpy-first
+numpy-first,all-layers-on-gpu PROBE_LAYERS=$layers
+numpy-first,OPENBLAS_CORETYPE=Haswell OPENBLAS_CORETYPE=Haswell
+numpy-first,no-extra-buffer-types PROBE_NO_EXTRA_BUFTS=1
+numpy-first,no-visible-gpu CUDA_VISIBLE_DEVICES=
+numpy-first,libstdc++-made-global PROBE_STDCXX_GLOBAL=1
+VARIANTS
+    rc=0; "$PY" -c "import numpy, sys
+from smartllm_local.planner.backends import load_backend
+load_backend('llamacpp', sys.argv[1], n_ctx=512, n_gpu_layers=$layers, prefix_cache='off').close()" "$model" \
+        >/dev/null 2>&1 || rc=$?
+    echo "  numpy-first,the-project's-load_backend: exit $rc"
+    local lib
+    for lib in "$(dirname "$("$PY" -c 'import llama_cpp; print(llama_cpp.__file__)')")"/lib/lib{llama,ggml-cuda}.so; do
+        [[ -f $lib ]] || continue
+        echo "  $(basename "$lib"): needs $(readelf -d "$lib" | grep -o 'NEEDED.*\[.*\]' | grep -o '\[.*\]' | tr -d '[]' \
+            | tr '\n' ' '); exports $(nm -D --defined-only "$lib" 2>/dev/null | grep -c ' _ZNS') std:: symbols"
+    done
+    if command -v cuda-gdb >/dev/null && ! "$PY" -c "$PROBE" "$model" >/dev/null 2>&1; then
+        echo "  where numpy-first crashes (cuda-gdb):"
+        cuda-gdb -q -batch -ex run -ex bt -ex 'info sharedlibrary' --args "$PY" -c "$PROBE" "$model" 2>&1 \
+            | grep -E '^#|signal|openblas|libggml|libllama|libgomp|libcuda' | head -60 | sed 's/^/    /' || true
+    fi
+}
+
+wait_for() {  # a model file the writer in the background is writing
+    while [[ ! -f $1 ]]; do
+        kill -0 "$2" 2>/dev/null || [[ -f $1 ]] || { echo "could not write $1"; exit 1; }
+        sleep 1
+    done
+}
+
 run() {
-    local cpu=0 layers=-1 shapes=(7b 70b) work site
+    local cpu=0 layers=-1 work site deadline=${GPU_CHECK_SECONDS:-480}
+    local -a shapes
+    read -r -a shapes <<<"${GPU_CHECK_SHAPES:-7b 70b}"
     [[ ${1:-} == --cpu ]] && { cpu=1; layers=0; shapes=(tiny); }
     work=${OUT:-$(mktemp -d)}
+    local gguf=${GGUF_DIR:-/tmp}
     site=$GPU/site
+    grep -m1 'model name' /proc/cpuinfo || true
+    echo "CPU AMX flags: $(grep -o -w 'amx[a-z_0-9]*' /proc/cpuinfo | sort -u | tr '\n' ' ')"
     if [[ $cpu == 0 ]]; then
         nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader
-        local began=$SECONDS
-        build "$site"
-        echo "built llama-cpp-python with CUDA in $((SECONDS - began)) s"
+        "$PY" -m pip install --quiet --no-deps --no-index --target "$site" "$GPU"/wheels/*.whl
         export PYTHONPATH=$site:$ROOT
     else
         export PYTHONPATH=$ROOT
     fi
-    for shape in "${shapes[@]}"; do
-        local model=${GGUF_DIR:-/tmp}/random-llama-2-$shape.gguf
-        [[ -f $model ]] || "$PY" "$ROOT/scripts/random_gguf.py" --shape "$shape" --out "$model" >/dev/null
+    # The models are written while llama.cpp builds (the 70B shape, 38.8 GB, takes about a minute).
+    (for shape in tiny "${shapes[@]}"; do
+        [[ -f $gguf/random-llama-2-$shape.gguf ]] || "$PY" "$ROOT/scripts/random_gguf.py" --shape "$shape" \
+            --out "$gguf/random-llama-2-$shape.gguf" >/dev/null
+    done) &
+    writer=$!
+    trap 'kill "$writer" 2>/dev/null || true' EXIT  # an early exit leaves no writer behind
+    if [[ $cpu == 0 ]]; then
         local began=$SECONDS
+        build "$site"
+        echo "built llama-cpp-python with CUDA in $((SECONDS - began)) s"
+    fi
+    wait_for "$gguf/random-llama-2-tiny.gguf" "$writer"
+    import_order "$gguf/random-llama-2-tiny.gguf" "$layers"
+    for shape in "${shapes[@]}"; do
+        local model=$gguf/random-llama-2-$shape.gguf
+        wait_for "$model" "$writer"
+        local began=$SECONDS
+        local states
+        states=$(mktemp -d)  # a first process's empty prefix store
         "$PY" -X faulthandler -m smartllm_local plan --task kitchen-01 --model "$model" --n-ctx 4096 \
-            --n-gpu-layers "$layers" --prefix-cache off --out "$work/$shape" >"$work/$shape.log" 2>&1 \
-            || { echo "plan on the $shape shape failed:"; tail -20 "$work/$shape.log"; exit 1; }
+            --n-gpu-layers "$layers" --prefix-cache "$states" --out "$work/$shape" \
+            >"$work/$shape.log" 2>&1 || { echo "plan on the $shape shape failed:"; tail -20 "$work/$shape.log"; exit 1; }
         echo "$((SECONDS - began))" >"$work/$shape.wall"
-        "$PY" -X faulthandler -c "import numpy, sys; assert 'llama_cpp' not in sys.modules
-from smartllm_local.planner.backends import load_backend
-load_backend('llamacpp', '$model', n_ctx=512, n_gpu_layers=$layers, prefix_cache='off').close()" \
-            || { echo "numpy imported first: loading the $shape shape failed"; exit 1; }
-    done
-    "$PY" - "$work" "${shapes[@]}" <<'EOF'
-import json, sys
-from pathlib import Path
-work = Path(sys.argv[1])
-print("| shape | plan wall s | decomposition s (prompt s, prompt tokens) | coalition s (prompt s) | allocation s (prompt s) |")
-print("|---|---:|---:|---:|---:|")
-for shape in sys.argv[2:]:
-    cells = []
-    for stage in ("decomposition", "coalition", "allocation"):
-        if not (work / shape / stage / "timings.json").is_file():
-            cells.append("- (refused before)")  # a random model may write the refusal line
+        rm -rf "$states"
+        if [[ $SECONDS -gt $((deadline - 150)) ]]; then
+            echo "the $shape shape's bench left out: $SECONDS s of $deadline gone"
             continue
-        t = json.loads((work / shape / stage / "timings.json").read_text())
-        extra = f", {t['prompt_tokens']:,}" if stage == "decomposition" else ""
-        cells.append(f"{t['seconds']:.1f} ({t['prompt_seconds']:.1f}{extra})")
-    print(f"| {shape} | {(work / f'{shape}.wall').read_text().strip()} | " + " | ".join(cells) + " |")
-EOF
+        fi
+        "$PY" -m smartllm_local bench --models "$model" --n-gpu-layers "$layers" --n-ctx 4096 --sample 2 \
+            --no-benchmark --no-executor --out "$work/bench-$shape.json" >>"$work/$shape.log" 2>&1 \
+            || { echo "bench on the $shape shape failed:"; tail -20 "$work/$shape.log"; exit 1; }
+    done
+    wait "$writer" || true
+    "$PY" "$ROOT/scripts/gpu_table.py" "$work" "${shapes[@]}"
 }
 
 case ${1:-} in

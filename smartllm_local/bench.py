@@ -1,5 +1,12 @@
-"""``smartllm-local bench``: the speed figures the README quotes, measured side by side in one run.
+"""``smartllm-local bench``: the speed figures docs/measurements.md and docs/servers-and-gpus.md quote, measured
+side by side in one run.
 
+Each model is measured as ``plan`` would run it (its backend, GPU layers, context and chat template):
+
+- the prompt path: ``prefill`` of the first sample task's decomposition prompt in a new backend with an empty
+  prefix store (kept states, the store and batches included), over the seconds llama.cpp takes to evaluate the
+  same tokens alone (``prefill_over_engine``; llama.cpp in-process only), and the same prompt again, with the
+  states kept in memory and from the store in a new backend;
 - decoding: per model, the tokens per second the decomposition stage writes with its grammar and
   without it (free generation with stop strings), over the same tasks, prompt evaluation left out;
 - prefix reuse: per model, the prompt tokens evaluated and the time to the first token of every
@@ -22,14 +29,15 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from .benchmark import load_reference_plan
 from .errors import SmartLLMError
 from .executor import run_plan
-from .planner.backends import load_backend
+from .planner.backends import Backend
 from .planner.pipeline import Planner, PlannerConfig, PlanResult
 from .planner.prompts import STAGES
 from .planner.scene_context import scene_objects
@@ -46,15 +54,55 @@ def spread_tasks(tasks: Sequence[Task], count: int) -> list[Task]:
     return feasible[::step][:count]
 
 
-def decode_speed(model: str, catalogue: Catalogue, tasks: Sequence[Task], threads: int | None = None) -> dict[str, Any]:
+Load = Callable[[str], Backend]  # a backend for the model measured, given its prefix store ("off": none)
+
+
+def prefill_cost(load: Load, config: PlannerConfig, catalogue: Catalogue, task: Task) -> dict[str, Any]:
+    """Seconds to prefill ``task``'s decomposition prompt: in a new backend with an empty store, against llama.cpp
+    evaluating the same tokens alone; again in that backend; and in a new one on the store the first filled."""
+    found: dict[str, Any] = {}
+    with tempfile.TemporaryDirectory(prefix="smartllm-bench-") as store:
+        for way in ("first", "second_process"):
+            backend = load(store)
+            try:
+                fitted = Planner(backend, catalogue, config).decomposition_prompt(
+                    task.instruction, scene_objects(task.floor_plan))
+                tokens, prefixes = list(fitted.tokens), fitted.prefixes
+                engine = getattr(backend, "engine_seconds", None)
+                if way == "first":  # first, so that the device's first use (its kernels loaded) is not prefill's
+                    found["engine_s"] = round(min(engine(tokens) for _ in range(2)), 3) if engine else None
+                backend.prefill(tokens[:8], ())
+                found[way] = _timed_prefill(backend, tokens, prefixes)
+                if way == "first":
+                    found["kept"] = _timed_prefill(backend, tokens, prefixes, warm=tokens[:8])
+                    found["keeps_states"] = getattr(backend, "keeps_states", None)
+                    found["stores_states"] = getattr(backend, "stores_states", None)
+            finally:
+                backend.close()
+    found["prompt_tokens"] = len(tokens)
+    found["prefill_over_engine"] = round(found["first"]["seconds"] / found["engine_s"], 3) \
+        if found["engine_s"] else None
+    return found
+
+
+def _timed_prefill(backend: Backend, tokens: list[int], prefixes: Sequence[int],
+                   warm: Sequence[int] = ()) -> dict[str, Any]:
+    if warm:  # another prompt in the cache first, as a later task finds it
+        backend.prefill(list(warm), ())
+    started = time.perf_counter()
+    reused = backend.prefill(tokens, prefixes)
+    return {"seconds": round(time.perf_counter() - started, 3), "reused": reused}
+
+
+def decode_speed(load: Load, config: PlannerConfig, catalogue: Catalogue, tasks: Sequence[Task]) -> dict[str, Any]:
     """The decomposition stage's output tokens per second with its grammar and without, prompt evaluation
     left out. Constrained output counts the tokens the model chose and those the grammar forced (in one
     batch each); ``generated_per_s`` counts the chosen ones alone."""
-    backend = load_backend("llamacpp", model, threads=threads, prefix_cache="off")
+    backend = load("off")
     found: dict[str, Any] = {}
     try:
         for name, grammar in (("constrained", True), ("free", False)):
-            planner = Planner(backend, catalogue, PlannerConfig(grammar=grammar))
+            planner = Planner(backend, catalogue, replace(config, grammar=grammar))
             generated = forced = 0
             seconds = 0.0
             for task in tasks:
@@ -77,15 +125,15 @@ def _costs(result: PlanResult) -> dict[str, dict[str, float]]:
                       "ttft_s": round(r.prompt_seconds, 3)} for r in result.stages}
 
 
-def prefix_reuse(model: str, catalogue: Catalogue, tasks: Sequence[Task], threads: int | None = None) -> dict[str, Any]:
+def prefix_reuse(load: Load, config: PlannerConfig, catalogue: Catalogue, tasks: Sequence[Task]) -> dict[str, Any]:
     """Prompt tokens evaluated and time to the first token per stage: the first task of a run, the later
     ones, and the first again in a new backend on the same (at first empty) store."""
     with tempfile.TemporaryDirectory(prefix="smartllm-bench-") as store:
         runs: list[list[dict[str, dict[str, float]]]] = []
         for batch in (tasks, tasks[:1]):  # a run, then a second "process"
-            backend = load_backend("llamacpp", model, threads=threads, prefix_cache=store)
+            backend = load(store)
             try:
-                planner = Planner(backend, catalogue)
+                planner = Planner(backend, catalogue, config)
                 runs.append([_costs(planner.plan(t.instruction, t.floor_plan, list(t.robots))) for t in batch])
             finally:
                 backend.close()
@@ -136,15 +184,15 @@ def executor_speed(catalogue: Catalogue, tasks: Sequence[Task], build: str | Non
             "plans_per_s": round(len(plans) / seconds, 2), "actions_per_s": round(actions / seconds, 1)}
 
 
-def time_benchmark(model: str, threads: int | None = None, out: Path | None = None) -> dict[str, Any]:
-    """``smartllm-local benchmark run`` over every task, one seed, greedy, from an empty prefix store, timed
-    from start to end (model loading included), in minutes; and per stage, the prompt tokens its later
-    tasks evaluated over those of its first. Its run folder is ``out`` if given."""
+def time_benchmark(options: Sequence[str], out: Path | None = None) -> dict[str, Any]:
+    """``smartllm-local benchmark run`` with the model ``options`` (as ``plan`` takes them) over every task, one
+    seed, greedy, from an empty prefix store, timed from start to end (model loading included), in minutes; and
+    per stage, the prompt tokens its later tasks evaluated over those of its first. Its run folder is ``out``
+    if given."""
     with tempfile.TemporaryDirectory(prefix="smartllm-bench-") as folder:
         run = out or Path(folder) / "run"
-        command = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--model", model,
-                   "--out", str(run), "--prefix-cache", str(Path(folder) / "states"),
-                   *(["--threads", str(threads)] if threads else [])]
+        command = [sys.executable, "-m", "smartllm_local", "benchmark", "run", *options,
+                   "--out", str(run), "--prefix-cache", str(Path(folder) / "states")]
         started = time.perf_counter()
         done = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         if done.returncode != 0:
@@ -170,25 +218,32 @@ def later_prompt_costs(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
     return stages
 
 
-def run_bench(models: Sequence[str], catalogue: Catalogue, tasks: Sequence[Task], *, sample: int,
-              whole_benchmark: bool, threads: int | None = None, benchmark_out: Path | None = None) -> dict[str, Any]:
-    """Everything above, as the JSON ``bench`` writes."""
+def run_bench(models: dict[str, tuple[Load, PlannerConfig]], catalogue: Catalogue, tasks: Sequence[Task], *,
+              sample: int, benchmark_options: Sequence[str] | None = None,
+              benchmark_out: Path | None = None, executor: bool = True,
+              machine: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Everything above, as the JSON ``bench`` writes: per model (named as given, each with how to load it and
+    the planner's settings), the prompt path, decoding and prefix reuse; the executor; and, given the first
+    model's ``benchmark_options``, the whole benchmark."""
     chosen = spread_tasks(tasks, sample)
-    per_model = {m: {"decode": decode_speed(m, catalogue, chosen, threads),
-                     "prefix": prefix_reuse(m, catalogue, chosen, threads)} for m in models}
-    executor = executor_speed(catalogue, tasks)
-    whole = time_benchmark(models[0], threads, benchmark_out) if whole_benchmark else None
+    per_model = {name: {"prefill": prefill_cost(load, config, catalogue, chosen[0]),
+                        "decode": decode_speed(load, config, catalogue, chosen),
+                        "prefix": prefix_reuse(load, config, catalogue, chosen)}
+                 for name, (load, config) in models.items()}
+    timed = executor_speed(catalogue, tasks) if executor else None
+    whole = time_benchmark(benchmark_options, benchmark_out) if benchmark_options is not None else None
     return {
-        "machine": {"cpus": os.cpu_count(), "threads": threads or os.cpu_count(), "platform": platform.platform()},
+        "machine": {"cpus": os.cpu_count(), "platform": platform.platform(), **(machine or {})},
         "versions": versions(), "sample_tasks": [t.id for t in chosen], "models": per_model,
+        "prefill_over_engine": {m: r["prefill"]["prefill_over_engine"] for m, r in per_model.items()},
         "constrained_over_free_decode": {m: r["decode"]["constrained_over_free"] for m, r in per_model.items()},
         "reused_over_fresh_prompt_tokens": {m: r["prefix"]["reused_over_fresh_prompt_tokens"]
                                             for m, r in per_model.items()},
         "second_process_over_fresh_prompt_tokens": {m: r["prefix"]["second_process_over_fresh_prompt_tokens"]
                                                     for m, r in per_model.items()},
-        "benchmark_model": models[0] if whole_benchmark else None,
+        "benchmark_model": next(iter(models)) if whole else None,
         "benchmark": whole, "benchmark_minutes": whole["minutes"] if whole else None,
-        "executor": executor, "executor_actions_per_s": executor["actions_per_s"],
+        "executor": timed, "executor_actions_per_s": timed["actions_per_s"] if timed else None,
     }
 
 
@@ -197,19 +252,24 @@ def summary(report: dict[str, Any]) -> str:
     lines = [f"{'model':<14}{'constrained tok/s':>18}{'free tok/s':>12}{'ratio':>7}"
              f"{'later/first prompt':>20}{'2nd process':>13}"]
     for model, found in report["models"].items():
-        decode, prefix = found["decode"], found["prefix"]
+        decode, prefix, prompt = found["decode"], found["prefix"], found["prefill"]
         lines.append(f"{model:<14}{decode['constrained']['tokens_per_s']:>18}{decode['free']['tokens_per_s']:>12}"
                      f"{decode['constrained_over_free']:>7}{prefix['reused_over_fresh_prompt_tokens']!s:>20}"
                      f"{prefix['second_process_over_fresh_prompt_tokens']!s:>13}")
+        lines.append(f"  prompt path: {prompt['prompt_tokens']} tokens prefilled in {prompt['first']['seconds']} s "
+                     f"(llama.cpp alone: {prompt['engine_s']} s; prefill_over_engine {prompt['prefill_over_engine']}; "
+                     f"states kept: {prompt['keeps_states']}, stored: {prompt['stores_states']}); again "
+                     f"{prompt['kept']['seconds']} s, in a new process {prompt['second_process']['seconds']} s")
         for stage, cost in prefix["stages"].items():
             lines.append(f"  {stage:<14} first task: {cost['first']['prompt']} prompt tokens, ttft "
                          f"{cost['first']['ttft_s']} s; later tasks: {cost['later_evaluated_mean']} evaluated "
                          f"({cost['later_over_first_prompt_tokens']} of the first's), "
                          f"ttft {cost['later_ttft_s_mean']} s")
     executor = report["executor"]
-    lines.append(f"executor: {executor['plans']} reference plans, "
-                 f"{executor['actions']} actions in {executor['seconds']} s "
-                 f"({executor['plans_per_s']} plans/s, {executor['actions_per_s']} actions/s)")
+    if executor is not None:
+        lines.append(f"executor: {executor['plans']} reference plans, "
+                     f"{executor['actions']} actions in {executor['seconds']} s "
+                     f"({executor['plans_per_s']} plans/s, {executor['actions_per_s']} actions/s)")
     if report["benchmark_minutes"] is not None:
         lines.append(f"whole benchmark with {report['benchmark_model']}: {report['benchmark_minutes']} min")
         for stage, cost in report["benchmark"]["stages"].items():

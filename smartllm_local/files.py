@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
-import tempfile
+import secrets
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -39,8 +41,12 @@ def _check_parents(path: Path, what: str) -> None:
             return
 
 
-def write_atomic(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path`` through a temporary file in the same folder, then rename it.
+def write_atomic(path: str | Path, data: str | bytes | Sequence[bytes]) -> Path:
+    """Write ``data`` (text as UTF-8, bytes, or bytes in parts) to ``path`` through a temporary file in the same
+    folder, then rename it.
+
+    The temporary file is made as ``open(path, "w")`` would make the file (0666 less the umask, which the kernel
+    applies); a file that exists keeps its own permissions.
 
     Raises:
         UserError: when the folder cannot be made or the file cannot be written or replaced
@@ -51,19 +57,20 @@ def write_atomic(path: str | Path, text: str) -> Path:
         raise UserError(f"cannot write {path}: it is a folder; give a file name")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+        fd, tmp = _new_file(path)
     except OSError as exc:
         raise UserError(f"cannot write {path}: {exc.strerror or exc}") from exc
     try:
-        os.fchmod(fd, _mode_for(path))
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
+        with contextlib.suppress(OSError):
+            os.fchmod(fd, path.stat().st_mode & 0o7777)
+        parts = [data.encode("utf-8")] if isinstance(data, str) else [data] if isinstance(data, bytes) else data
+        with os.fdopen(fd, "wb") as handle:
+            for part in parts:
+                handle.write(part)
         os.replace(tmp, path)
     except BaseException as exc:
-        try:
+        with contextlib.suppress(OSError):
             os.unlink(tmp)
-        except OSError:
-            pass
         if isinstance(exc, OSError):
             reason = "it is a folder; give a file name" if isinstance(exc, IsADirectoryError) else exc.strerror or exc
             raise UserError(f"cannot write {path}: {reason}") from exc
@@ -71,15 +78,14 @@ def write_atomic(path: str | Path, text: str) -> Path:
     return path
 
 
-def _mode_for(path: Path) -> int:
-    """The permissions a plain ``open(path, "w")`` would give, not mkstemp's owner-only 0600:
-    an existing file keeps its own, a new one gets 0666 less the umask."""
-    try:
-        return path.stat().st_mode & 0o7777
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
+def _new_file(path: Path) -> tuple[int, Path]:
+    """A new file beside ``path`` with a name of its own, open for writing."""
+    while True:
+        tmp = path.with_name(f".{path.name}.{secrets.token_hex(6)}")
+        try:
+            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), tmp
+        except FileExistsError:
+            continue
 
 
 def json_text(data: Any) -> str:

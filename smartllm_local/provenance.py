@@ -84,10 +84,6 @@ def versions(packages: Iterable[str] = PACKAGES) -> dict[str, str | None]:
     return found
 
 
-def text_digest(text: str) -> str:
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
 def model_record(model: str | os.PathLike[str]) -> dict[str, Any]:
     """The model as run.json records it: a file's digest, or a checkpoint folder's files' digests."""
     path = Path(model)

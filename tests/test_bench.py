@@ -26,6 +26,10 @@ def test_bench_measures_decoding_reuse_and_the_executor(tmp_path):
         assert found["tokens_per_s"] == pytest.approx(written / found["seconds"], rel=1e-3)
     assert decode["free"]["forced_tokens"] == 0 < decode["constrained"]["forced_tokens"]
     assert report["constrained_over_free_decode"]["smollm2"] == decode["constrained_over_free"] > 0
+    prompt = report["models"]["smollm2"]["prefill"]  # on a CPU keeping states pays: a new process finds them
+    assert prompt["keeps_states"] is prompt["stores_states"] is True
+    assert prompt["second_process"]["reused"] > 0 and prompt["engine_s"] > 0
+    assert report["prefill_over_engine"]["smollm2"] == prompt["prefill_over_engine"] > 0
     prefix = report["models"]["smollm2"]["prefix"]
     for stage, cost in prefix["stages"].items():
         if stage == "allocation":  # it goes on in its coalition's context: only its opening line is new
@@ -46,6 +50,34 @@ def test_bench_finds_every_model_before_measuring(tmp_path):
     one_line_error(cli("bench", "--models", "smollm2,missing.gguf", "--out", tmp_path / "b.json"),
                    "missing.gguf does not exist")
     assert not (tmp_path / "b.json").exists()
+
+
+def test_bench_takes_plans_model_options_and_refuses_a_server_without_endpoint(tmp_path):
+    one_line_error(cli("bench", "--backend", "server", "--out", tmp_path / "b.json"), "--endpoint")
+    assert not (tmp_path / "b.json").exists()
+
+
+def test_the_whole_benchmark_is_run_with_the_options_bench_was_given():
+    from smartllm_local.cli.plan import ModelOptions
+
+    options = ModelOptions(model="model.gguf", n_ctx=4096, threads=8, n_gpu_layers=-1, chat_template="none")
+    assert options.as_arguments() == ["--model", "model.gguf", "--backend", "llamacpp", "--n-ctx", "4096",
+                                      "--n-gpu-layers", "-1", "--chat-template", "none", "--threads", "8"]
+    served = ModelOptions(backend="server", endpoint="http://127.0.0.1:8080")
+    assert served.as_arguments()[:4] == ["--backend", "server", "--endpoint", "http://127.0.0.1:8080"]
+    slow = ModelOptions(backend="server", endpoint="http://127.0.0.1:8080", server_timeout=900.0)
+    assert slow.as_arguments()[4:6] == ["--server-timeout", "900.0"]
+
+
+def test_every_model_option_of_plan_and_benchmark_run_reaches_model_options():
+    """``ModelOptions.from_command`` takes a command's options by name: a renamed one would be dropped silently."""
+    import inspect
+
+    from smartllm_local.cli.plan import ModelOptions, benchmark_run, plan_command
+
+    wanted = set(inspect.signature(ModelOptions).parameters)
+    assert wanted <= set(inspect.signature(benchmark_run).parameters)
+    assert wanted - {"workers"} <= set(inspect.signature(plan_command).parameters)
 
 
 def test_later_prompt_costs_reads_what_a_run_reused_per_stage():

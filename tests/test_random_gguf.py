@@ -3,6 +3,7 @@ the tiny shape is written, loaded by llama.cpp and planned with; the 7B and 70B 
 
 from __future__ import annotations
 
+import json
 import lzma
 import os
 import re
@@ -60,10 +61,20 @@ def test_bad_output_is_refused_with_status_2(tmp_path):
 def test_the_gpu_check_runs_on_the_cpu_with_a_tiny_shape(tmp_path):
     """scripts/gpu_check.sh as a GPU machine runs it, with the tiny shape and the installed llama.cpp: the plan,
     the numpy-first load and the table."""
-    env = {**os.environ, "PYTHON": sys.executable, "OUT": str(tmp_path), "GGUF_DIR": str(tmp_path)}
+    env = {**os.environ, "PYTHON": sys.executable, "OUT": str(tmp_path), "GGUF_DIR": str(tmp_path),
+           "GPU_CHECK_SECONDS": "100000"}
     done = subprocess.run(["bash", str(SCRIPTS / "gpu_check.sh"), "run", "--cpu"], env=env, capture_output=True,
                           text=True, timeout=600)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     row = next(line for line in done.stdout.splitlines() if line.startswith("| tiny |"))
     assert re.match(r"\| tiny \| \d+ \| \d+\.\d \(\d+\.\d, [\d,]+\) \|", row), row
     assert (tmp_path / "tiny" / "decomposition" / "timings.json").is_file()
+    # every import-order variant loads with this build, the project's own load with numpy first among them
+    variants = dict(re.findall(r"^  ([\w'+=,-]+): exit (\d+)$", done.stdout, re.M))
+    assert len(variants) == 8 and set(variants.values()) == {"0"}, variants
+    # bench ran with plan's model options: its prompt path against llama.cpp alone, in the table
+    models = json.loads((tmp_path / "bench-tiny.json").read_text())["models"]
+    prefill = models[str(tmp_path / "random-llama-2-tiny.gguf")]["prefill"]
+    assert prefill["engine_s"] > 0 and prefill["first"]["seconds"] > 0 and prefill["prompt_tokens"] > 1000
+    assert prefill["prefill_over_engine"] == round(prefill["first"]["seconds"] / prefill["engine_s"], 3)
+    assert f"({prefill['prefill_over_engine']:.2f})" in row

@@ -1,7 +1,9 @@
-"""``smartllm-local bench``: decoding speed, prefix reuse, the executor and the whole benchmark, in one run."""
+"""``smartllm-local bench``: the prompt path, decoding, prefix reuse, the executor and the whole benchmark, in one
+run, with each model run as ``plan`` runs it (its backend, GPU layers, context and chat template)."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import typer
@@ -13,37 +15,56 @@ from ..files import check_output_file, check_output_folder, json_text, write_ato
 from ..planner.backends import model_location
 from ..planner.models import EMBEDDED
 from ..tasks import load_tasks
+from .plan import _BACKEND, _CHAT_TEMPLATE, _ENDPOINT, _GPU, _N_CTX, _SERVER_TIMEOUT, _THREADS, ModelOptions
 
 
 def bench_command(
-    models: str = typer.Option(",".join(EMBEDDED), "--models", help=(
-        "Comma-separated GGUF files or embedded models, measured one after another (the first also runs "
-        "the whole benchmark).")),
+    models: str | None = typer.Option(None, "--models", help=(
+        f"Comma-separated GGUF files or embedded models, measured one after another (the first also runs the "
+        f"whole benchmark); default: {', '.join(EMBEDDED)}, or with --backend server the served model.")),
     sample: int = typer.Option(5, "--sample", help="Tasks (spread over the categories) for the decoding and "
                                                    "prefix-reuse figures."),
     whole_benchmark: bool = typer.Option(True, "--benchmark/--no-benchmark", help=(
         "Also time the whole benchmark with the first model (minutes).")),
+    executor: bool = typer.Option(True, "--executor/--no-executor", help=(
+        "Also time the executor on every reference plan.")),
     benchmark_out: Path | None = typer.Option(None, "--benchmark-out", help=(
         "Keep the whole benchmark's run folder here (a new folder, as `benchmark run --out` writes it), "
         "for `benchmark report`.")),
-    threads: int | None = typer.Option(None, help="CPU threads (default: all cores)."),
+    backend: str = _BACKEND,
+    endpoint: str | None = _ENDPOINT,
+    server_timeout: float | None = _SERVER_TIMEOUT,
+    n_ctx: int = _N_CTX,
+    n_gpu_layers: int = _GPU,
+    chat_template: str = _CHAT_TEMPLATE,
+    threads: int | None = _THREADS,
     out: Path = typer.Option(Path("bench.json"), "--out", help="The JSON file to write."),
 ) -> None:
-    """Measure, side by side: constrained and free decoding, prompt tokens and time to first token with
-    and without the examples' kept states, executor speed, and the whole benchmark's time."""
-    chosen = [m.strip() for m in models.split(",") if m.strip()]
-    if not chosen:
-        raise UserError("--models needs at least one model")
+    """Measure, side by side: the prompt path against llama.cpp alone, constrained and free decoding, prompt
+    tokens and time to first token with and without the examples' kept states, executor speed, and the whole
+    benchmark's time."""
+    if models is None:
+        chosen: list[str | None] = [None] if backend == "server" else list(EMBEDDED)
+    else:
+        chosen = [m.strip() for m in models.split(",") if m.strip()]
+        if not chosen:
+            raise UserError("--models needs at least one model")
     if sample < 2:
         raise UserError("--sample must be at least 2: reuse shows from the second task on")
     check_output_file(out, "--out")
     if benchmark_out is not None and check_output_folder(benchmark_out, "--benchmark-out").exists():
         raise UserError(f"--benchmark-out {benchmark_out} exists: give a new folder")
+    options = [ModelOptions(model=model, backend=backend, n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers,
+                            chat_template=chat_template, endpoint=endpoint, server_timeout=server_timeout)
+               for model in chosen]
     for model in chosen:  # every model is found before the first is measured
-        model_location("llamacpp", model)
+        model_location(backend, model)
     household = load_domain()
-    report = run_bench(chosen, household.catalogue, load_tasks(domain=household), sample=sample,
-                       whole_benchmark=whole_benchmark, threads=threads, benchmark_out=benchmark_out)
+    report = run_bench({model or "served": (o.load, o.config) for model, o in zip(chosen, options)},
+                       household.catalogue, load_tasks(domain=household), sample=sample,
+                       benchmark_options=options[0].as_arguments() if whole_benchmark else None,
+                       benchmark_out=benchmark_out, executor=executor,
+                       machine={"threads": threads or os.cpu_count(), "backend": backend, "n_gpu_layers": n_gpu_layers})
     write_atomic(out, json_text(report))
     typer.echo(summary(report))
     typer.echo(f"written: {out}")

@@ -12,7 +12,7 @@ import typer
 from ..domain import DOMAIN_FILE, builtin_domains, load_domain, starter_domain
 from ..errors import UserError
 
-app = typer.Typer(help="Domains: your own robots, skills and site (see the README's \"Your own robots\").",
+app = typer.Typer(help="Domains: your own robots, skills and site (see docs/domains.md).",
                   no_args_is_help=True)
 
 

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import sys
 from dataclasses import asdict, replace
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -16,7 +18,15 @@ from ..evaluation import execute_and_score, run_benchmark
 from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..files import check_output_folder, write_atomic
 from ..methods import METHODS, make_method
-from ..planner.backends import BACKENDS, LoopGuard, Sampling, check_server_options, load_backends, model_location
+from ..planner.backends import (
+    BACKENDS,
+    Backend,
+    LoopGuard,
+    Sampling,
+    check_server_options,
+    load_backends,
+    model_location,
+)
 from ..planner.chat import CHAT_TEMPLATE_MODES, mode_for
 from ..planner.models import DEFAULT_MODEL, EMBEDDED, default_model
 from ..planner.pipeline import Planner, PlannerConfig, write_artifacts
@@ -47,12 +57,13 @@ MAX_SEED = 2**32 - 1  # llama.cpp takes an unsigned 32-bit seed
 class ModelOptions:
     """The options every planning command shares, turned into a Planner."""
 
-    def __init__(self, model: str | None, backend: str, n_ctx: int, threads: int | None, n_gpu_layers: int,
-                 seed: int, temperature: float, no_comments: bool, no_summary: bool, no_coalition: bool,
-                 no_grammar: bool, free_teams: bool = False, chat_template: str = "auto",
+    def __init__(self, *, model: str | None = None, backend: str = "llamacpp", n_ctx: int = 8192,
+                 threads: int | None = None, n_gpu_layers: int = 0, seed: int = 0, temperature: float = 0.0,
+                 no_comments: bool = False, no_summary: bool = False, no_coalition: bool = False,
+                 no_grammar: bool = False, free_teams: bool = False, chat_template: str = "auto",
                  free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None,
                  endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None,
-                 no_loop_guard: bool = False, *, no_token_alignment: bool = False):
+                 no_loop_guard: bool = False, no_token_alignment: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -84,9 +95,31 @@ class ModelOptions:
         )
         self.seed = seed
 
+    @classmethod
+    def from_command(cls, arguments: dict[str, Any]) -> ModelOptions:
+        """The options among a command's parameters (its ``locals()``), taken by name: a command lists them in
+        whatever order reads best, and one it does not take keeps its default."""
+        names = inspect.signature(cls).parameters
+        return cls(**{name: value for name, value in arguments.items() if name in names})
+
     def config_for(self, seed: int) -> PlannerConfig:
         """The planner's settings with another sampling seed."""
         return replace(self.config, sampling=replace(self.config.sampling, seed=seed))
+
+    def load(self, prefix_cache: str | None = None) -> Backend:
+        """One backend for this model (a server's first slot), its prefix states in ``prefix_cache``."""
+        return load_backends(self.backend, self.model, endpoints=self.endpoints, server_timeout=self.server_timeout,
+                             n_ctx=self.n_ctx, threads=self.threads, n_gpu_layers=self.n_gpu_layers,
+                             seed=self.seed, prefix_cache=prefix_cache)[0]
+
+    def as_arguments(self) -> list[str]:
+        """The model's options as ``plan`` and ``benchmark run`` take them on the command line."""
+        return [*(["--model", self.model] if self.model else []), "--backend", self.backend,
+                *(["--endpoint", ",".join(self.endpoints)] if self.endpoints else []),
+                *(["--server-timeout", str(self.server_timeout)] if self.server_timeout else []),
+                "--n-ctx", str(self.n_ctx), "--n-gpu-layers", str(self.n_gpu_layers),
+                "--chat-template", self.config.chat_template,
+                *(["--threads", str(self.threads)] if self.threads else [])]
 
     def planners(self, catalogue, domain: Domain | None = None) -> list[Planner]:
         """One planner per worker (one, but for a server backend with --workers), for ``domain``'s tasks."""
@@ -132,11 +165,11 @@ _NO_WORLD_CHECK = typer.Option(False, "--no-world-check", help=(
     "steps so far produce (for measuring the check's effect)."))
 _NO_LOOP_GUARD = typer.Option(False, "--no-loop-guard", help=(
     "Let free text (summaries, comments, a coalition's reasoning) repeat itself to its length limit, rather "
-    "than end it where it starts saying one thing a third time over (see the README's \"Loops in free text\")."))
+    "than end it where it starts saying one thing a third time over (see docs/planner.md, \"Loops in free text\")."))
 _NO_TOKEN_ALIGNMENT = typer.Option(False, "--no-token-alignment", help=(
     "Write text the grammar forces whole, end each line at its newline and let the model end only where the "
     "grammar may, rather than leave forced text's last token, line ends and the end of sequence to the model "
-    "(for measuring what that changes; see the README's \"Line ends and forced text\")."))
+    "(for measuring what that changes; see docs/planner.md, \"Line ends and forced text\")."))
 _PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
     "Where the examples' key/value states are kept between runs, so a later run on the same model starts "
     "from them (default: the user's cache, $XDG_CACHE_HOME/smartllm-local/prefix-states, at most 4 GiB); "
@@ -183,10 +216,7 @@ def plan_command(
     domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
-    options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
-                           no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check, prefix_cache, endpoint, 1, server_timeout, no_loop_guard,
-                           no_token_alignment=no_token_alignment)
+    options = ModelOptions.from_command(locals())
     if out is not None:
         check_output_folder(out, "--out")
     dom = load_domain(domain, catalogue=catalogue)
@@ -295,16 +325,13 @@ def benchmark_run(
     endpoint: str | None = _ENDPOINT,
     workers: int = typer.Option(1, "--workers", help=(
         "--backend server: plan this many tasks at once, spread over the endpoints and their slots "
-        "(llama-server -np N has N; vLLM batches them all). Through a server, plans can differ with it: see the "
-        "README.")),
+        "(llama-server -np N has N; vLLM batches them all). Through a server, plans can differ with it: see "
+        "docs/servers-and-gpus.md.")),
     server_timeout: float | None = _SERVER_TIMEOUT,
     domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Plan, execute and score every task of a task file; print a per-category table."""
-    options = ModelOptions(model, backend, n_ctx, threads, n_gpu_layers, seed, temperature, no_comments,
-                           no_summary, no_coalition, no_grammar, free_teams, chat_template, free_allocation,
-                           no_world_check, prefix_cache, endpoint, workers, server_timeout, no_loop_guard,
-                           no_token_alignment=no_token_alignment)
+    options = ModelOptions.from_command(locals())
     check_output_folder(out, "--out")
     dom = load_domain(domain, catalogue=catalogue)
     cat = dom.catalogue

@@ -262,14 +262,6 @@ class Grammar:
         derived = self._derive(node.item, c, shortest)
         return None if derived is None else seq(derived, rep(node.item, max(node.min - 1, 0), node.max - 1))
 
-    def to_lark(self) -> str:
-        """The same grammar in the Lark dialect llguidance reads (``start`` is root)."""
-        lines = []
-        for name, node in self._reachable():
-            lark_name = "start" if name == "root" else name.replace("-", "_")
-            lines.append(f"{lark_name}: {_lark(node)}")
-        return "\n".join(lines) + "\n"
-
 
 FREE_TEXT_CHARS = 20  # a run of more kinds of character than this is free text (not digits, not a name's first letter)
 
@@ -498,23 +490,4 @@ def _gbnf(node: Node) -> str:
 
 def _gbnf_atom(node: Node) -> str:
     text = _gbnf(node)
-    return f"({text})" if isinstance(node, (Alt, Seq)) else text
-
-
-def _lark(node: Node) -> str:
-    if isinstance(node, Lit):
-        return "\"" + node.text.replace("\\", "\\\\").replace("\"", "\\\"").replace("\n", "\\n") + "\""
-    if isinstance(node, Chars):
-        return "/" + "[" + "".join(re.escape(c).replace("/", "\\/") for c in sorted(node.chars)) + "]/"
-    if isinstance(node, Ref):
-        return node.name.replace("-", "_")
-    if isinstance(node, Seq):
-        return " ".join(_lark_atom(i) for i in node.items)
-    if isinstance(node, Alt):
-        return " | ".join(_lark(o) for o in node.options)
-    return f"{_lark_atom(node.item)}{{{node.min},{node.max}}}"
-
-
-def _lark_atom(node: Node) -> str:
-    text = _lark(node)
     return f"({text})" if isinstance(node, (Alt, Seq)) else text

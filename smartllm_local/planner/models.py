@@ -144,7 +144,7 @@ EMBEDDED: dict[str, Embedded] = {
 #: first command). The environment variable ``SMARTLLM_MODEL`` names another (a path or an embedded name).
 DEFAULT_MODEL = "qwen2.5-coder-0.5b"
 #: Embedded instruct models whose plans measured better as raw completion (few-shot, as the paper prompts) than
-#: as a chat turn, over the household benchmark: ``--chat-template auto`` gives them raw text (README, Figures).
+#: as a chat turn, over the household benchmark: ``--chat-template auto`` gives them raw text (docs/planner.md).
 RAW_COMPLETION = frozenset({"qwen2.5-coder-1.5b", "qwen2.5-coder-0.5b"})
 GGUF_MAGIC = b"GGUF"
 

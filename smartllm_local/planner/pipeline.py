@@ -141,14 +141,19 @@ class Planner:
 
     # ---------------------------------------------------------------- stages
 
+    def decomposition_prompt(self, instruction: str, scene: SceneObjects) -> Fitted:
+        """The decomposition's prompt as the model gets it: its tokens and where its shared prefixes end."""
+        opts = self.config.prompts
+        examples = examples_for("decomposition", self.examples, opts)
+        return fit_prompt(lambda ex: decomposition_prompt(instruction, scene, self.catalogue.skills, ex, opts),
+                          examples, self.backend, self.config.budgets["decomposition"], self.chat)
+
     def decompose(self, result: PlanResult, scene: SceneObjects) -> StageRecord:
         opts = self.config.prompts
         record = StageRecord("decomposition", chat_template=self.chat_status)
-        examples = examples_for("decomposition", self.examples, opts)
         budget = self.config.budgets["decomposition"]
         skills = self.catalogue.skills
-        prompt = fit_prompt(lambda ex: decomposition_prompt(result.instruction, scene, skills, ex, opts), examples,
-                            self.backend, budget, self.chat)
+        prompt = self.decomposition_prompt(result.instruction, scene)
         world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site) if self.config.world_check else None
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world) \
             if self.config.grammar else None
@@ -381,10 +386,6 @@ def _remove_stale_artifacts(out: Path, written: set[Path]) -> None:
         folder = out / stage
         if folder.is_dir() and not folder.is_symlink() and not any(folder.iterdir()):
             folder.rmdir()
-
-
-def result_json(result: PlanResult) -> str:
-    return json.dumps({"allocated": result.allocated, "refusal": result.refusal, "error": result.error or None})
 
 
 def restore_stage(result: PlanResult, record: StageRecord, skills: SkillSet, scene: SceneObjects,

@@ -20,15 +20,14 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
+import time
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..errors import ModelError
-from ..files import check_output_folder
-from .backends.base import shared_prefix
+from ..errors import ModelError, UserError
+from ..files import check_output_folder, write_atomic
 
 _MAGIC = b"smartllm-local prefix state 1\n"
 _SUFFIX = ".kv"
@@ -83,6 +82,11 @@ class PrefixStore:
         self.touch(key)
         return state
 
+    def has_entries(self) -> bool:
+        """Whether any state is stored: until one is, nothing needs the model's digest (a 70B file takes half a
+        minute to digest the first time)."""
+        return next(self.folder.glob(f"*{_SUFFIX}"), None) is not None
+
     def touch(self, key: str) -> None:
         """Mark an entry recently used: evicted last."""
         try:
@@ -96,17 +100,8 @@ class PrefixStore:
         header = json.dumps({"tokens": list(prefix), "size": len(state),
                              "sha256": hashlib.sha256(state).hexdigest()}).encode()
         try:
-            self.folder.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(prefix=".entry.", dir=self.folder)
-            try:
-                with os.fdopen(fd, "wb") as handle:
-                    handle.write(_MAGIC + header + b"\n")
-                    handle.write(state)
-                os.replace(tmp, self._path(key))
-            except BaseException:
-                _unlink(Path(tmp))
-                raise
-        except OSError:
+            write_atomic(self._path(key), [_MAGIC, header, b"\n", state])
+        except (UserError, OSError):
             return False
         self.evict()
         return True
@@ -186,21 +181,57 @@ class PrefixReuse:
     Each part after a prefix is always evaluated on a state loaded back from its snapshot, also right
     after the prefix was first evaluated: with a sliding-window model (Gemma-3) a loaded state does
     not give quite the logits of the live cache it was taken from, so loading it every time is what
-    makes a task's output the same whichever way the state came (evaluated now, kept, or stored)."""
+    makes a task's output the same whichever way the state came (evaluated now, kept, or stored).
+
+    Keeping a state costs copying it out of the engine and back (and, for the store, hashing it and
+    writing it to disk): on a CPU that is a small share of evaluating the prefix, so a backend on the CPU
+    always keeps them (``keeps_states`` set from the start); on a GPU it can cost more than evaluating it
+    again, so there the first prefix a backend evaluates (of at least ``_DECIDE_TOKENS``) decides, from
+    its measured evaluation time and its state's size per token, whether keeping states pays (costs at
+    most ``KEEP_SHARE`` of evaluating them), in memory and in the store; where it does not, prompts are
+    evaluated whole, at the engine's speed, on whatever prefix the live cache shares with them."""
+
+    # What keeping a state costs, per byte of it: copied out and back in; and hashed, written, read back,
+    # hashed again (a state is copied at every prefix end, the shorter ones again: counted twice).
+    MEMORY_BYTES_PER_S = 2e9
+    STORE_BYTES_PER_S = 4e8
+    KEEP_SHARE = 0.2
+    _DECIDE_TOKENS = 64
 
     _states: MemoryStates
     prefix_store: PrefixStore | None
     n_ctx: int
     _tokens: list[int]  # what the cache holds
+    evaluated_tokens: int
+    keeps_states: bool | None = None  # None until decided (see above)
+    stores_states: bool | None = None
 
     def prefill(self, context: Sequence[int], prefixes: Sequence[int]) -> int:
         """Make the cache hold ``context``; returns how many of its tokens were not evaluated now. Without
         prefixes (a stage that goes on in the context the one before left), the cache is kept as it is."""
         ends = [end for end in prefixes if 0 < end < min(len(context), self.n_ctx)]
-        held = shared_prefix(self._tokens, context)
-        reused = self._load_prefixes(context, ends) if ends else held
+        if ends and self.keeps_states is not False:
+            reused = self._load_prefixes(context, ends)
+            self._sync(context)
+            return reused
+        evaluated = self.evaluated_tokens
         self._sync(context)
-        return reused
+        return len(context) - (self.evaluated_tokens - evaluated)
+
+    def _decide_keeping(self, tokens: int, seconds: float) -> None:
+        """Whether keeping states pays, from a prefix's last ``tokens`` evaluated in ``seconds``."""
+        if tokens < self._DECIDE_TOKENS or seconds <= 0 or not self._tokens:
+            return
+        per_token = 2 * self._state_bytes() / len(self._tokens)
+        budget = self.KEEP_SHARE * seconds / tokens
+        self.keeps_states = per_token / self.MEMORY_BYTES_PER_S <= budget
+        self.stores_states = self.keeps_states and per_token / self.STORE_BYTES_PER_S <= budget
+
+    def _stored(self, lookup: bool = False) -> PrefixStore | None:
+        """The store, where keeping states there pays (or is not decided yet); for a ``lookup``, only if it holds
+        any."""
+        store = self.prefix_store if self.stores_states is not False else None
+        return None if store is None or (lookup and not store.has_entries()) else store
 
     def _load_prefixes(self, context: Sequence[int], ends: Sequence[int]) -> int:
         """Make the cache hold ``context[:ends[-1]]``: from the longest of the prefixes ending at ``ends`` that
@@ -212,8 +243,9 @@ class PrefixReuse:
         for depth in reversed(range(len(ends))):
             prefix = list(context[: ends[depth]])
             state = self._states.get(prefix)
-            if state is None and self.prefix_store is not None:
-                state = self.prefix_store.load(self._store_key(prefix), prefix)
+            store = self._stored(lookup=True) if state is None else None
+            if store is not None:
+                state = store.load(self._store_key(prefix), prefix)
             if state is not None and self._restore(prefix, state):
                 self._states.put(prefix, state, self._state_size(state))
                 self._touch([list(context[:end]) for end in ends[:depth]])
@@ -223,21 +255,27 @@ class PrefixReuse:
             self._truncate(0)
         for end in ends[start:]:
             prefix = list(context[:end])
-            self._evaluate(prefix[len(self._tokens):])
+            piece = prefix[len(self._tokens):]
+            started = time.perf_counter()
+            self._evaluate(piece)
+            if self.keeps_states is None:
+                self._decide_keeping(len(piece), time.perf_counter() - started)
+            if self.keeps_states is False:
+                continue
             state = self._snapshot()
             if not self._restore(prefix, state):
                 raise ModelError("the backend could not load back the state it had just saved")
             self._states.put(prefix, state, self._state_size(state))
-            if self.prefix_store is not None:
-                self.prefix_store.save(self._store_key(prefix), prefix, state)
+            if (store := self._stored()) is not None:
+                store.save(self._store_key(prefix), prefix, state)
         return reused
 
     def _touch(self, prefixes: Sequence[list[int]]) -> None:
         """Mark shorter prefixes used with a longer one, so that bounded stores keep them as long."""
         for prefix in prefixes:
             self._states.touch(prefix)
-            if self.prefix_store is not None:
-                self.prefix_store.touch(self._store_key(prefix))
+            if (store := self._stored(lookup=True)) is not None:
+                store.touch(self._store_key(prefix))
 
     # hooks
     def _sync(self, context: Sequence[int]) -> None:
@@ -258,6 +296,10 @@ class PrefixReuse:
         raise NotImplementedError
 
     def _state_size(self, state: Any) -> int:
+        raise NotImplementedError
+
+    def _state_bytes(self) -> int:
+        """The size of the cache's state now, without copying it."""
         raise NotImplementedError
 
     def _store_key(self, prefix: Sequence[int]) -> str:

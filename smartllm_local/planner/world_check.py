@@ -8,8 +8,9 @@ and no mass limit, one per sub-task (a sub-task's robot holds what it picked up
 and nothing another sub-task's robot holds); an allocation for one notional robot
 per ``robot_list`` slot (whether a robot has the skill and the strength is the
 team feasibility's question). Sub-tasks are checked in the order they are
-written; what runs concurrently may still interleave differently (see README). A site domain's plan
-is tried on its site simulator the same way (:class:`~smartllm_local.executor.site.SiteDryRun`).
+written; what runs concurrently may still interleave differently (see docs/planner.md, "The world
+check"). A site domain's plan is tried on its site simulator the same way
+(:class:`~smartllm_local.executor.site.SiteDryRun`).
 """
 
 from __future__ import annotations

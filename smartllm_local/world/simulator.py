@@ -129,10 +129,6 @@ class Simulator:
 
     # ------------------------------------------------------------------ public
 
-    @property
-    def action_names(self) -> frozenset[str]:
-        return frozenset(self._handlers)
-
     def step(self, agent_id: int, action: dict[str, Any]) -> ActionResult:
         """Run one action for one agent."""
         name = action.get("action")

@@ -170,7 +170,7 @@ def test_a_bad_chat_template_mode_is_a_one_line_error(tmp_path, command):
 
 
 def test_auto_plans_the_qwen_models_raw_and_every_other_model_in_its_template():
-    """The measured choice (README, Figures): Qwen2.5-Coder plans better as raw completion; none stays none."""
+    """The measured choice (docs/planner.md): Qwen2.5-Coder plans better as raw completion; none stays none."""
     for qwen in ("qwen2.5-coder-1.5b", "qwen2.5-coder-0.5b"):
         assert mode_for(qwen, "auto") == "none" and mode_for(qwen, "none") == "none" and mode_for(qwen, "on") == "on"
     for other in (None, "smollm2", "gemma3-270m", "/models/qwen2.5-coder-1.5b-instruct-q4_k_m.gguf"):

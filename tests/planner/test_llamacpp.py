@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from smartllm_local.errors import ModelError
@@ -166,8 +167,8 @@ def test_the_end_of_sequence_is_the_models_choice_where_the_grammar_cannot_end(s
 
 
 def test_a_process_that_imports_numpy_before_llama_cpp_loads_and_runs_a_model():
-    """The order that crashed llama.cpp's model load on a CUDA build (README, GPU): numpy first, then a model
-    loaded and run; here on the build CI has, on a GPU machine by scripts/gpu_check.sh."""
+    """The order that crashed llama.cpp's model load on a CUDA build (docs/servers-and-gpus.md): numpy first, then a
+    model loaded and run; here on the build CI has, on a GPU machine by scripts/gpu_check.sh."""
     code = ("import numpy, sys; assert 'llama_cpp' not in sys.modules\n"
             "from smartllm_local.planner.backends import load_backend\n"
             "backend = load_backend('llamacpp', 'smollm2', n_ctx=512, prefix_cache='off')\n"
@@ -176,3 +177,24 @@ def test_a_process_that_imports_numpy_before_llama_cpp_loads_and_runs_a_model():
                           timeout=300)
     assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
     assert int(done.stdout.split()[-1]) > 3
+
+
+def test_scores_that_are_not_numbers_are_a_clear_error_not_a_grammar_one(smollm2):
+    """A broken model or build (a random 70B shape overflowed half precision on a GPU) gives NaN logits: said so."""
+    logits = np.zeros(smollm2.n_vocab, dtype=np.float32)
+    logits[7] = np.nan
+    with pytest.raises(ModelError, match="not numbers"):
+        smollm2._pick(logits, None, Sampling(), np.random.default_rng(0))
+
+
+def test_flash_attention_is_off_on_the_cpu_and_llama_cpps_auto_where_layers_are_on_a_gpu(smollm2):
+    """Off on the CPU (measured slower there); on a GPU llama.cpp's own ``auto``, which llama-cpp-python cannot ask
+    for by name: its "off" constant is borrowed while the context is made, and left as it was."""
+    import llama_cpp
+
+    from smartllm_local.planner.backends import llamacpp
+
+    assert smollm2.llm.context_params.flash_attn_type == llama_cpp.LLAMA_FLASH_ATTN_TYPE_DISABLED
+    with llamacpp._flash_attention_auto(llama_cpp, wanted=True):
+        assert llama_cpp.llama_cpp.LLAMA_FLASH_ATTN_TYPE_DISABLED == llama_cpp.LLAMA_FLASH_ATTN_TYPE_AUTO
+    assert llama_cpp.llama_cpp.LLAMA_FLASH_ATTN_TYPE_DISABLED == 0

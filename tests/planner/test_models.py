@@ -23,12 +23,10 @@ def test_embedded_models_are_found_through_their_packages():
 def test_the_default_model_is_qwen_0_5b_unless_smartllm_model_names_another(monkeypatch):
     monkeypatch.delenv("SMARTLLM_MODEL")
     assert resolve_gguf(None) == embedded_model_path("qwen2.5-coder-0.5b")
-    assert ModelOptions(None, "llamacpp", 8192, None, 0, 0, 0.0, False, False, False, False).config.chat_template \
-        == "none", "the default model plans raw, as measured"
+    assert ModelOptions().config.chat_template == "none", "the default model plans raw, as measured"
     monkeypatch.setenv("SMARTLLM_MODEL", "smollm2")
     assert resolve_gguf(None) == embedded_model_path("smollm2")
-    assert ModelOptions(None, "llamacpp", 8192, None, 0, 0, 0.0, False, False, False, False).config.chat_template \
-        == "auto"
+    assert ModelOptions().config.chat_template == "auto"
 
 
 def test_the_qwen_models_are_instruct_models_with_their_template_and_32k_context():

@@ -15,8 +15,9 @@ import pytest
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 from smartllm_local.planner.backends import load_backend
-from smartllm_local.planner.pipeline import Planner
-from smartllm_local.planner.prefix_cache import PrefixStore, default_store_folder, open_store, state_key
+from smartllm_local.planner.pipeline import Planner, PlanResult
+from smartllm_local.planner.prefix_cache import PrefixReuse, PrefixStore, default_store_folder, open_store, state_key
+from smartllm_local.planner.scene_context import scene_objects
 from smartllm_local.tasks import find_task, load_tasks
 from tests.test_cli_errors import cli, one_line_error
 
@@ -172,3 +173,62 @@ def test_a_damaged_store_is_rebuilt(tmp_path):
     third, rebuilt = plan("third")
     assert third == first and rebuilt["coalition"]["reused_tokens"] == rebuilt["decomposition"]["reused_tokens"] == 0
     assert [p.stat().st_size > 1000 for p in entries(states)] == [True] * 3
+
+
+class _Keeper(PrefixReuse):
+    """The decision alone: a cache of ``held`` tokens whose state takes ``per_token`` bytes each."""
+
+    def __init__(self, held: int, per_token: int):
+        self._tokens, self.per_token = [0] * held, per_token
+
+    def _state_bytes(self) -> int:
+        return len(self._tokens) * self.per_token
+
+
+@pytest.mark.parametrize(("per_token", "keeps", "stores"), [
+    (20_000, True, True),  # a small model on a CPU: copying is a sliver of evaluating
+    (150_000, True, False),  # out of the engine and back pays, through the disk it does not
+    (500_000, False, False),  # a 7B on a GPU: evaluating again is cheaper than copying
+])
+def test_states_are_kept_only_where_copying_them_costs_a_fifth_of_evaluating(per_token, keeps, stores):
+    keeper = _Keeper(2000, per_token)
+    keeper._decide_keeping(1000, 1000 * 0.8e-3)  # 1,250 tokens a second
+    assert (keeper.keeps_states, keeper.stores_states) == (keeps, stores)
+
+
+def test_a_short_piece_decides_nothing():
+    keeper = _Keeper(2000, 10**9)
+    keeper._decide_keeping(PrefixReuse._DECIDE_TOKENS - 1, 10.0)
+    assert keeper.keeps_states is None and keeper.stores_states is None
+
+
+def test_where_keeping_does_not_pay_prompts_are_evaluated_whole_and_plan_the_same(smollm2, tmp_path):
+    """A backend that measures (as one on a GPU does) and finds copying states dear keeps none and stores none,
+    reuses what its live cache shares with the next prompt, and writes what a backend that keeps them writes
+    (on the CPU every backend keeps them, decided from the start)."""
+    assert smollm2.keeps_states is smollm2.stores_states is True
+    catalogue = load_domain().catalogue
+    task = find_task(load_tasks(), "kitchen-01")
+    dear = load_backend("llamacpp", "smollm2", n_ctx=8192, prefix_cache=tmp_path / "states")
+    try:
+        dear.keeps_states = dear.stores_states = None  # measured, as where layers are on a GPU
+        dear.MEMORY_BYTES_PER_S = 1.0
+        planner = Planner(dear, catalogue)
+        record = planner.decompose(PlanResult(task.instruction, task.floor_plan, list(task.robots)),
+                                   scene_objects(task.floor_plan))
+        assert dear.keeps_states is False and dear.stores_states is False
+        assert not (tmp_path / "states").exists() or not entries(tmp_path / "states")
+        context = list(dear._tokens[:-2])  # the prompt and most of what was written after it
+        evaluated = dear.evaluated_tokens
+        reused = dear.prefill(context, record_prefixes(planner, task))
+        assert dear._tokens == context and reused == len(context) - (dear.evaluated_tokens - evaluated)
+        assert len(context) - 3 <= reused < len(context)  # the live cache's prefix: its last token or two again
+    finally:
+        dear.close()
+    kept = Planner(smollm2, catalogue).decompose(PlanResult(task.instruction, task.floor_plan, list(task.robots)),
+                                                 scene_objects(task.floor_plan))
+    assert record.output == kept.output and record.reused_tokens == 0
+
+
+def record_prefixes(planner: Planner, task) -> list[int]:
+    return planner.decomposition_prompt(task.instruction, scene_objects(task.floor_plan)).prefixes

@@ -39,7 +39,7 @@ def test_every_stage_is_a_valid_plan_in_the_models_own_words(run):
         parse_plan(decomposed, form="decomposed")
         # after forced text, the model's word with its own space: never a second one
         assert not re.search(r"^(# SubTask \d+:|#|    #)  ", decomposed, re.M), decomposed
-        # measured better raw (README, Figures): --chat-template auto gives the Qwen models raw text
+        # measured better raw (docs/planner.md): --chat-template auto gives the Qwen models raw text
         assert json.loads((run / task / "decomposition" / "timings.json").read_text())["chat_template"] == "off"
         if not line["refused"]:
             parse_plan((run / task / "allocated.py").read_text(), form="allocated")

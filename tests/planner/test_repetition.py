@@ -72,8 +72,7 @@ def test_no_loop_guard_turns_it_off_and_labels_the_run():
     from smartllm_local.report.runs import Run
 
     def options(off: bool) -> ModelOptions:
-        return ModelOptions(None, "llamacpp", 4096, None, 0, 0, 0.0, False, False, False, False,
-                            prefix_cache="off", no_loop_guard=off)
+        return ModelOptions(n_ctx=4096, prefix_cache="off", no_loop_guard=off)
 
     assert options(False).config.sampling.loop_guard == LoopGuard()
     assert options(True).config.sampling.loop_guard is None

@@ -221,8 +221,8 @@ def _llama_server(tmp_path: Path, *args: str) -> tuple[Server, Path]:
 
 @pytest.mark.heavy
 def test_llama_server_plans_token_for_token_what_the_in_process_backend_plans(tmp_path):
-    """Greedy plans through llama.cpp's own server (flash attention off, as in-process) are the in-process
-    backend's, stage for stage and token for token, prefix reuse and the loop guard included."""
+    """Greedy plans through llama.cpp's own server (flash attention off, as in-process on the CPU) are the
+    in-process backend's, stage for stage and token for token, prefix reuse and the loop guard included."""
     tasks = (*TASKS, "kitchen-02")
     task_args = [a for t in tasks for a in ("--task", t)]
     run = cli("benchmark", "run", "--out", tmp_path / "in-process", "--prefix-cache", "off", *task_args)
@@ -247,6 +247,27 @@ def test_llama_server_plans_token_for_token_what_the_in_process_backend_plans(tm
             counts = [{k: line[task]["tokens"][stage][k] for k in ("prompt", "generated")} for line in (local, remote)]
             assert counts[0] == counts[1], (task, stage)
     assert remote["kitchen-02"]["tokens"]["decomposition"]["reused"] > 2000  # the slot held the examples
+
+
+@pytest.mark.heavy
+def test_bench_measures_through_a_server_what_it_measures_in_process(tmp_path):
+    """``bench --backend server``: the prompt path, decoding and prefix reuse through llama-server's slot (no engine
+    of its own to time against: ``prefill_over_engine`` is null), with the figures' shape an in-process run has."""
+    server, _ = _llama_server(tmp_path, "-c", "8192", "-np", "1")
+    try:
+        out = tmp_path / "bench.json"
+        run = cli("bench", "--backend", "server", "--endpoint", server.url, "--sample", "2", "--no-benchmark",
+                  "--no-executor", "--out", out)
+        assert run.returncode == 0, run.stderr
+    finally:
+        server.stop()
+    report = json.loads(out.read_text())
+    served = report["models"]["served"]
+    assert served["prefill"]["prefill_over_engine"] is None and served["prefill"]["first"]["seconds"] > 0
+    assert served["prefill"]["kept"]["reused"] > 2000  # the slot held the prompt
+    assert served["decode"]["free"]["generated_tokens"] > 0 < served["decode"]["constrained"]["tokens_per_s"]
+    assert served["prefix"]["stages"]["decomposition"]["later_evaluated_mean"] is not None
+    assert report["machine"]["backend"] == "server" and report["executor"] is None
 
 
 @pytest.mark.heavy

@@ -36,6 +36,7 @@ import contextlib
 import ctypes
 import io
 import os
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -48,12 +49,30 @@ from .base import Generated, Sampling, continuation_tokens, keep_whole, shared_p
 from .repetition import TRIES, current_line, draw
 
 _TOP = 64
+CPU_BATCH, GPU_BATCH, UBATCH = 512, 2048, 512
 
 
 def _trained_context(metadata: dict[str, str]) -> int | None:
     """The context the model was trained on, from its GGUF metadata (a vocabulary file has none)."""
     value = metadata.get(f"{metadata.get('general.architecture', '')}.context_length", "")
     return int(value) if value.isdigit() and int(value) > 0 else None
+
+
+@contextlib.contextmanager
+def _flash_attention_auto(llama_cpp, wanted: bool):
+    """Where ``wanted``, make the context llama.cpp's own default, flash attention ``auto`` (on where the device
+    runs it: on a GPU, where the build has its kernels), which llama-cpp-python 0.3.36 cannot ask for (its
+    ``flash_attn`` is on or off): it reads its "off" from this constant while it makes the context."""
+    if not wanted:
+        yield
+        return
+    module = llama_cpp.llama_cpp
+    off = module.LLAMA_FLASH_ATTN_TYPE_DISABLED
+    module.LLAMA_FLASH_ATTN_TYPE_DISABLED = module.LLAMA_FLASH_ATTN_TYPE_AUTO
+    try:
+        yield
+    finally:
+        module.LLAMA_FLASH_ATTN_TYPE_DISABLED = off
 
 
 class LlamaCppBackend(PrefixReuse):
@@ -69,12 +88,14 @@ class LlamaCppBackend(PrefixReuse):
         threads: int | None = None,
         n_gpu_layers: int = 0,
         seed: int = 0,
-        n_batch: int = 512,
+        n_batch: int | None = None,
         vocab_only: bool = False,
         prefix_store: PrefixStore | None = None,
     ):
         """``vocab_only`` loads the tokenizer alone (llama.cpp's vocabulary files): it tokenizes but cannot generate.
-        ``prefix_store`` keeps the examples' states for later processes (None: this process only)."""
+        ``prefix_store`` keeps the examples' states for later processes (None: this process only). ``n_batch``
+        (tokens per evaluation call) follows the device unless given: llama.cpp's own 2,048 where layers are on a
+        GPU, 512 on the CPU (whose speed it does not change); either way llama.cpp computes 512 at a time."""
         try:
             import llama_cpp
         except ImportError as exc:
@@ -83,17 +104,22 @@ class LlamaCppBackend(PrefixReuse):
             ) from exc
         self._lib = llama_cpp
         self.model = str(model_path)
+        n_batch = n_batch or (GPU_BATCH if n_gpu_layers else CPU_BATCH)
+        self._threads = threads or max(1, os.cpu_count() or 1)
         # A vocabulary has no training context, which llama.cpp warns about on stderr as it loads one.
         quiet = contextlib.redirect_stderr(io.StringIO()) if vocab_only else contextlib.nullcontext()
         try:
-            with quiet:
+            # On the CPU flash attention stays off: there it decoded Qwen2.5-Coder-1.5B 30% slower over the
+            # benchmark's decompositions (docs/measurements.md); on a GPU llama.cpp decides (auto).
+            with quiet, _flash_attention_auto(llama_cpp, wanted=bool(n_gpu_layers)):
                 self.llm = llama_cpp.Llama(
                     model_path=str(model_path),
                     n_ctx=n_ctx,
-                    n_threads=threads or max(1, os.cpu_count() or 1),
+                    n_threads=self._threads,
                     n_gpu_layers=n_gpu_layers,
                     seed=seed,
                     n_batch=n_batch,
+                    n_ubatch=UBATCH,
                     logits_all=False,
                     vocab_only=vocab_only,
                     verbose=False,
@@ -109,8 +135,11 @@ class LlamaCppBackend(PrefixReuse):
         self._states = MemoryStates()
         self._ends = True  # whether the end of sequence is always admitted (Sampling.aligned)
         self.prefix_store = prefix_store
+        if not n_gpu_layers:  # on the CPU keeping states always pays (see PrefixReuse): measured on a GPU only
+            self.keeps_states = self.stores_states = True
         self._settings = {"backend": self.name, "llama_cpp": getattr(llama_cpp, "__version__", ""), "n_ctx": n_ctx,
-                          "n_batch": n_batch, "n_gpu_layers": n_gpu_layers}
+                          "n_batch": n_batch, "n_gpu_layers": n_gpu_layers,
+                          "flash_attn": "auto" if n_gpu_layers else "off"}
         self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
         self._pieces: dict[tuple[int, bool], bytes] = {}
@@ -192,15 +221,18 @@ class LlamaCppBackend(PrefixReuse):
 
         return state_key({**self._settings, "model": sha256_file(self.model)}, prefix)
 
+    def _state_bytes(self) -> int:
+        return int(self._lib.llama_state_seq_get_size(self._ctx, 0))
+
     def _snapshot(self) -> bytes:
-        size = self._lib.llama_state_seq_get_size(self._ctx, 0)
+        size = self._state_bytes()
         buffer = (ctypes.c_uint8 * size)()
         written = self._lib.llama_state_seq_get_data(self._ctx, buffer, size, 0)
-        return bytes(buffer)[:written]
+        return ctypes.string_at(buffer, written)
 
     def _restore(self, prefix: list[int], state: bytes) -> bool:
         self._truncate(0)
-        source = (ctypes.c_uint8 * len(state)).from_buffer_copy(state)
+        source = ctypes.cast(state, ctypes.POINTER(ctypes.c_uint8))  # read in place, not copied
         if not self._lib.llama_state_seq_set_data(self._ctx, source, len(state), 0):
             self._truncate(0)
             return False
@@ -216,10 +248,47 @@ class LlamaCppBackend(PrefixReuse):
         if not tokens:
             return
         self.llm.eval(tokens)
+        self._lib.llama_synchronize(self._ctx)  # on a GPU evaluation runs on after eval returns
         self.evaluated_tokens += len(tokens)
         self._tokens.extend(tokens)
         self._alone.extend([len(tokens) == 1] * len(tokens))
         self._fresh = True
+
+    def engine_seconds(self, tokens: Sequence[int], n_batch: int = GPU_BATCH) -> float:
+        """Seconds llama.cpp alone takes to evaluate ``tokens`` from an empty cache: a context of its own on the
+        same weights with this backend's settings (threads, attention) but llama.cpp's default batches, the last
+        token's logits only, after a warm-up. What ``bench`` measures :meth:`prefill` against."""
+        lib = self._lib
+        if not tokens:
+            return 0.0
+        mine = self.llm.context_params
+        params = type(mine).from_buffer_copy(mine)
+        params.n_ctx = min(self.n_ctx, -(-(len(tokens) + 8) // 256) * 256)
+        params.n_batch, params.n_ubatch = n_batch, UBATCH
+        ctx = lib.llama_init_from_model(self.llm._model.model, params)
+        if not ctx:
+            raise ModelError("llama.cpp could not make a second context for the engine's own timing")
+        batch = lib.llama_batch_init(n_batch, 0, 1)
+        try:
+            def run(chunk: Sequence[int], start: int, last: bool) -> None:
+                batch.n_tokens = len(chunk)
+                for i, token in enumerate(chunk):
+                    batch.token[i], batch.pos[i], batch.n_seq_id[i] = token, start + i, 1
+                    batch.seq_id[i][0], batch.logits[i] = 0, last and i == len(chunk) - 1
+                if lib.llama_decode(ctx, batch) != 0:
+                    raise ModelError("llama.cpp could not evaluate the engine's timing batch")
+
+            run(tokens[:8], 0, True)  # the first call sets the device up: not timed
+            lib.llama_synchronize(ctx)
+            lib.llama_memory_clear(lib.llama_get_memory(ctx), True)
+            started = time.perf_counter()
+            for start in range(0, len(tokens), n_batch):
+                run(tokens[start:start + n_batch], start, start + n_batch >= len(tokens))
+            lib.llama_synchronize(ctx)
+            return time.perf_counter() - started
+        finally:
+            lib.llama_batch_free(batch)
+            lib.llama_free(ctx)
 
     def _logits(self) -> np.ndarray:
         ptr = self._lib.llama_get_logits_ith(self._ctx, -1)
@@ -259,6 +328,9 @@ class LlamaCppBackend(PrefixReuse):
         """The next token, greedy or sampled, among those the grammar admits and, where any of them is
         left, those ``avoid`` does not refuse. The end of sequence is always admitted: where the model
         ends, the planner completes the output (see :mod:`..generation`)."""
+        if not np.isfinite(logits[int(np.argmax(logits))]):
+            raise ModelError("the model's scores are not numbers (NaN or infinite logits): its weights, or the build "
+                             "that runs them, are broken (on a GPU, see whether --n-gpu-layers 0 runs it)")
         if sampling.temperature <= 0:
             best = int(np.argmax(logits))
             if (self._admits(sampler, best)) and not (avoid and avoid(best)):

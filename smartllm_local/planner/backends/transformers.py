@@ -233,8 +233,10 @@ class TransformersBackend(PrefixReuse):
         self._tokens = self._tokens[:size]
         self._logits = None
 
-    # prefixes (see PrefixReuse): kept in memory for this process; the store on disk is llama.cpp's
+    # prefixes (see PrefixReuse): kept in memory for this process, copied on the model's device; the store on
+    # disk is llama.cpp's
     prefix_store = None
+    keeps_states = True
 
     def _snapshot(self) -> Any:
         return copy.deepcopy(self._cache)
