@@ -108,9 +108,12 @@ class ModelOptions:
 
     def load(self, prefix_cache: str | None = None) -> Backend:
         """One backend for this model (a server's first slot), its prefix states in ``prefix_cache``."""
-        return load_backends(self.backend, self.model, endpoints=self.endpoints, server_timeout=self.server_timeout,
-                             n_ctx=self.n_ctx, threads=self.threads, n_gpu_layers=self.n_gpu_layers,
-                             seed=self.seed, prefix_cache=prefix_cache)[0]
+        return self._backends(1, prefix_cache)[0]
+
+    def _backends(self, workers: int, prefix_cache: str | None) -> list[Backend]:
+        return load_backends(self.backend, self.model, workers=workers, endpoints=self.endpoints,
+                             server_timeout=self.server_timeout, n_ctx=self.n_ctx, threads=self.threads,
+                             n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=prefix_cache)
 
     def as_arguments(self) -> list[str]:
         """The model's options as ``plan`` and ``benchmark run`` take them on the command line."""
@@ -124,10 +127,8 @@ class ModelOptions:
     def planners(self, catalogue, domain: Domain | None = None) -> list[Planner]:
         """One planner per worker (one, but for a server backend with --workers), for ``domain``'s tasks."""
         site = domain.as_site if domain is not None else None
-        backends = load_backends(self.backend, self.model, workers=self.workers, endpoints=self.endpoints,
-                                 server_timeout=self.server_timeout, n_ctx=self.n_ctx, threads=self.threads,
-                                 n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=self.prefix_cache)
-        return [Planner(backend, catalogue, self.config, site=site) for backend in backends]
+        return [Planner(backend, catalogue, self.config, site=site)
+                for backend in self._backends(self.workers, self.prefix_cache)]
 
 
 # Options shared by every command that plans (typer option objects can be reused as defaults).

@@ -210,13 +210,10 @@ class PrefixReuse:
         """Make the cache hold ``context``; returns how many of its tokens were not evaluated now. Without
         prefixes (a stage that goes on in the context the one before left), the cache is kept as it is."""
         ends = [end for end in prefixes if 0 < end < min(len(context), self.n_ctx)]
-        if ends and self.keeps_states is not False:
-            reused = self._load_prefixes(context, ends)
-            self._sync(context)
-            return reused
         evaluated = self.evaluated_tokens
+        loaded = self._load_prefixes(context, ends) if ends and self.keeps_states is not False else None
         self._sync(context)
-        return len(context) - (self.evaluated_tokens - evaluated)
+        return loaded if loaded is not None else len(context) - (self.evaluated_tokens - evaluated)
 
     def _decide_keeping(self, tokens: int, seconds: float) -> None:
         """Whether keeping states pays, from a prefix's last ``tokens`` evaluated in ``seconds``."""
