@@ -25,12 +25,12 @@ import time
 
 import numpy as np
 
+from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
 from smartllm_local.planner.models import resolve_gguf
 from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.tasks import find_task, load_tasks
+from smartllm_local.planner.prompting.scene_context import scene_objects
 
 
 class Measured(LlamaCppBackend):

@@ -7,8 +7,8 @@ import json
 
 import pytest
 
-from smartllm_local.bench import later_prompt_costs
-from smartllm_local.tasks import load_tasks
+from smartllm_local.benchmark.speed import later_prompt_costs
+from smartllm_local.benchmark.tasks import load_tasks
 from tests.test_cli_errors import cli, one_line_error
 
 
@@ -58,7 +58,7 @@ def test_bench_takes_plans_model_options_and_refuses_a_server_without_endpoint(t
 
 
 def test_the_whole_benchmark_is_run_with_the_options_bench_was_given():
-    from smartllm_local.cli.plan import ModelOptions
+    from smartllm_local.cli.options import ModelOptions
 
     options = ModelOptions(model="model.gguf", n_ctx=4096, threads=8, n_gpu_layers=-1, chat_template="none")
     assert options.as_arguments() == ["--model", "model.gguf", "--backend", "llamacpp", "--n-ctx", "4096",
@@ -69,15 +69,22 @@ def test_the_whole_benchmark_is_run_with_the_options_bench_was_given():
     assert slow.as_arguments()[4:6] == ["--server-timeout", "900.0"]
 
 
-def test_every_model_option_of_plan_and_benchmark_run_reaches_model_options():
-    """``ModelOptions.from_command`` takes a command's options by name: a renamed one would be dropped silently."""
+def test_every_model_option_is_declared_once_and_reaches_model_options():
+    """The commands take their model options from one list (``model_options``); each must be a ModelOptions
+    parameter, and each ModelOptions parameter an option: a renamed one would fail here, not drop silently."""
     import inspect
 
-    from smartllm_local.cli.plan import ModelOptions, benchmark_run, plan_command
+    from smartllm_local.cli.benchmark import run
+    from smartllm_local.cli.bench import bench_command
+    from smartllm_local.cli.options import MODEL_PARAMETERS, ModelOptions
+    from smartllm_local.cli.plan import plan_command
 
     wanted = set(inspect.signature(ModelOptions).parameters)
-    assert wanted <= set(inspect.signature(benchmark_run).parameters)
+    assert {p.name for p in MODEL_PARAMETERS} == wanted
+    assert wanted <= set(inspect.signature(run).parameters)
     assert wanted - {"workers"} <= set(inspect.signature(plan_command).parameters)
+    bench = set(inspect.signature(bench_command).parameters)
+    assert {"backend", "endpoint", "n_gpu_layers", "chat_template"} <= bench and "model_settings" not in bench
 
 
 def test_later_prompt_costs_reads_what_a_run_reused_per_stage():

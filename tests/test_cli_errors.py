@@ -172,12 +172,12 @@ def test_write_atomic_gives_the_permissions_a_plain_write_would(tmp_path):
     (UserError("bad input"), 2, "error: bad input\n"),
 ])
 def test_main_keeps_its_exit_codes(monkeypatch, capsys, raised, code, stderr):
-    from smartllm_local.cli import main, plans
+    from smartllm_local.cli import main, validate
 
     def fail(*args, **kwargs):
         raise raised
 
-    monkeypatch.setattr(plans, "load_domain", fail)
+    monkeypatch.setattr(validate, "load_domain", fail)
     monkeypatch.setattr(sys, "argv", ["smartllm-local", "validate", "plan.py"])
     with pytest.raises(SystemExit) as exited:
         main()

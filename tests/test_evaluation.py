@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from smartllm_local.evaluation import TaskOutcome
-from smartllm_local.results import summary_table, variability_table
+from smartllm_local.benchmark.results import summary_table, variability_table
+from smartllm_local.benchmark.run import TaskOutcome
+from smartllm_local.benchmark.tasks import Task
 from smartllm_local.scoring import Scores
-from smartllm_local.tasks import Task
 
 
 def _task(task_id: str, category: str = "uncategorized", feasible: bool = True) -> Task:
@@ -51,12 +51,12 @@ def test_speed_shows_what_ru_cannot():
 def test_a_reference_plan_runs_at_speed_1_and_a_padded_one_slower(tmp_path):
     """The real Controller: the reference plan's ticks are the yardstick; the same plan with its
     sub-tasks run one after another (no parallelism) is slower."""
-    from smartllm_local.benchmark import default_plans_dir, reference_ticks
+    from smartllm_local.benchmark.reference_plans import default_plans_dir, reference_ticks
+    from smartllm_local.benchmark.run import execute_and_score
+    from smartllm_local.benchmark.tasks import load_tasks
     from smartllm_local.domain import load_domain
-    from smartllm_local.evaluation import execute_and_score
     from smartllm_local.plan_language import parse_plan
     from smartllm_local.planner.pipeline import PlanResult
-    from smartllm_local.tasks import load_tasks
     from smartllm_local.world.controller import open_controller
 
     catalogue = load_domain().catalogue

@@ -16,10 +16,12 @@ import typer
 from ..errors import SmartLLMError, UserError
 from . import bench as _bench
 from . import benchmark as _benchmark
+from . import dispatch as _dispatch
 from . import domains as _domains
+from . import execute as _execute
 from . import plan as _plan
-from . import plans as _plans
 from . import scenes as _scenes
+from . import validate as _validate
 
 app = typer.Typer(
     help="Offline multi-robot task planning (SMART-LLM) on local models, executed in AI2-THOR.",
@@ -30,11 +32,10 @@ app = typer.Typer(
 app.add_typer(_scenes.app, name="scenes")
 app.add_typer(_benchmark.app, name="benchmark")
 app.add_typer(_domains.app, name="domain")
-_benchmark.app.command("run")(_plan.benchmark_run)
 app.command("plan")(_plan.plan_command)
-app.command("validate")(_plans.validate)
-app.command("execute")(_plans.execute)
-app.command("dispatch")(_plans.dispatch)
+app.command("validate")(_validate.validate)
+app.command("execute")(_execute.execute)
+app.command("dispatch")(_dispatch.dispatch)
 app.command("bench")(_bench.bench_command)
 
 

@@ -5,19 +5,21 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import typer
 
-from ..bench import run_bench, summary
+from ..benchmark.speed import run_bench, summary
+from ..benchmark.tasks import load_tasks
 from ..domain import load_domain
 from ..errors import UserError
 from ..files import check_output_file, check_output_folder, json_text, write_atomic
 from ..planner.backends import model_location
 from ..planner.models import EMBEDDED
-from ..tasks import load_tasks
-from .plan import _BACKEND, _CHAT_TEMPLATE, _ENDPOINT, _GPU, _N_CTX, _SERVER_TIMEOUT, _THREADS, ModelOptions
+from .options import ModelOptions, model_options
 
 
+@model_options("backend", "endpoint", "server_timeout", "n_ctx", "n_gpu_layers", "chat_template", "threads")
 def bench_command(
     models: str | None = typer.Option(None, "--models", help=(
         f"Comma-separated GGUF files or embedded models, measured one after another (the first also runs the "
@@ -31,18 +33,14 @@ def bench_command(
     benchmark_out: Path | None = typer.Option(None, "--benchmark-out", help=(
         "Keep the whole benchmark's run folder here (a new folder, as `benchmark run --out` writes it), "
         "for `benchmark report`.")),
-    backend: str = _BACKEND,
-    endpoint: str | None = _ENDPOINT,
-    server_timeout: float | None = _SERVER_TIMEOUT,
-    n_ctx: int = _N_CTX,
-    n_gpu_layers: int = _GPU,
-    chat_template: str = _CHAT_TEMPLATE,
-    threads: int | None = _THREADS,
     out: Path = typer.Option(Path("bench.json"), "--out", help="The JSON file to write."),
+    *,
+    model_settings: dict[str, Any],
 ) -> None:
     """Measure, side by side: the prompt path against llama.cpp alone, constrained and free decoding, prompt
     tokens and time to first token with and without the examples' kept states, executor speed, and the whole
     benchmark's time."""
+    backend = model_settings["backend"]
     if models is None:
         chosen: list[str | None] = [None] if backend == "server" else list(EMBEDDED)
     else:
@@ -54,9 +52,7 @@ def bench_command(
     check_output_file(out, "--out")
     if benchmark_out is not None and check_output_folder(benchmark_out, "--benchmark-out").exists():
         raise UserError(f"--benchmark-out {benchmark_out} exists: give a new folder")
-    options = [ModelOptions(model=model, backend=backend, n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers,
-                            chat_template=chat_template, endpoint=endpoint, server_timeout=server_timeout)
-               for model in chosen]
+    options = [ModelOptions(model=model, **model_settings) for model in chosen]
     for model in chosen:  # every model is found before the first is measured
         model_location(backend, model)
     household = load_domain()
@@ -64,7 +60,8 @@ def bench_command(
                        household.catalogue, load_tasks(domain=household), sample=sample,
                        benchmark_options=options[0].as_arguments() if whole_benchmark else None,
                        benchmark_out=benchmark_out, executor=executor,
-                       machine={"threads": threads or os.cpu_count(), "backend": backend, "n_gpu_layers": n_gpu_layers})
+                       machine={"threads": model_settings["threads"] or os.cpu_count(), "backend": backend,
+                                "n_gpu_layers": model_settings["n_gpu_layers"]})
     write_atomic(out, json_text(report))
     typer.echo(summary(report))
     typer.echo(f"written: {out}")

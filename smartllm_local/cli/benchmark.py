@@ -1,18 +1,42 @@
-"""``smartllm-local benchmark``: list the tasks, check the benchmark, report on runs, import task files."""
+"""``smartllm-local benchmark``: run it (plan, execute and score every task, resumable), list its tasks, check
+its reference plans, report on runs, import task files."""
 
 from __future__ import annotations
 
 import json
+import sys
+from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import typer
 
-from ..domain import load_domain
-from ..files import check_output_file, write_atomic
-from ..tasks import CATEGORIES, check_category, load_tasks
-from .plans import DOMAIN_HELP
+from ..benchmark.methods import METHODS, make_method
+from ..benchmark.results import summary_table, variability_table
+from ..benchmark.run import run_benchmark
+from ..benchmark.run_store import RunStore
+from ..benchmark.tasks import CATEGORIES, Task, check_category, find_task, load_tasks
+from ..domain import Domain, load_domain
+from ..errors import UserError
+from ..files import check_output_file, check_output_folder, write_atomic
+from ..planner.backends import model_location
+from ..planner.pipeline import Planner
+from ..provenance import run_manifest
+from .options import (
+    CATALOGUE,
+    DOMAIN,
+    DOMAIN_HELP,
+    MAX_SEED,
+    TASKS,
+    THOR_BUILD,
+    ModelOptions,
+    model_options,
+)
+from .progress import RunProgress
 
-app = typer.Typer(help="The benchmark: list its tasks, check it, import SMART-LLM's task files.", no_args_is_help=True)
+app = typer.Typer(help="The benchmark: run it, list its tasks, check it, report on runs, import SMART-LLM's task "
+                       "files.",
+                  no_args_is_help=True)
 
 
 @app.command("list")
@@ -46,7 +70,7 @@ def check(
     domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
     """Validate the task files and run every reference plan; print a per-category table."""
-    from ..benchmark import category_table, check_reference_plans
+    from ..benchmark.reference_plans import category_table, check_reference_plans
 
     dom = load_domain(domain)
     loaded = load_tasks(tasks or dom.task_files(), domain=dom)
@@ -81,7 +105,7 @@ def import_smartllm(
     out: Path = typer.Option(..., "--out", help="The task file (JSON lines) to write."),
 ) -> None:
     """Import SMART-LLM's data/final_test/FloorPlan<N>.json files as a task file."""
-    from ..importer import import_smartllm as run_import
+    from ..benchmark.importer import import_smartllm as run_import
 
     check_output_file(out, "--out")
     report = run_import(source)
@@ -89,3 +113,111 @@ def import_smartllm(
         typer.echo(str(note))
     write_atomic(out, "".join(json.dumps(task) + "\n" for task in report.tasks))
     typer.echo(f"wrote {len(report.tasks)} task(s) to {out} ({report.summary()})")
+
+
+@app.command("run")
+@model_options()
+def run(
+    ctx: typer.Context,
+    out: Path = typer.Option(..., "--out", help=(
+        "Folder for run.json, per-task artifacts, results.jsonl and summary.txt. A run stopped at any "
+        "point (Ctrl-C, a crash, kill -9) and started again with the same arguments resumes here.")),
+    restart: bool = typer.Option(False, "--restart", help="Discard the run --out holds and start over."),
+    seeds: str | None = typer.Option(None, "--seeds", help=(
+        "N (seeds --seed … --seed+N-1) or a list (0,3,7): every task once per seed (with --temperature "
+        "above 0), each run in DIR/seed-<s>/; summary.txt gives each category's mean ± standard deviation "
+        "over the seeds (the paper's Table II).")),
+    method: str = typer.Option("smartllm", help=(
+        f"{', '.join(METHODS)}: SMART-LLM's stages; the model's decomposition with robots at random (seeded) "
+        "or by a rule (a capable robot, else the smallest capable team); the reference plans (no model).")),
+    tasks: Path | None = TASKS,
+    category: str | None = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
+    task: list[str] | None = typer.Option(None, help="Only these task ids (repeatable)."),
+    catalogue: Path | None = CATALOGUE,
+    thor_build: Path | None = THOR_BUILD,
+    domain: str | None = DOMAIN,
+    *,
+    model_settings: dict[str, Any],
+) -> None:
+    """Plan, execute and score every task of a task file; print a per-category table."""
+    options = ModelOptions(**model_settings)
+    check_output_folder(out, "--out")
+    dom = load_domain(domain, catalogue=catalogue)
+    tasks_files = [tasks] if tasks else dom.task_files()
+    chosen = _chosen_tasks(dom, tasks_files, category, task)
+    if method not in METHODS:
+        raise UserError(f"--method must be one of {', '.join(METHODS)}, not {method!r}")
+    chosen_seeds = parse_seeds(seeds, options.seed)
+    if len(chosen_seeds) > 1 and options.config.sampling.temperature == 0 and method != "decomp-random":
+        raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
+    arguments = {k: v for k, v in ctx.params.items()
+                 if k not in ("out", "restart", "seeds", "prefix_cache", "workers", "server_timeout")}
+    model_path = None if method == "reference" else model_location(options.backend, options.model)
+    runs = []
+    for s in chosen_seeds:  # every run folder is checked before the model loads
+        folder = out if seeds is None else out / f"seed-{s}"
+        manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
+                                Path(dom.catalogue.path), dom.examples_dir())
+        runs.append((s, RunStore(folder, manifest, restart=restart)))
+    _run_seeds(runs, chosen, options, method, dom, thor_build, labelled=seeds is not None)
+    per_run = [[lines[t.id] for t in chosen if t.id in lines] for lines in (store.results() for _, store in runs)]
+    if seeds is None:
+        typer.echo(summary_table(per_run[0]))
+        typer.echo(f"results: {out / 'results.jsonl'}")
+        return
+    table = variability_table(per_run)
+    write_atomic(out / "summary.txt", table + "\n")
+    typer.echo(table)
+    typer.echo(f"results: {', '.join(str(store.out / 'results.jsonl') for _, store in runs)}")
+
+
+def _chosen_tasks(dom: Domain, tasks_files: list[Path], category: str | None, ids: list[str] | None) -> list[Task]:
+    """The tasks of the task files that pass ``--category`` and ``--task``; none is an error."""
+    check_category(category)
+    chosen = load_tasks(tasks_files, catalogue=dom.catalogue, domain=dom)
+    if category is not None:
+        chosen = [t for t in chosen if t.category == category]
+    if ids:
+        chosen = [find_task(chosen, t) for t in ids]
+    if not chosen:
+        raise UserError("no task matches the filters")
+    return chosen
+
+
+def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: ModelOptions, method: str,
+               dom: Domain, thor_build: Path | None, *, labelled: bool) -> None:
+    """Plan, execute and score the tasks once per seed, resuming each run; Ctrl-C says how far it got."""
+    cat = dom.catalogue
+    planners = [] if method == "reference" else options.planners(cat, dom)
+    try:
+        for s, store in runs:
+            done = store.results()
+            if done:
+                print(f"resuming the run in {store.out}: {sum(t.id in done for t in chosen)} of {len(chosen)} "
+                      "tasks done", file=sys.stderr)
+            seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.site) for p in planners] or [None]
+            with RunProgress(f"seed {s}" if labelled else "") as progress:
+                run_benchmark(chosen, [make_method(method, cat, p, dom.plans_dir()) for p in seeded], cat,
+                              out=store.out, store=store, build=str(thor_build) if thor_build else None,
+                              progress=progress, domain=dom)
+    except KeyboardInterrupt:
+        scored = sum(t.id in store.results() for _, store in runs for t in chosen)
+        print(f"interrupted: {scored} of {len(chosen) * len(runs)} tasks scored; the same command resumes the run",
+              file=sys.stderr)
+        raise typer.Exit(130) from None
+    finally:
+        for planner in planners:
+            planner.backend.close()
+
+
+def parse_seeds(seeds: str | None, seed: int) -> list[int]:
+    """``--seeds``: N (seeds ``seed`` .. ``seed + N - 1``) or a comma-separated list; none: ``[seed]``."""
+    if seeds is None:
+        return [seed]
+    try:
+        values = [int(v) for v in seeds.split(",")] if "," in seeds else list(range(seed, seed + int(seeds)))
+    except ValueError:
+        raise UserError(f"--seeds must be a count (e.g. 5) or a list of seeds (e.g. 0,1,2), not {seeds!r}") from None
+    if not values or len(set(values)) != len(values) or not all(0 <= v <= MAX_SEED for v in values):
+        raise UserError(f"--seeds must name distinct seeds between 0 and {MAX_SEED}, at least one, not {seeds!r}")
+    return values

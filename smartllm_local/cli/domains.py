@@ -56,9 +56,9 @@ def new(folder: Path = typer.Argument(..., help="The folder to create (it must n
 def check(domain: str = typer.Argument(..., help="A domain folder, or a built-in domain's name.")) -> None:
     """Check a domain: its file, its prompt examples (each in its stage's grammar), its tasks and its reference
     plans (run in its world). Exit 2 for a problem in a file, 1 if a reference plan falls short."""
-    from ..benchmark import category_table, check_reference_plans
-    from ..planner.example_check import check_examples
-    from ..tasks import load_tasks
+    from ..benchmark.reference_plans import category_table, check_reference_plans
+    from ..benchmark.tasks import load_tasks
+    from ..planner.prompting.example_check import check_examples
 
     loaded = load_domain(domain)
     catalogue = loaded.catalogue

@@ -22,8 +22,9 @@ import numpy as np
 from ..plan_language import Plan
 from ..plan_language.ir import SkillCall, Sleep
 from ..robots import Robot
-from .constraints import INDENT, REFUSAL_PREFIX
-from .feasibility import Need, can_do
+from .constraints.feasibility import Need, can_do
+from .constraints.format import INDENT
+from .decoding.protocol import REFUSAL_PREFIX
 
 #: Chooses the team (indices into the task's team) of one sub-task, given the robots busy in its block.
 Chooser = Callable[[str, Need, set[int]], "tuple[int, ...] | None"]

@@ -25,13 +25,16 @@ from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
 from ..skills import SkillSet
 from .backends.base import Backend, Sampling
-from .chat import chat_format, prompt_tokens
-from .coalition import LINE as COALITION_LINE
-from .coalition import CoalitionConstraint
-from .constraints import MAX_SUBTASKS, REFUSAL_PREFIX, Constraint
-from .feasibility import function_needs
-from .plan_constraint import PlanConstraint
-from .prompts import (
+from .constraints.coalition import LINE as COALITION_LINE
+from .constraints.coalition import CoalitionConstraint
+from .constraints.feasibility import function_needs
+from .constraints.format import MAX_SUBTASKS
+from .constraints.plan import PlanConstraint
+from .constraints.restated import RestatedAllocation, restated_bodies
+from .constraints.world_check import WorldCheck
+from .decoding.protocol import REFUSAL_PREFIX, Constraint
+from .prompting.chat import chat_format, prompt_tokens
+from .prompting.prompts import (
     ALLOCATION_GLUE,
     Example,
     Prompt,
@@ -42,10 +45,8 @@ from .prompts import (
     examples_for,
     load_examples,
 )
-from .restated import RestatedAllocation, restated_bodies
-from .scene_context import SceneObjects, scene_objects, site_objects
+from .prompting.scene_context import SceneObjects, scene_objects, site_objects
 from .stages import Fitted, StageRecord, check_output, fit_prompt, run_stage
-from .world_check import WorldCheck
 
 DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 896, "allocation": 1280}
 #: Room for a task's own part of the coalition prompt (its plan, team and objects: 325-630 tokens on average, measured).

@@ -19,11 +19,11 @@ import numpy as np
 
 from ..errors import GrammarMismatchError, PlanError, UserError
 from .backends.base import Backend, Generated, Sampling
-from .chat import ChatFormat, prompt_tokens
-from .constraints import Constraint
-from .generation import BudgetError, GuaranteeError, Line, Report, TokenWriter, Written, run_tokens
-from .grammar import Matcher
-from .prompts import Example, Prompt
+from .decoding.matcher import Matcher
+from .decoding.protocol import Constraint
+from .decoding.writer import BudgetError, GuaranteeError, Line, Report, TokenWriter, Written, run_tokens
+from .prompting.chat import ChatFormat, prompt_tokens
+from .prompting.prompts import Example, Prompt
 
 STOP_STRINGS = {
     "decomposition": ("\n# Example", "\n# Your task", "\n# Task Description", "\nobjects ="),

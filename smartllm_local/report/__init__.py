@@ -1,7 +1,7 @@
 """``benchmark report``: the paper's tables and figures for one or more runs, from their folders alone.
 
 The report is computed from ``results.jsonl`` and ``run.json`` (see
-:mod:`smartllm_local.results` for how a mean treats errors, refusals and
+:mod:`smartllm_local.benchmark.results` for how a mean treats errors, refusals and
 metrics a task cannot be judged on), so it can be made again, on any machine,
 long after the run: report.md (every table, and what each run was), one CSV per
 table, and PNG figures.

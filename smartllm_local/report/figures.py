@@ -12,7 +12,7 @@ matplotlib.use("Agg")  # no display: files only, on any machine
 
 import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
 
-from ..results import METRICS, STAGE_NAMES, mean_sd, stage_costs  # noqa: E402
+from ..benchmark.results import METRICS, STAGE_NAMES, mean_sd, stage_costs
 from .runs import Run  # noqa: E402
 from .tables import categories, per_seed  # noqa: E402
 

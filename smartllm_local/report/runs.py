@@ -12,9 +12,9 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from ..benchmark.results import Line, read_results
+from ..benchmark.run_store import RESULTS, RUN_FILE
 from ..errors import UserError
-from ..results import Line, read_results
-from ..run_store import RESULTS, RUN_FILE
 
 # The settings that make a run a variant of SMART-LLM (ablations and this project's switches), as labels.
 _VARIANTS = (

@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..results import (
+from ..benchmark.results import (
     PAPER_METRICS,
     REFUSERS,
     STAGE_NAMES,
@@ -21,7 +21,7 @@ from ..results import (
     refusals,
     stage_costs,
 )
-from ..tasks import CATEGORIES
+from ..benchmark.tasks import CATEGORIES
 from .runs import Run
 
 Cell = Any  # str, int, float, None (n/a) or (mean, sd)

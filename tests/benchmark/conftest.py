@@ -7,8 +7,8 @@ import sys
 
 import pytest
 
+from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
-from smartllm_local.tasks import load_tasks
 
 
 @pytest.fixture(scope="session")

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from smartllm_local.tasks import SMARTLLM_CATEGORIES
+from smartllm_local.benchmark.tasks import SMARTLLM_CATEGORIES
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
@@ -54,7 +54,7 @@ def test_check_prints_the_table_and_passes(feasible, infeasible):
 
 @pytest.mark.parametrize("broken", ["missing", "failing"])
 def test_check_fails_on_a_bad_reference_plan(tmp_path, broken):
-    from smartllm_local.benchmark import default_plans_dir
+    from smartllm_local.benchmark.reference_plans import default_plans_dir
     from smartllm_local.domain import load_domain
 
     tasks = tmp_path / "tasks.jsonl"

@@ -7,13 +7,13 @@ import json
 
 import numpy as np
 
+from smartllm_local.benchmark.tasks import SMARTLLM_CATEGORIES
 from smartllm_local.domain import load_domain
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.baselines import allocate_by, random_chooser, rule_chooser
-from smartllm_local.planner.feasibility import function_needs
-from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.tasks import SMARTLLM_CATEGORIES
+from smartllm_local.planner.constraints.feasibility import function_needs
+from smartllm_local.planner.prompting.scene_context import scene_objects
 
 from .conftest import SAMPLE
 
@@ -160,8 +160,8 @@ def test_both_baselines_on_the_reference_decompositions(feasible):
     goal with every action succeeding; at random, no action fails for want of a skill or of strength
     where the drawn robots can do their sub-tasks, and some does where one cannot. (At random, two
     sub-tasks on one robot can still clash: the first may leave its hands full.)"""
-    from smartllm_local.benchmark import default_plans_dir
-    from smartllm_local.planner.feasibility import can_do
+    from smartllm_local.benchmark.reference_plans import default_plans_dir
+    from smartllm_local.planner.constraints.feasibility import can_do
     from smartllm_local.scoring import score_execution
     from smartllm_local.world.controller import open_controller
 

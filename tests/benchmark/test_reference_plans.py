@@ -7,11 +7,11 @@ import shutil
 
 import pytest
 
-import smartllm_local.benchmark as bench
-from smartllm_local.benchmark import ReferenceResult, category_table, check_reference_plans
+import smartllm_local.benchmark.reference_plans as bench
+from smartllm_local.benchmark.reference_plans import ReferenceResult, category_table, check_reference_plans
+from smartllm_local.benchmark.tasks import SMARTLLM_CATEGORIES, find_task
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import read_plan
-from smartllm_local.tasks import SMARTLLM_CATEGORIES, find_task
 from smartllm_local.world.controller import open_controller
 
 from ..executor.helpers import run_record

@@ -14,8 +14,8 @@ from pathlib import Path
 import matplotlib.image
 import pytest
 
+from smartllm_local.benchmark.tasks import SMARTLLM_CATEGORIES as CATEGORIES
 from smartllm_local.report.runs import Run
-from smartllm_local.tasks import SMARTLLM_CATEGORIES as CATEGORIES
 
 CLI = [sys.executable, "-m", "smartllm_local", "benchmark", "report"]
 METRICS = ("SR", "TCR", "GCR", "RU", "Exe")

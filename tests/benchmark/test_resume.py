@@ -15,14 +15,14 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.benchmark.run import run_benchmark
+from smartllm_local.benchmark.run_store import RunStore
+from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import SmartLLMError
-from smartllm_local.evaluation import run_benchmark
 from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord
-from smartllm_local.run_store import RunStore
-from smartllm_local.tasks import find_task, load_tasks
 
 TASKS = ("living-01", "bedroom-inf-01", "bathroom-01")  # tasks no other test plans with these settings
 # The model decomposes; robots are the rule's (every stage through the model resumes alike, and costs minutes).
@@ -197,7 +197,7 @@ class _Recorded:
         self.calls: list[tuple[str, str]] = []
 
     def stages(self):
-        from smartllm_local.methods import Stage
+        from smartllm_local.benchmark.methods import Stage
 
         return [Stage("coalition", self._run("coalition")), Stage("allocation", self._run("allocation"), follows=True)]
 

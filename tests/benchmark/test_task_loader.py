@@ -6,8 +6,8 @@ import json
 
 import pytest
 
+from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.errors import TaskFileError, UserError
-from smartllm_local.tasks import load_tasks
 from smartllm_local.world.scenes import VALID_RANGE_TEXT
 
 GOOD = {

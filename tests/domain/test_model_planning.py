@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import read_plan
-from smartllm_local.tasks import load_tasks
 
 from ..executor.test_cli import SCRIPT
 

@@ -7,22 +7,22 @@ import random
 
 import pytest
 
+from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain, starter_domain
 from smartllm_local.executor import run_site_plan
 from smartllm_local.executor.site import unattainable
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.coalition import LINE as COALITION_LINE
-from smartllm_local.planner.coalition import CoalitionConstraint, needs_clause
-from smartllm_local.planner.feasibility import feasible_teams, function_needs
-from smartllm_local.planner.generation import accepts, sample_output
+from smartllm_local.planner.constraints.coalition import LINE as COALITION_LINE
+from smartllm_local.planner.constraints.coalition import CoalitionConstraint, needs_clause
+from smartllm_local.planner.constraints.feasibility import feasible_teams, function_needs
+from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
+from smartllm_local.planner.constraints.world_check import WorldCheck
+from smartllm_local.planner.decoding.writer import accepts, sample_output
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
-from smartllm_local.planner.plan_constraint import PlanConstraint
-from smartllm_local.planner.prompts import load_examples
-from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
-from smartllm_local.planner.scene_context import site_objects
-from smartllm_local.planner.world_check import WorldCheck
+from smartllm_local.planner.prompting.prompts import load_examples
+from smartllm_local.planner.prompting.scene_context import site_objects
 from smartllm_local.scoring import parse_goals, score_execution
-from smartllm_local.tasks import load_tasks
 
 PATROL = load_domain("patrol")
 SCENE = site_objects(PATROL)

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import pytest
 
-from smartllm_local.benchmark import check_reference_plans
+from smartllm_local.benchmark.reference_plans import check_reference_plans
+from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.executor import run_site_plan
 from smartllm_local.executor.site import SiteWorld, unattainable
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.scoring import parse_goals, score_execution
-from smartllm_local.tasks import load_tasks
 
 PATROL = load_domain("patrol")
 SKILLS = PATROL.catalogue.skills

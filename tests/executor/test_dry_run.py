@@ -7,11 +7,11 @@ from random import Random
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from smartllm_local.benchmark import default_plans_dir
+from smartllm_local.benchmark.reference_plans import default_plans_dir
+from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.executor import Execution, run_plan
 from smartllm_local.executor.dry_run import DryRun, _Thor, notional_robot
 from smartllm_local.plan_language import parse_plan, read_plan
-from smartllm_local.tasks import load_tasks
 from smartllm_local.world.controller import open_controller
 from smartllm_local.world.metadata import AGENT_FIELDS
 from smartllm_local.world.simulator import Simulator

@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from smartllm_local.tasks import load_tasks
+from smartllm_local.benchmark.tasks import load_tasks
 
 from .test_importer import EXPECTED_IDS, EXPECTED_NOTES, FIXTURE
 

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.benchmark.importer import MAX_LINE_CHARS, import_smartllm
+from smartllm_local.benchmark.tasks import check_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
-from smartllm_local.importer import MAX_LINE_CHARS, import_smartllm
-from smartllm_local.tasks import check_task, load_tasks
 
 FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "smartllm_final_test"
 FINAL_TEST = FIXTURE / "data" / "final_test"

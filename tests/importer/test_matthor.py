@@ -11,8 +11,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from smartllm_local.importer import import_smartllm
-from smartllm_local.tasks import load_tasks
+from smartllm_local.benchmark.importer import import_smartllm
+from smartllm_local.benchmark.tasks import load_tasks
 
 CLI = str(Path(sys.executable).with_name("smartllm-local"))
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import random
 
 from smartllm_local.planner.backends.base import Generated
-from smartllm_local.planner.constraints import Choose, Constraint, Forced
-from smartllm_local.planner.grammar import Grammar
+from smartllm_local.planner.decoding.grammar import Grammar
+from smartllm_local.planner.decoding.protocol import Choose, Constraint, Forced
 
 
 class FakeBackend:

@@ -10,16 +10,23 @@ import json
 
 import pytest
 
+from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner import pipeline
 from smartllm_local.planner.backends import load_backend
-from smartllm_local.planner.chat import APPLIED, BASE_MODEL, OFF, chat_format, mode_for, prompt_tokens
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult, write_artifacts
-from smartllm_local.planner.prompts import Prompt
-from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.prompting.chat import (
+    APPLIED,
+    BASE_MODEL,
+    OFF,
+    chat_format,
+    mode_for,
+    prompt_tokens,
+)
+from smartllm_local.planner.prompting.prompts import Prompt
+from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord, fit_prompt
-from smartllm_local.tasks import find_task, load_tasks
 from tests.test_cli_errors import cli, one_line_error
 
 

@@ -7,14 +7,14 @@ import random
 import pytest
 
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.coalition import LINE, CoalitionConstraint, needs_clause
-from smartllm_local.planner.constraints import Forced
-from smartllm_local.planner.feasibility import Need
-from smartllm_local.planner.generation import BudgetError, accepts, run_constraint, sample_output
+from smartllm_local.planner.constraints.coalition import LINE, CoalitionConstraint, needs_clause
+from smartllm_local.planner.constraints.feasibility import Need
+from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.decoding.protocol import Forced
+from smartllm_local.planner.decoding.writer import BudgetError, accepts, run_constraint, sample_output
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
-from smartllm_local.planner.plan_constraint import PlanConstraint
-from smartllm_local.planner.prompts import load_examples
-from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.prompting.prompts import load_examples
+from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.skills import DEFAULT_SKILL_SET
 
 from .writers import WRITERS, writer

@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from smartllm_local.errors import UserError
-from smartllm_local.planner.backends.dialects import LlamaCppPythonServer, LlamaServer, Vllm, probe
+from smartllm_local.planner.backends.server.dialects import LlamaCppPythonServer, LlamaServer, Vllm, probe
 
 
 def _vllm_answer(text: str, token_ids: list[int], finish: str, stop_reason, cached: int | None = 0,

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import json
 
+from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.pipeline import Planner
-from smartllm_local.tasks import load_tasks
 
 
 def test_the_plan_command_writes_its_artifacts_and_executes(kitchen01):
@@ -34,7 +34,7 @@ def test_a_refusal_the_grammar_forces_is_told_from_one_the_model_chose(smollm2):
     """kitchen-inf-02's team cannot slice: once the model writes a SliceObject step, the coalition
     grammar admits only a refusal, and the result says the grammar refused, not the model."""
     from smartllm_local.planner.pipeline import PlanResult
-    from smartllm_local.planner.scene_context import scene_objects
+    from smartllm_local.planner.prompting.scene_context import scene_objects
     from smartllm_local.planner.stages import StageRecord
 
     catalogue = load_domain().catalogue

@@ -10,17 +10,17 @@ import pytest
 from smartllm_local.domain import load_domain
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.coalition import LINE as COALITION_LINE
-from smartllm_local.planner.coalition import CoalitionConstraint
-from smartllm_local.planner.example_check import check_examples
-from smartllm_local.planner.feasibility import function_needs
-from smartllm_local.planner.generation import accepts
+from smartllm_local.planner.constraints.coalition import LINE as COALITION_LINE
+from smartllm_local.planner.constraints.coalition import CoalitionConstraint
+from smartllm_local.planner.constraints.feasibility import function_needs
+from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
+from smartllm_local.planner.constraints.world_check import WorldCheck
+from smartllm_local.planner.decoding.writer import accepts
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
-from smartllm_local.planner.plan_constraint import PlanConstraint
-from smartllm_local.planner.prompts import PromptOptions, load_examples, shape
-from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
-from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.planner.world_check import WorldCheck
+from smartllm_local.planner.prompting.example_check import check_examples
+from smartllm_local.planner.prompting.prompts import PromptOptions, load_examples, shape
+from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.scoring import parse_goals, score_execution
 from smartllm_local.skills import DEFAULT_SKILL_SET
 from smartllm_local.world.controller import open_controller

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from smartllm_local.planner.grammar import Grammar, GrammarError, Ref, alt, chars, opt, rep, seq
+from smartllm_local.planner.decoding.grammar import Grammar, GrammarError, Ref, alt, chars, opt, rep, seq
 
 
 def test_gbnf_escapes_quotes_backslashes_newlines_and_class_punctuation():
@@ -67,7 +67,7 @@ def test_llguidance_accepts_the_gbnf_form():
 
 
 def test_the_matcher_follows_text_and_knows_what_is_forced():
-    from smartllm_local.planner.grammar import Matcher
+    from smartllm_local.planner.decoding.matcher import Matcher
 
     g = Grammar({"obj": alt("'Apple'", "'Fridge'"), "root": seq("    PutObject(", Ref("obj"), ", 'Bowl')\n")})
     m = Matcher(g)
@@ -96,7 +96,7 @@ _SHORT = ["", *(a + b for a in " abc,\n" for b in ("", *" abc,\n"))]  # every te
 def test_after_a_prefix_a_grammar_admits_exactly_what_may_follow_it(seed, noise):
     """The derivative's defining equation: after every prefix of a line, a text follows exactly when the
     prefix and the text make a line (texts that do and texts that almost do)."""
-    from smartllm_local.planner.grammar import Matcher
+    from smartllm_local.planner.decoding.matcher import Matcher
 
     line = _WORDS.sample(random.Random(seed))
     for cut in range(len(line) + 1):
@@ -113,7 +113,7 @@ def test_after_real_stage_lines_llama_cpp_reads_the_grammar_and_forces_the_same_
     """Every line of a few tasks' three stages, written by adversarial writers, cut at every point: what the
     rest of the line must be is the same in the grammar after the cut as in the whole grammar, and
     llama.cpp's grammar engine reads the grammar a server is sent."""
-    from smartllm_local.planner.grammar import Matcher
+    from smartllm_local.planner.decoding.matcher import Matcher
     from tests.planner import test_guarantees as guarantees
 
     lines = guarantees.collect_lines(random.Random(7), ["kitchen-01", "living-01", "bathroom-01"])

@@ -8,7 +8,7 @@ import pytest
 
 from smartllm_local.errors import GrammarMismatchError
 from smartllm_local.planner.backends.base import Generated, Sampling
-from smartllm_local.planner.grammar import Grammar, alt
+from smartllm_local.planner.decoding.grammar import Grammar, alt
 from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
 
 from .fakes import FakeBackend, Script

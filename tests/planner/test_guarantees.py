@@ -13,14 +13,17 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.benchmark.importer import import_smartllm
+from smartllm_local.benchmark.tasks import check_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import SmartLLMError
-from smartllm_local.importer import import_smartllm
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.coalition import CoalitionConstraint
-from smartllm_local.planner.constraints import Constraint, Forced
-from smartllm_local.planner.feasibility import function_needs
-from smartllm_local.planner.generation import (
+from smartllm_local.planner.constraints.coalition import CoalitionConstraint
+from smartllm_local.planner.constraints.feasibility import function_needs
+from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
+from smartllm_local.planner.decoding.protocol import Constraint, Forced
+from smartllm_local.planner.decoding.writer import (
     BudgetError,
     GuaranteeError,
     TokenWriter,
@@ -28,11 +31,8 @@ from smartllm_local.planner.generation import (
     run_constraint,
     run_tokens,
 )
-from smartllm_local.planner.plan_constraint import PlanConstraint
-from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
-from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.skills import DEFAULT_SKILL_SET, SkillSet
-from smartllm_local.tasks import check_task, load_tasks
 
 from .writers import WRITERS, TokenAdversary, writer
 

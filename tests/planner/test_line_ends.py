@@ -7,12 +7,13 @@ from __future__ import annotations
 import pytest
 
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.constraints import Choose
-from smartllm_local.planner.generation import Line, Report, TokenWriter, Written, run_tokens
-from smartllm_local.planner.grammar import Grammar, Matcher, seq
-from smartllm_local.planner.line_ends import BLANKS, COMMENT_NEXT, INDENTED_NEXT, open_ends
-from smartllm_local.planner.plan_constraint import PlanConstraint
-from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.decoding.grammar import Grammar, seq
+from smartllm_local.planner.decoding.line_ends import BLANKS, COMMENT_NEXT, INDENTED_NEXT, open_ends
+from smartllm_local.planner.decoding.matcher import Matcher
+from smartllm_local.planner.decoding.protocol import Choose
+from smartllm_local.planner.decoding.writer import Line, Report, TokenWriter, Written, run_tokens
+from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.skills import DEFAULT_SKILL_SET
 
 
@@ -132,8 +133,8 @@ def test_a_blank_line_where_nothing_may_end_is_read_as_none():
 def test_a_spill_is_checked_against_what_the_plan_offers_next():
     """A writer that runs past a line's end into text the next line cannot begin with is a planner bug, told
     as such (the grammar's follows never admit one)."""
-    from smartllm_local.planner.constraints import Constraint
-    from smartllm_local.planner.generation import GuaranteeError
+    from smartllm_local.planner.decoding.protocol import Constraint
+    from smartllm_local.planner.decoding.writer import GuaranteeError
 
     class Two(Constraint):
         def next(self, remaining):

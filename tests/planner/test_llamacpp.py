@@ -11,7 +11,7 @@ import pytest
 from smartllm_local.errors import ModelError
 from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.backends.base import Sampling
-from smartllm_local.planner.grammar import Grammar, GrammarError, alt, chars, rep, seq
+from smartllm_local.planner.decoding.grammar import Grammar, GrammarError, alt, chars, rep, seq
 
 from .test_repetition import check_loop_guard
 
@@ -136,7 +136,7 @@ def test_forced_text_ends_with_the_models_own_token_and_a_word_keeps_its_space(s
     """Token healing: the planner writes forced text up to its last token, and the model writes on from there
     under the grammar, so the space that ends ``# SubTask 1: `` comes with the model's next word (`` put``),
     as the model tokenizes it, never doubled."""
-    from smartllm_local.planner.constraints import SUMMARY_CHARS, text_run
+    from smartllm_local.planner.constraints.format import SUMMARY_CHARS, text_run
 
     line = "# SubTask 1: put the apple in the fridge\n"
     context = smollm2.tokenize(line * 4, bos=True)
@@ -154,7 +154,7 @@ def test_forced_text_ends_with_the_models_own_token_and_a_word_keeps_its_space(s
 def test_the_end_of_sequence_is_the_models_choice_where_the_grammar_cannot_end(smollm2):
     """The model ends the sequence where it would, though the line is not complete (the planner completes it
     then); with its likeliest token refused at each step, each such step is counted."""
-    from smartllm_local.planner.chat import chat_format, prompt_tokens
+    from smartllm_local.planner.prompting.chat import chat_format, prompt_tokens
 
     chat, _ = chat_format(smollm2, "auto")
     _, context, _ = prompt_tokens(smollm2, "Answer with one word: is the sky blue?", chat)

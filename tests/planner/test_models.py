@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from smartllm_local.cli.plan import ModelOptions
+from smartllm_local.cli.options import ModelOptions
 from smartllm_local.errors import ModelError
 from smartllm_local.planner.backends.transformers import _locate
 from smartllm_local.planner.models import EMBEDDED, SplitOverPackages, embedded_model_path, is_gguf, resolve_gguf

@@ -12,13 +12,19 @@ from pathlib import Path
 
 import pytest
 
+from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 from smartllm_local.planner.backends import load_backend
+from smartllm_local.planner.backends.prefix_cache import (
+    PrefixReuse,
+    PrefixStore,
+    default_store_folder,
+    open_store,
+    state_key,
+)
 from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.prefix_cache import PrefixReuse, PrefixStore, default_store_folder, open_store, state_key
-from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.tasks import find_task, load_tasks
+from smartllm_local.planner.prompting.scene_context import scene_objects
 from tests.test_cli_errors import cli, one_line_error
 
 PREFIX = [1, 5, 9, 200]

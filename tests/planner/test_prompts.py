@@ -9,7 +9,7 @@ import pytest
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 from smartllm_local.planner.pipeline import OWN_PART, Planner, PlannerConfig, write_artifacts
-from smartllm_local.planner.prompts import (
+from smartllm_local.planner.prompting.prompts import (
     STAGES,
     PromptOptions,
     coalition_decisions,

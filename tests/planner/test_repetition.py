@@ -11,9 +11,11 @@ from hypothesis import strategies as st
 
 from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.backends.repetition import LoopGuard, current_line, draw
-from smartllm_local.planner.coalition import CoalitionConstraint
-from smartllm_local.planner.constraints import COMMENT_CHARS, Choose, text_run
-from smartllm_local.planner.grammar import Grammar, Matcher, alt, opt, seq
+from smartllm_local.planner.constraints.coalition import CoalitionConstraint
+from smartllm_local.planner.constraints.format import COMMENT_CHARS, text_run
+from smartllm_local.planner.decoding.grammar import Grammar, alt, opt, seq
+from smartllm_local.planner.decoding.matcher import Matcher
+from smartllm_local.planner.decoding.protocol import Choose
 
 DOMAINS = Path(__file__).resolve().parents[2] / "domains"
 GUARD = LoopGuard()
@@ -68,7 +70,7 @@ def test_no_line_any_domain_writes_by_hand_is_ever_a_loop():
 
 
 def test_no_loop_guard_turns_it_off_and_labels_the_run():
-    from smartllm_local.cli.plan import ModelOptions
+    from smartllm_local.cli.options import ModelOptions
     from smartllm_local.report.runs import Run
 
     def options(off: bool) -> ModelOptions:

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from smartllm_local.planner.backends.base import keep_whole, shared_prefix
-from smartllm_local.planner.backends.slot_mirror import SlotMirror
+from smartllm_local.planner.backends.server.slot_mirror import SlotMirror
 
 
 class ServerCache:

@@ -19,14 +19,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
-from smartllm_local.planner.backends.vocabulary import end_tokens_by_rule
-from smartllm_local.planner.chat import prompt_tokens
-from smartllm_local.planner.grammar import Grammar, Matcher, alt, seq
+from smartllm_local.planner.backends.server.vocabulary import end_tokens_by_rule
+from smartllm_local.planner.decoding.grammar import Grammar, alt, seq
+from smartllm_local.planner.decoding.matcher import Matcher
 from smartllm_local.planner.models import embedded_model_path
-from smartllm_local.planner.prompts import (
+from smartllm_local.planner.prompting.chat import prompt_tokens
+from smartllm_local.planner.prompting.prompts import (
     PromptOptions,
     allocation_prompt,
     coalition_prompt,
@@ -34,9 +36,8 @@ from smartllm_local.planner.prompts import (
     examples_for,
     load_examples,
 )
-from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
-from smartllm_local.tasks import load_tasks
 
 from .fakes import Script
 
@@ -233,7 +234,7 @@ def test_a_prompt_tokenized_in_its_parts_is_tokenized_as_a_whole(vocab):
 def test_a_folder_without_a_tokenizer_is_a_clear_error(tmp_path):
     pytest.importorskip("transformers")
     from smartllm_local.errors import ModelError
-    from smartllm_local.planner.backends.vocabulary import open_vocabulary
+    from smartllm_local.planner.backends.server.vocabulary import open_vocabulary
 
     (tmp_path / "config.json").write_text("{}")
     with pytest.raises(ModelError, match="holds no Hugging Face tokenizer.*tokenizer files"):

@@ -14,10 +14,10 @@ from smartllm_local.errors import BackendUnavailableError
 from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.backends.transformers import _placement, _quiet_loading
-from smartllm_local.planner.grammar import Grammar, alt
+from smartllm_local.planner.decoding.grammar import Grammar, alt
 from smartllm_local.planner.models import embedded_model_path
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
-from smartllm_local.planner.scene_context import scene_objects
+from smartllm_local.planner.prompting.scene_context import scene_objects
 
 from .conftest import LOAD_STDERR
 from .test_repetition import check_loop_guard

@@ -20,7 +20,7 @@ import pytest
 
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.backends.server import connect
+from smartllm_local.planner.backends.server.backend import connect
 from tests.planner.test_server_backend import Server, lines
 from tests.test_cli_errors import cli, one_line_error
 from tests.vllm_server import ENVIRONMENT, SERVE, smollm2_checkpoint, vllm_python

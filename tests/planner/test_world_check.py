@@ -7,18 +7,18 @@ import random
 
 import pytest
 
+from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.coalition import CoalitionConstraint
-from smartllm_local.planner.constraints import MAX_SUBTASKS
-from smartllm_local.planner.feasibility import function_needs
-from smartllm_local.planner.generation import accepts, run_constraint
-from smartllm_local.planner.plan_constraint import PlanConstraint
-from smartllm_local.planner.restated import RestatedAllocation, restated_bodies
-from smartllm_local.planner.scene_context import scene_objects
-from smartllm_local.planner.world_check import WorldCheck
-from smartllm_local.tasks import load_tasks
+from smartllm_local.planner.constraints.coalition import CoalitionConstraint
+from smartllm_local.planner.constraints.feasibility import function_needs
+from smartllm_local.planner.constraints.format import MAX_SUBTASKS
+from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
+from smartllm_local.planner.constraints.world_check import WorldCheck
+from smartllm_local.planner.decoding.writer import accepts, run_constraint
+from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.world.controller import open_controller
 
 from .writers import writer

@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import random
 
-from smartllm_local.planner.constraints import Choose
-from smartllm_local.planner.generation import Line, TokenWriter, Written
-from smartllm_local.planner.grammar import Grammar, Matcher
-from smartllm_local.planner.line_ends import BLANKS, TRAILING_SPACES
+from smartllm_local.planner.decoding.grammar import Grammar
+from smartllm_local.planner.decoding.line_ends import BLANKS, TRAILING_SPACES
+from smartllm_local.planner.decoding.matcher import Matcher
+from smartllm_local.planner.decoding.protocol import Choose
+from smartllm_local.planner.decoding.writer import Line, TokenWriter, Written
 
 WRITERS = ("longest", "shortest", "random")
 

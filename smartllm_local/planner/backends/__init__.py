@@ -41,8 +41,8 @@ def load_backend(
         os.environ[switch] = "1"
     if name == "llamacpp":
         from ..models import resolve_gguf
-        from ..prefix_cache import open_store
         from .llamacpp import LlamaCppBackend
+        from .prefix_cache import open_store
 
         return LlamaCppBackend(resolve_gguf(model), n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers, seed=seed,
                                prefix_store=open_store(prefix_cache))
@@ -70,7 +70,7 @@ def load_backends(
     check_server_options(name, endpoints, workers)
     if name != "server":
         return [load_backend(name, model, **settings)]
-    from .server import DEFAULT_TIMEOUT, connect
+    from .server.backend import DEFAULT_TIMEOUT, connect
 
     return list(connect(endpoints, model, workers=workers, n_ctx=settings.get("n_ctx", 8192),
                         timeout=server_timeout or DEFAULT_TIMEOUT))

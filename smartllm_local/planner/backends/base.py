@@ -14,7 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from ...errors import ModelError
-from ..grammar import Grammar
+from ..decoding.grammar import Grammar
 from .repetition import LoopGuard
 
 

@@ -43,9 +43,10 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
-from ..grammar import Grammar, GrammarError, Matcher
-from ..prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
+from ..decoding.grammar import Grammar, GrammarError
+from ..decoding.matcher import Matcher
 from .base import Generated, Sampling, continuation_tokens, keep_whole, shared_prefix
+from .prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
 from .repetition import TRIES, current_line, draw
 
 _TOP = 64
@@ -327,7 +328,7 @@ class LlamaCppBackend(PrefixReuse):
               avoid: Callable[[int], bool] | None = None) -> int:
         """The next token, greedy or sampled, among those the grammar admits and, where any of them is
         left, those ``avoid`` does not refuse. The end of sequence is always admitted: where the model
-        ends, the planner completes the output (see :mod:`..generation`)."""
+        ends, the planner completes the output (see :mod:`..decoding.writer`)."""
         if not np.isfinite(logits[int(np.argmax(logits))]):
             raise ModelError("the model's scores are not numbers (NaN or infinite logits): its weights, or the build "
                              "that runs them, are broken (on a GPU, see whether --n-gpu-layers 0 runs it)")

@@ -38,12 +38,13 @@ from typing import Any
 import numpy as np
 
 from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
-from ..grammar import Grammar, GrammarError, Matcher
+from ..decoding.grammar import Grammar, GrammarError
+from ..decoding.matcher import Matcher
 from ..models import EMBEDDED, default_model, embedded_model_path, is_gguf
-from ..prefix_cache import MemoryStates, PrefixReuse
 from .base import Generated, Sampling, shared_prefix
 from .hf_vocabulary import EXTRA as _EXTRA
 from .hf_vocabulary import HFVocabulary
+from .prefix_cache import MemoryStates, PrefixReuse
 from .repetition import TRIES, current_line, draw
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):

@@ -1,0 +1,147 @@
+"""Planning methods as plug-ins: SMART-LLM, the paper's baselines, and the reference plans.
+
+A method is a sequence of named stages, each of which adds one StageRecord to a
+task's PlanResult. The benchmark runner takes every task through one stage
+before the next (so a model keeps each stage's examples in its cache), except
+that a stage which goes on in its predecessor's context runs right after it for
+each task. It saves each finished stage, and never needs to know which method
+it runs: a new method is a new class here, not a branch in the runner.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Protocol
+
+from ..errors import UserError
+from ..plan_language import parse_plan
+from ..planner.baselines import allocate_by, random_chooser, rule_chooser
+from ..planner.constraints.feasibility import function_needs
+from ..planner.pipeline import Planner, PlanResult
+from ..planner.stages import StageRecord
+from ..robots import Catalogue
+from .reference_plans import default_plans_dir
+from .tasks import Task
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One step of a method: it adds the record named ``name`` to the task's result. A stage that
+    ``follows`` goes on in the context of the stage before it: a runner runs it for a task right
+    after that stage, on the same worker, before the next task's."""
+
+    name: str
+    run: Callable[[Task, PlanResult], None]
+    follows: bool = False
+
+
+class Method(Protocol):
+    name: str
+
+    def stages(self) -> Sequence[Stage]: ...
+
+
+class SmartLLM:
+    """SMART-LLM's three stages on the model: decomposition, coalition formation, allocation."""
+
+    name = "smartllm"
+
+    def __init__(self, planner: Planner, catalogue: Catalogue):
+        self.planner, self.catalogue = planner, catalogue
+
+    def stages(self) -> list[Stage]:
+        if not self.planner.config.prompts.coalition:
+            return [Stage("decomposition", self.decompose), Stage("allocation", self.allocate)]
+        return [Stage("decomposition", self.decompose), Stage("coalition", self.coalition),
+                Stage("allocation", self.allocate, follows=True)]
+
+    def decompose(self, task: Task, result: PlanResult) -> None:
+        self.planner.decompose(result, self.planner.scene(task.floor_plan))
+
+    def coalition(self, task: Task, result: PlanResult) -> None:
+        self.planner.form_coalition(result, result.stages[0].plan, self.catalogue.team(task.robots),  # type: ignore[arg-type]
+                                    self.planner.scene(task.floor_plan))
+
+    def allocate(self, task: Task, result: PlanResult) -> None:
+        coalition = result.stages[1] if len(result.stages) > 1 else None
+        self.planner.allocate(result, result.stages[0].plan, coalition, self.catalogue.team(task.robots),  # type: ignore[arg-type]
+                              self.planner.scene(task.floor_plan))
+
+
+class DecompositionThenRule(SmartLLM):
+    """The model's decomposition; robots by a rule (``decomp-rule``) or at random (``decomp-random``)."""
+
+    def __init__(self, planner: Planner, catalogue: Catalogue, rule: str):
+        super().__init__(planner, catalogue)
+        self.rule = rule
+        self.name = f"decomp-{rule}"
+
+    def stages(self) -> list[Stage]:
+        return [Stage("decomposition", self.decompose), Stage("allocation", self.allocate)]
+
+    def allocate(self, task: Task, result: PlanResult) -> None:
+        started = time.perf_counter()
+        team = self.catalogue.team(task.robots)
+        scene = self.planner.scene(task.floor_plan)
+        decomposed = result.stages[0].plan
+        pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
+        choose = rule_chooser(team) if self.rule == "rule" else \
+            random_chooser(team, self.planner.stage_rng(result, "allocation"))
+        record = StageRecord("allocation", output=allocate_by(decomposed, function_needs(decomposed, scene, pickups),  # type: ignore[arg-type]
+                                                              choose))
+        record.seconds = time.perf_counter() - started
+        record.plan = parse_plan(record.output, form="allocated", skills=self.catalogue.skills, team_size=len(team),
+                                 scene_types=scene.types, name=f"<{self.name} allocation>")
+        if record.plan.is_refusal:
+            record.refusal, record.refused_by = record.plan.refusal, "rule"
+            result.refusal = record.refusal
+        result.stages.append(record)
+
+
+class Reference:
+    """The benchmark's hand-written reference plans: the ceiling, and proof that the harness is sound."""
+
+    name = "reference"
+
+    def __init__(self, catalogue: Catalogue, plans_dir: Path | None = None):
+        self.catalogue = catalogue
+        self.plans_dir = plans_dir or default_plans_dir()
+
+    def stages(self) -> list[Stage]:
+        return [Stage("allocation", self.allocate)]
+
+    def allocate(self, task: Task, result: PlanResult) -> None:
+        path = self.plans_dir / f"{task.id}.py"
+        if not task.feasible:
+            why = f"the team lacks {', '.join(task.missing_skills)}" if task.missing_skills else \
+                "the team cannot meet a goal condition"
+            text = f"# INFEASIBLE: {why}\n"
+        elif path.is_file():
+            text = path.read_text(encoding="utf-8")
+        else:
+            raise UserError(f"task {task.id} has no reference plan ({path} does not exist)")
+        record = StageRecord("allocation", output=text)
+        record.plan = parse_plan(text, form="allocated", skills=self.catalogue.skills, team_size=len(task.robots),
+                                 name=str(path))
+        if record.plan.is_refusal:
+            record.refusal, record.refused_by = record.plan.refusal, "rule"
+            result.refusal = record.refusal
+        result.stages.append(record)
+
+
+METHODS = ("smartllm", "decomp-random", "decomp-rule", "reference")
+
+
+def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_dir: Path | None = None) -> Method:
+    """The method ``name`` (the reference plans, from ``plans_dir`` or the benchmark's, need no planner)."""
+    if name == "reference":
+        return Reference(catalogue, plans_dir)
+    if name not in METHODS:
+        raise UserError(f"--method must be one of {', '.join(METHODS)}, not {name!r}")
+    assert planner is not None
+    if name == "smartllm":
+        return SmartLLM(planner, catalogue)
+    return DecompositionThenRule(planner, catalogue, name.removeprefix("decomp-"))

@@ -1,0 +1,194 @@
+"""Benchmark tasks: one JSON object per line, checked against ``domains/task.schema.json``.
+
+A task file is read whole and checked line by line; every bad line is
+reported as ``file:line: what is wrong`` and no line is skipped silently (blank
+lines are not tasks). Beyond the schema, floor plans must be iTHOR scenes,
+robots must be in the catalogue, goal types must exist in the floor plan, and
+ids must be unique.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import json
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+
+from ..domain import Domain, load_domain
+from ..errors import TaskFileError, UnknownFloorPlanError, UserError
+from ..resources import data_dir
+from ..robots import Catalogue
+from ..scoring import STATES, Goal, parse_goals
+from ..world.object_types import SLICE_RESULTS
+from ..world.scenes import floor_plan_name, load_scene
+
+# SMART-LLM's four categories (this project's benchmark has tasks in each), and LaMMA-P's MAT-THOR
+# "vague" commands (imported tasks only).
+SMARTLLM_CATEGORIES = ("elemental", "simple", "compound", "complex")
+CATEGORIES = (*SMARTLLM_CATEGORIES, "vague")
+
+
+def check_category(category: str | None) -> None:
+    """A ``--category`` filter must name a category (or "uncategorized", for imported tasks)."""
+    if category is not None and category not in (*CATEGORIES, "uncategorized"):
+        raise UserError(f"--category must be one of {', '.join(CATEGORIES)}, not {category!r}")
+
+
+@dataclass(frozen=True)
+class Task:
+    id: str
+    category: str
+    floor_plan: str
+    instruction: str
+    robots: tuple[int, ...]
+    goals: tuple[Goal, ...]
+    trans: int | None
+    max_trans: int | None
+    feasible: bool
+    missing_skills: tuple[str, ...] = ()
+    notes: str = ""
+    source: str = ""  # file:line
+
+    def _floor_plan_field(self) -> int | str:
+        """iTHOR floor plans by number, as task files give them; a site domain's site by name."""
+        number = self.floor_plan[len("FloorPlan"):]
+        return int(number) if self.floor_plan.startswith("FloorPlan") and number.isdigit() else self.floor_plan
+
+    def as_json(self) -> dict[str, Any]:
+        data: dict[str, Any] = {
+            "id": self.id, "category": self.category, "floor_plan": self._floor_plan_field(),
+            "instruction": self.instruction, "robots": list(self.robots),
+            "goals": [g.as_dict() for g in self.goals], "trans": self.trans, "max_trans": self.max_trans,
+            "feasible": self.feasible,
+        }
+        if self.missing_skills:
+            data["missing_skills"] = list(self.missing_skills)
+        if self.notes:
+            data["notes"] = self.notes
+        return data
+
+
+@lru_cache(maxsize=1)
+def task_schema() -> dict[str, Any]:
+    """The schema of an AI2-THOR domain's task lines (a site domain's is derived from it)."""
+    return json.loads((data_dir("domains") / "task.schema.json").read_text(encoding="utf-8"))
+
+
+def site_task_schema(domain: Domain) -> dict[str, Any]:
+    """The task schema for a site domain: ``floor_plan`` names its site, goals use its states, and an
+    infeasible task may list no missing skills (the site shows why it is infeasible, see :mod:`.reference_plans`)."""
+    schema = copy.deepcopy(task_schema())
+    del schema["then"]["properties"]["missing_skills"]["minItems"]
+    schema["properties"]["floor_plan"] = {"const": domain.site}
+    schema["properties"]["goals"]["items"]["properties"]["state"] = {"enum": [None, *domain.states]}
+    return schema
+
+
+@lru_cache(maxsize=256)
+def _scene_types(floor_plan: str) -> frozenset[str]:
+    types = {o["objectType"] for o in load_scene(floor_plan)}
+    types |= {SLICE_RESULTS[t][0] for t in types if t in SLICE_RESULTS}
+    return frozenset(t.lower() for t in types)
+
+
+def check_task(data: Any, catalogue: Catalogue, where: str,
+               domain: Domain | None = None) -> tuple[Task | None, list[str]]:
+    """Check one decoded line (of ``domain``'s tasks, default household); return the task and the problems found."""
+    problems = []
+    site = domain is not None and not domain.is_ai2thor
+    validator = jsonschema.Draft202012Validator(site_task_schema(domain) if site else task_schema())  # type: ignore[arg-type]
+    for error in sorted(validator.iter_errors(data), key=lambda e: list(e.absolute_path)):
+        field = "/".join(str(p) for p in error.absolute_path) or "(line)"
+        problems.append(f"{where}: {field}: {error.message}")
+    if problems:
+        return None, problems
+    try:
+        scene = data["floor_plan"] if site else floor_plan_name(data["floor_plan"])
+    except UnknownFloorPlanError as exc:
+        return None, [f"{where}: floor_plan: {exc}"]
+    unknown = [r for r in data["robots"] if r not in catalogue.robots]
+    if unknown:
+        problems.append(f"{where}: robots: {unknown} are not in the catalogue {catalogue.path}")
+    try:
+        goals = parse_goals(data["goals"], where="goals", states=domain.states if site else STATES)  # type: ignore[union-attr]
+    except TaskFileError as exc:
+        return None, problems + [f"{where}: {exc}"]
+    types = frozenset(p.lower() for p in domain.places) if site else _scene_types(scene)  # type: ignore[union-attr]
+    for goal in goals:
+        for name in (goal.name, *goal.contains):
+            if name.lower() not in types:
+                problems.append(f"{where}: goals: there is no {name!r} in {scene}")
+    if data["trans"] is not None and data["max_trans"] is not None and data["trans"] > data["max_trans"]:
+        problems.append(f"{where}: trans ({data['trans']}) is larger than max_trans ({data['max_trans']})")
+    if problems:
+        return None, problems
+    task = Task(
+        id=data["id"], category=data["category"], floor_plan=scene, instruction=data["instruction"].strip(),
+        robots=tuple(data["robots"]), goals=goals, trans=data["trans"], max_trans=data["max_trans"],
+        feasible=data["feasible"], missing_skills=tuple(data.get("missing_skills", ())),
+        notes=data.get("notes", ""), source=where,
+    )
+    return task, []
+
+
+def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
+               catalogue: Catalogue | None = None, domain: Domain | None = None) -> list[Task]:
+    """Read task files (default: the domain's benchmark, household's by default) and check every line.
+
+    Raises:
+        TaskFileError: listing every bad line as ``file:line: problem``.
+    """
+    domain = domain or load_domain()
+    if paths is None:
+        paths = domain.task_files()
+    elif isinstance(paths, (str, Path)):
+        paths = [paths]
+    catalogue = catalogue or domain.catalogue
+    tasks: list[Task] = []
+    problems: list[str] = []
+    seen: dict[str, str] = {}
+    for path in map(Path, paths):
+        try:
+            lines = path.read_text(encoding="utf-8").splitlines()
+        except OSError as exc:
+            raise TaskFileError(f"cannot read task file {path}: {exc.strerror or exc}") from exc
+        except UnicodeDecodeError as exc:
+            raise TaskFileError(f"task file {path} is not UTF-8 text ({exc.reason})") from exc
+        for number, line in enumerate(lines, start=1):
+            if not line.strip():
+                continue
+            where = f"{path}:{number}"
+            try:
+                data = json.loads(line)
+            except ValueError as exc:
+                problems.append(f"{where}: not valid JSON ({exc})")
+                continue
+            task, found = check_task(data, catalogue, where, domain)
+            problems += found
+            if task is None:
+                continue
+            if task.id in seen:
+                problems.append(f"{where}: id {task.id!r} is already used at {seen[task.id]}")
+                continue
+            seen[task.id] = where
+            tasks.append(task)
+    if problems:
+        raise TaskFileError("\n".join(problems))
+    return tasks
+
+
+def find_task(tasks: Iterable[Task], task_id: str) -> Task:
+    """The task with this id; an unknown id gets the closest ids as suggestions."""
+    tasks = list(tasks)
+    for task in tasks:
+        if task.id == task_id:
+            return task
+    close = difflib.get_close_matches(task_id, [t.id for t in tasks], n=3)
+    hint = f"; did you mean {', '.join(close)}?" if close else ""
+    raise UserError(f"no task {task_id!r} in the task file(s){hint}")

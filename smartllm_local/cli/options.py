@@ -1,0 +1,217 @@
+"""The options several commands share, defined once: the model options (``plan``, ``benchmark run``,
+``bench``) as :class:`ModelOptions` and the :func:`model_options` decorator that gives a command them, and
+the domain, catalogue, build and task-file options."""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import math
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from ..domain import Domain
+from ..errors import UserError
+from ..planner.backends import BACKENDS, Backend, LoopGuard, Sampling, check_server_options, load_backends
+from ..planner.backends.prefix_cache import open_store
+from ..planner.models import DEFAULT_MODEL, EMBEDDED, default_model
+from ..planner.pipeline import Planner, PlannerConfig
+from ..planner.prompting.chat import CHAT_TEMPLATE_MODES, mode_for
+from ..planner.prompting.prompts import PromptOptions
+
+DOMAIN_HELP = "The domain: household (the default), patrol, or a domain folder (see `smartllm-local domain`)."
+CATALOGUE_HELP = "A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."
+THOR_BUILD_HELP = "A Unity AI2-THOR executable to run in (default: $SMARTLLM_THOR_BUILD, else the headless stand-in)."
+MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded model: "
+              f"{', '.join(EMBEDDED)} (default: {DEFAULT_MODEL}, or what SMARTLLM_MODEL names).")
+
+MAX_SEED = 2**32 - 1  # llama.cpp takes an unsigned 32-bit seed
+
+
+class ModelOptions:
+    """The model options of ``plan``, ``benchmark run`` and ``bench``, checked, turned into backends and planners."""
+
+    def __init__(self, *, model: str | None = None, backend: str = "llamacpp", n_ctx: int = 8192,
+                 threads: int | None = None, n_gpu_layers: int = 0, seed: int = 0, temperature: float = 0.0,
+                 no_comments: bool = False, no_summary: bool = False, no_coalition: bool = False,
+                 no_grammar: bool = False, free_teams: bool = False, chat_template: str = "auto",
+                 free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None,
+                 endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None,
+                 no_loop_guard: bool = False, no_token_alignment: bool = False):
+        if backend not in BACKENDS:
+            raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
+        if not math.isfinite(temperature) or temperature < 0:
+            raise UserError(f"--temperature must be a number, 0 (greedy) or more, not {temperature}")
+        if not 0 <= seed <= MAX_SEED:
+            raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
+        if n_ctx < 512:
+            raise UserError("--n-ctx must be at least 512 tokens")
+        chat_template = mode_for(model if backend == "server" else model or default_model(), chat_template)
+        self.endpoints = [e.strip() for e in endpoint.split(",") if e.strip()] if endpoint else []
+        check_server_options(backend, self.endpoints, workers)
+        if server_timeout is not None and not (math.isfinite(server_timeout) and server_timeout > 0):
+            raise UserError(f"--server-timeout must be a number of seconds above 0, not {server_timeout}")
+        self.workers, self.server_timeout = workers, server_timeout
+        self.model, self.backend, self.n_ctx, self.threads = model, backend, n_ctx, threads
+        self.n_gpu_layers = n_gpu_layers
+        self.prefix_cache = prefix_cache
+        if backend == "llamacpp":  # a cache folder that can never be one fails before the model loads
+            open_store(prefix_cache)
+        self.config = PlannerConfig(
+            sampling=Sampling(temperature=temperature, seed=seed, loop_guard=None if no_loop_guard else LoopGuard(),
+                              aligned=not no_token_alignment),
+            grammar=not no_grammar,
+            free_teams=free_teams,
+            prompts=PromptOptions(comments=not no_comments, summary=not no_summary, coalition=not no_coalition),
+            chat_template=chat_template,
+            restate=not free_allocation,
+            world_check=not no_world_check,
+        )
+        self.seed = seed
+
+    def config_for(self, seed: int) -> PlannerConfig:
+        """The planner's settings with another sampling seed."""
+        return replace(self.config, sampling=replace(self.config.sampling, seed=seed))
+
+    def load(self, prefix_cache: str | None = None) -> Backend:
+        """One backend for this model (a server's first slot), its prefix states in ``prefix_cache``."""
+        return self._backends(1, prefix_cache)[0]
+
+    def _backends(self, workers: int, prefix_cache: str | None) -> list[Backend]:
+        return load_backends(self.backend, self.model, workers=workers, endpoints=self.endpoints,
+                             server_timeout=self.server_timeout, n_ctx=self.n_ctx, threads=self.threads,
+                             n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=prefix_cache)
+
+    def as_arguments(self) -> list[str]:
+        """The model's options as ``plan`` and ``benchmark run`` take them on the command line."""
+        return [*(["--model", self.model] if self.model else []), "--backend", self.backend,
+                *(["--endpoint", ",".join(self.endpoints)] if self.endpoints else []),
+                *(["--server-timeout", str(self.server_timeout)] if self.server_timeout else []),
+                "--n-ctx", str(self.n_ctx), "--n-gpu-layers", str(self.n_gpu_layers),
+                "--chat-template", self.config.chat_template,
+                *(["--threads", str(self.threads)] if self.threads else [])]
+
+    def planners(self, catalogue, domain: Domain | None = None) -> list[Planner]:
+        """One planner per worker (one, but for a server backend with --workers), for ``domain``'s tasks."""
+        site = domain.as_site if domain is not None else None
+        return [Planner(backend, catalogue, self.config, site=site)
+                for backend in self._backends(self.workers, self.prefix_cache)]
+
+
+_MODEL = typer.Option(None, help=MODEL_HELP)
+_BACKEND = typer.Option("llamacpp", help=(
+    "llamacpp or transformers (the model runs in this process), or server (a llama-server, llama_cpp.server or "
+    "vLLM at --endpoint runs it; --model then names the served GGUF or tokenizer folder, read for its vocabulary "
+    "only)."))
+_ENDPOINT = typer.Option(None, "--endpoint", metavar="URL[,URL...]", help=(
+    "--backend server: the servers' URLs, such as http://gpu-box:8080 (llama-server, with -np slots) or "
+    "http://127.0.0.1:8000 (python -m llama_cpp.server or vllm serve)."))
+_SERVER_TIMEOUT = typer.Option(None, "--server-timeout", help=(
+    "--backend server: seconds a request may go unanswered before its task fails (default 300)."))
+_N_CTX = typer.Option(8192, "--n-ctx", help="Context size in tokens (at most the model's trained context).")
+_THREADS = typer.Option(None, help="CPU threads (default: all cores).")
+_GPU = typer.Option(0, "--n-gpu-layers", help="Layers to offload to a GPU (needs a CUDA or Metal build of llama.cpp).")
+_SEED = typer.Option(0, help="Sampling seed.")
+_TEMPERATURE = typer.Option(0.0, help="0 is greedy decoding.")
+_NO_COMMENTS = typer.Option(False, "--no-comments", help="Ablation: examples without comments.")
+_NO_SUMMARY = typer.Option(False, "--no-summary", help="Ablation: decompositions without the summary.")
+_NO_COALITION = typer.Option(False, "--no-coalition", help="Ablation: skip coalition formation.")
+_NO_GRAMMAR = typer.Option(False, "--no-grammar", help="Generate freely (for comparison); the output may be invalid.")
+_FREE_TEAMS = typer.Option(False, "--free-teams", help="Let the model pick any team and refuse at will, rather than "
+                                                       "only teams whose skills and strength suit each sub-task.")
+_CHAT_TEMPLATE = typer.Option("auto", "--chat-template", help=(
+    f"{' or '.join(CHAT_TEMPLATE_MODES)}. auto: a model whose file carries a chat template (an instruct "
+    "model) gets each stage's prompt as the user turn and writes its output as the assistant turn; "
+    "base models, and the embedded Qwen2.5-Coder models (measured better so), get raw text. on: the "
+    "model's template wherever it has one. none: raw text for every model."))
+_FREE_ALLOCATION = typer.Option(False, "--free-allocation", help=(
+    "Let the allocation stage rewrite every step (as the paper's prompts allow), rather than write the "
+    "decomposition's steps itself and leave the model only the robots and the orchestration."))
+_NO_WORLD_CHECK = typer.Option(False, "--no-world-check", help=(
+    "Offer steps whatever the scene's state, rather than only steps that succeed from the state the "
+    "steps so far produce (for measuring the check's effect)."))
+_NO_LOOP_GUARD = typer.Option(False, "--no-loop-guard", help=(
+    "Let free text (summaries, comments, a coalition's reasoning) repeat itself to its length limit, rather "
+    "than end it where it starts saying one thing a third time over (see docs/planner.md, \"Loops in free text\")."))
+_NO_TOKEN_ALIGNMENT = typer.Option(False, "--no-token-alignment", help=(
+    "Write text the grammar forces whole, end each line at its newline and let the model end only where the "
+    "grammar may, rather than leave forced text's last token, line ends and the end of sequence to the model "
+    "(for measuring what that changes; see docs/planner.md, \"Line ends and forced text\")."))
+_PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
+    "Where the examples' key/value states are kept between runs, so a later run on the same model starts "
+    "from them (default: the user's cache, $XDG_CACHE_HOME/smartllm-local/prefix-states, at most 4 GiB); "
+    "off keeps them for this run only. llama.cpp only."))
+_WORKERS = typer.Option(1, "--workers", help=(
+    "--backend server: plan this many tasks at once, spread over the endpoints and their slots "
+    "(llama-server -np N has N; vLLM batches them all). Through a server, plans can differ with it: see "
+    "docs/servers-and-gpus.md."))
+
+#: Every model option: its parameter name, type and typer option, in the order --help lists them.
+MODEL_PARAMETERS = [
+    inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=option, annotation=kind)
+    for name, kind, option in (
+        ("model", str | None, _MODEL), ("backend", str, _BACKEND), ("n_ctx", int, _N_CTX),
+        ("threads", int | None, _THREADS), ("n_gpu_layers", int, _GPU), ("seed", int, _SEED),
+        ("temperature", float, _TEMPERATURE), ("no_comments", bool, _NO_COMMENTS),
+        ("no_summary", bool, _NO_SUMMARY), ("no_coalition", bool, _NO_COALITION),
+        ("no_grammar", bool, _NO_GRAMMAR), ("free_teams", bool, _FREE_TEAMS),
+        ("chat_template", str, _CHAT_TEMPLATE), ("free_allocation", bool, _FREE_ALLOCATION),
+        ("no_world_check", bool, _NO_WORLD_CHECK), ("no_loop_guard", bool, _NO_LOOP_GUARD),
+        ("no_token_alignment", bool, _NO_TOKEN_ALIGNMENT), ("prefix_cache", str | None, _PREFIX_CACHE),
+        ("endpoint", str | None, _ENDPOINT), ("workers", int, _WORKERS),
+        ("server_timeout", float | None, _SERVER_TIMEOUT),
+    )
+]
+
+
+def model_options(*names: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Give a command the model options ``names`` (all of them when none is named) after its own, passed to
+    it as one ``model_settings`` dict of what the user gave (for :class:`ModelOptions`, which checks them).
+
+    typer reads a command's options from its signature: the wrapper's signature is the command's own
+    parameters (less ``model_settings``) and the chosen model parameters, so each option is declared once."""
+    chosen = [p for p in MODEL_PARAMETERS if not names or p.name in names]
+
+    def decorate(command: Callable[..., Any]) -> Callable[..., Any]:
+        own = [p for p in inspect.signature(command).parameters.values() if p.name != "model_settings"]
+
+        @functools.wraps(command)
+        def run(**arguments: Any) -> Any:
+            settings = {p.name: arguments.pop(p.name) for p in chosen}
+            return command(**arguments, model_settings=settings)
+
+        run.__signature__ = inspect.Signature(own + chosen)  # type: ignore[attr-defined]
+        run.__annotations__ = {**command.__annotations__, **{p.name: p.annotation for p in chosen}}
+        run.__annotations__.pop("model_settings", None)
+        return run
+
+    return decorate
+
+
+CATALOGUE = typer.Option(None, help=CATALOGUE_HELP)
+THOR_BUILD = typer.Option(None, help=THOR_BUILD_HELP)
+TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
+DOMAIN = typer.Option(None, help=DOMAIN_HELP)
+
+
+def refuse_household_options(dom: Domain, floor_plan: str | None, thor_build: Path | None) -> None:
+    """A site domain's plans run on its site: AI2-THOR's floor plan and build options do not apply."""
+    if not dom.is_ai2thor and (floor_plan or thor_build):
+        raise UserError(f"--floor-plan and --thor-build are for the household domain; the {dom.name} domain's "
+                        f"plans run on its site {dom.site}")
+
+
+def check_transitions(trans: int | None, max_trans: int | None) -> None:
+    """RU (and so SR) needs both the ground-truth and the maximum transitions, 0 <= trans <= max_trans."""
+    for name, value in (("--trans", trans), ("--max-trans", max_trans)):
+        if value is not None and value < 0:
+            raise UserError(f"{name} must be 0 or more, not {value}")
+    if (trans is None) != (max_trans is None):
+        given, missing = ("--trans", "--max-trans") if max_trans is None else ("--max-trans", "--trans")
+        raise UserError(f"{given} needs {missing} too: RU and SR are scored from both")
+    if trans is not None and max_trans is not None and max_trans < trans:
+        raise UserError(f"--max-trans ({max_trans}) must be at least --trans ({trans})")

@@ -1,0 +1,147 @@
+"""Stage 2's constraint: the coalition policy, one comment line per sub-task, reasoning first.
+
+As in the paper's coalition policy, a line analyses before it decides: what the
+sub-task needs (its skills, sorted, and the mass of the heaviest thing it picks up),
+then which robots have what and what is missing, and only then, after ``; so``, the
+robot or team. One line, shown here broken in two::
+
+    # SubTask 2 (subtask2_toast_slice): needs GoToObject, PickupObject, PutObject, SwitchOn, lifting 0.117 kg;
+      robots[1] picks up and puts but lacks SwitchOn, which robots[2] has; so robots[1] and robots[2]
+"""
+
+from __future__ import annotations
+
+import re
+import string
+from collections.abc import Sequence
+
+from ...robots import Robot
+from ..decoding.grammar import Node, Ref, alt, chars, opt, rep, seq
+from ..decoding.line_ends import COMMENT_NEXT
+from ..decoding.protocol import Choose, Constraint, Forced, longest
+from .feasibility import Need, feasible_teams
+from .format import REASON_CHARS, refusal_line, robot_list, text_run
+
+# A word of free text: letters and punctuation, never the ";" that ends a part of the line.
+WORD_CHARS = REASON_CHARS - {" ", ";"}
+#: A coalition line's shape (for text written without the grammar): prefix, needs, analysis, team.
+LINE = re.compile(r"^(# SubTask \d+ \(\w+\): )needs ([^;\n]+); ([^;\n]+); so (robots\[\d+\](?: and robots\[\d+\])*)$",
+                  re.M)
+
+
+def needs_clause(need: Need) -> str:
+    """What a sub-task needs, as the line states it (the examples' coalitions follow it): its skills, the
+    mass it lifts, and on a site what it pools and the places only some robot kinds reach."""
+    mass = f", lifting {need.mass:g} kg" if need.mass > 0 else ""
+    demands = sorted(need.demands, key=lambda d: (d.place.name, d.skill))
+    pooled = [f", pooling {d.amount:g} {d.capacity}" for d in demands if d.capacity and d.capacity != "camera_range"]
+    reach = dict.fromkeys(f", reaching {d.place.name} ({' or '.join(sorted(d.place.reach))} robots only)"
+                          for d in demands if d.place.reach is not None)
+    return f"needs {', '.join(sorted(need.skills))}{mass}{''.join(pooled)}{''.join(reach)};"
+
+
+class CoalitionConstraint(Constraint):
+    """Stage 2: per sub-task, ``needs <skills and mass>; <analysis>; so <team>``.
+
+    The team comes last: nothing before ``; so`` can name it, since the needs
+    name no robot and no word of free text holds a ``;``. Robots are named only
+    as ``robots[i]`` with i inside the team: free text admits no digits or
+    brackets, except in a mass (``2.5 kg``). With the sub-tasks' needs known,
+    the constraint writes each needs clause itself (the catalogue's facts), a
+    line admits only teams that can do the sub-task, and a refusal is the only
+    answer when some sub-task has none; ``free=True`` leaves the needs, the
+    team and refusing to the model.
+
+    Free text is words (a run of letters and punctuation, a robot or a mass)
+    separated by single spaces, so a line parses one way only. The analysis
+    runs to MAX_WORDS words (the needs the model writes, to MAX_NEED_WORDS),
+    fewer when the budget left must also cover the lines still to come.
+    """
+
+    WORD = 16  # longest run of letters and punctuation in a word ("DropHandObject," is 15)
+    MAX_WORDS = 40
+    MAX_NEED_WORDS = 12
+
+    def __init__(self, function_names: Sequence[str], team: Sequence[Robot] | int, *,
+                 needs: Sequence[Need] | None = None, free: bool = False, allow_refusal: bool = True):
+        super().__init__()
+        self.names = list(function_names)
+        self.team_size = team if isinstance(team, int) else len(team)
+        self.allow_refusal = allow_refusal
+        self.lines = 0
+        self.head_written = False
+        teams: list[list[tuple[int, ...]] | None] = [None] * len(self.names)
+        if needs is not None and not free and not isinstance(team, int):
+            teams = [feasible_teams(team, need) for need in needs]
+        # The model decides on refusing, and states the needs, unless every sub-task's teams are known.
+        self.free = any(t is None for t in teams)
+        self.must_refuse = allow_refusal and any(t == [] for t in teams)
+        clauses = ["needs "] * len(self.names) if self.free else [needs_clause(n) for n in needs or ()]
+        self.heads = [self._prefix(k) + clauses[k] for k in range(len(self.names))]
+        # A robot or a mass may be followed by punctuation or a possessive: "2.1 kg," "robots[1]'s".
+        suffix = opt(alt(",", ".", ":", "'s"))
+        mass = seq(rep(chars(string.digits), 1, 3), opt(seq(".", rep(chars(string.digits), 1, 3))), " kg", suffix)
+        self.rules: dict[str, Node] = {
+            "robot": alt(*(f"robots[{i}]" for i in range(self.team_size))),
+            "need-word": alt(text_run(WORD_CHARS, self.WORD), mass),
+            "word": alt(text_run(WORD_CHARS, self.WORD), seq(Ref("robot"), suffix), mass),
+            "refusal": refusal_line(),
+        }
+        for k, allowed in enumerate(teams):
+            if allowed:
+                self.rules[f"team-{k}"] = alt(*(" and ".join(f"robots[{i}]" for i in c) for c in allowed))
+            else:
+                self.rules[f"team-{k}"] = robot_list(self.team_size, 1, " and ")
+        self.word_len = longest(Ref("word"), self.rules) + 1  # a word and the space before it
+        # A line's length but for its words, and the fewest words it can have.
+        self.fixed = [len(self.heads[k]) + len(";" if self.free else "") + len(" ; so ")
+                      + longest(Ref(f"team-{k}"), self.rules) + len("\n") for k in range(len(self.names))]
+        self.min_words = 2 if self.free else 1
+        self.refusal_len = longest(Ref("refusal"), self.rules)
+
+    def _prefix(self, k: int) -> str:
+        return f"# SubTask {k + 1} ({self.names[k]}): "
+
+    def _shortest_line(self, k: int) -> int:
+        return self.fixed[k] + self.min_words * self.word_len
+
+    def minimum_budget(self) -> int:
+        if self.must_refuse:
+            return self.refusal_len
+        return sum(self._shortest_line(k) for k in range(len(self.names)))
+
+    def next(self, remaining: int) -> Forced | Choose | None:
+        k = self.lines
+        if self.refusal is not None or k == len(self.names):
+            return None
+        if self.must_refuse:
+            return self._choose(self.rules, {"refusal": Ref("refusal")})
+        if not self.free and not self.head_written:
+            return Forced(self.heads[k])
+        reserve = sum(self._shortest_line(j) for j in range(k + 1, len(self.names)))
+        spent = len(self.heads[k]) if self.head_written else 0
+        # The reserves keep this at least min_words; the max keeps the grammar valid regardless.
+        words = max(self.min_words, (remaining - reserve - (self.fixed[k] - spent)) // self.word_len)
+        options: dict[str, Node] = {}
+        if self.allow_refusal and self.free and self.refusal_len <= remaining:
+            options["refusal"] = Ref("refusal")
+        # The model's needs, when it writes them, take at most a quarter of the words.
+        need_words = min(self.MAX_NEED_WORDS, max(1, words // 4)) if self.free else 0
+        tail = (" ", _words(Ref("word"), min(self.MAX_WORDS, words - need_words)), "; so ", Ref(f"team-{k}"), "\n")
+        if self.free:
+            options["line"] = seq(self.heads[k], _words(Ref("need-word"), need_words), ";", *tail)
+        else:
+            options["line"] = seq(*tail)
+        # Another line follows (its "# SubTask"), or the output ends.
+        return self._choose(self.rules, options, {"line": COMMENT_NEXT} if k + 1 < len(self.names) else {})
+
+    def _advance(self, kind: str, piece: str) -> None:
+        if kind == "forced":
+            self.head_written = True
+        elif kind == "line":
+            self.lines += 1
+            self.head_written = False
+
+
+def _words(word: Node, most: int) -> Node:
+    return seq(word, rep(seq(" ", word), 0, most - 1))

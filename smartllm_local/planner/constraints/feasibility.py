@@ -1,0 +1,154 @@
+"""Which robots can do what: the team knowledge the coalition and allocation grammars build on.
+
+A robot can use only its own skills and lift up to its mass capacity; a team
+pools skills and capacities. On a site, a call also asks that its robots get
+where it acts (a roof: aerial robots only) and, for a patrol, that the members
+with the skill pool the region's area. The coalition grammar admits, for each sub-task,
+only the teams that have every skill its function uses and can lift the
+heaviest thing it picks up, and admits only a refusal when some sub-task has
+no such team. The allocation grammar admits only robot lists that give every
+step a robot (or team) able to do it. This is the catalogue's knowledge, not
+the model's: the model still chooses among the teams that can do the work.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from itertools import combinations, permutations
+
+from ...domain import Place, pooled
+from ...plan_language import Plan
+from ...plan_language.ir import Call, SkillCall
+from ...robots import Robot
+from ..prompting.scene_context import SceneObjects
+
+MASS_TOLERANCE = 1e-6  # scene masses are float32
+SOME_CAMERA = 1e-3  # metres: a photograph needs a robot with some camera (how far it sees, the world check asks)
+EXACT_COALITIONS = 6  # teams up to this size are enumerated
+EXACT_ALLOCATIONS = 5  # robot lists (ordered) up to this team size are enumerated
+
+
+@dataclass(frozen=True)
+class Demand:
+    """What one call on a site asks of the robots that make it: to get to ``place`` (its reach), and for
+    a pooling skill, ``amount`` of ``capacity`` from the members that have ``skill`` and get there (a
+    camera: some camera_range)."""
+
+    skill: str
+    place: Place
+    capacity: str = ""
+    amount: float = 0.0
+
+    def met_by(self, robots: Sequence[Robot]) -> bool:
+        able = [r for r in robots if self.skill in r.skills and self.place.reachable_by(r)]
+        return bool(able) and (not self.capacity or pooled(able, self.skill, self.capacity)
+                               + MASS_TOLERANCE >= self.amount)
+
+
+@dataclass(frozen=True)
+class Need:
+    """What a sub-task asks of whoever does it."""
+
+    skills: frozenset[str]
+    mass: float  # the heaviest object it picks up (kg)
+    demands: frozenset[Demand] = frozenset()  # a site domain's: where its calls go, what they pool
+
+
+@dataclass(frozen=True)
+class Step:
+    """One action of an allocated function: who (a robot_list slot, or None for the whole list) does what."""
+
+    slot: int | None
+    skill: str
+    mass: float  # of the object picked up, else 0
+    demand: Demand | None = None  # on a site: every actor must get there (a team goes together)
+
+
+def call_demand(scene: SceneObjects, skill: str, objects: Sequence[str]) -> Demand | None:
+    """What a call asks on a site (None: nothing beyond the skill, or not a site)."""
+    site = scene.site
+    place = site.place(objects[0]) if site is not None and objects else None
+    if site is None or place is None:
+        return None
+    if site.effects.get(skill) == "patrol":
+        return Demand(skill, place, site.pools[skill], place.area)
+    if site.effects.get(skill) == "photograph":
+        return Demand(skill, place, "camera_range", SOME_CAMERA)
+    return Demand(skill, place) if place.reach is not None else None
+
+
+def function_needs(plan: Plan, scene: SceneObjects,
+                   pickup_skills: Iterable[str] = ("PickupObject",)) -> dict[str, Need]:
+    """The needs of each function of a (decomposed) plan, helper calls included."""
+    pickups = set(pickup_skills)
+    functions = plan.by_name
+    memo: dict[str, Need] = {}
+
+    def need(name: str) -> Need:
+        if name not in memo:
+            skills: set[str] = set()
+            demands: set[Demand] = set()
+            mass = 0.0
+            for step in functions[name].body:
+                if isinstance(step, SkillCall):
+                    skills.add(step.skill)
+                    if step.skill in pickups and step.objects:
+                        mass = max(mass, scene.masses.get(step.objects[0], 0.0))
+                    demand = call_demand(scene, step.skill, step.objects)
+                    if demand is not None:
+                        demands.add(demand)
+                elif isinstance(step, Call):
+                    inner = need(step.function)
+                    skills |= inner.skills
+                    demands |= inner.demands
+                    mass = max(mass, inner.mass)
+            memo[name] = Need(frozenset(skills), mass, frozenset(demands))
+        return memo[name]
+
+    return {name: need(name) for name in functions}
+
+
+def can_do(robots: Sequence[Robot], need: Need) -> bool:
+    skills = frozenset().union(*(r.skills for r in robots))
+    return need.skills <= skills and sum(r.mass_capacity for r in robots) + MASS_TOLERANCE >= need.mass \
+        and all(d.met_by(robots) for d in need.demands)
+
+
+def feasible_teams(team: Sequence[Robot], need: Need) -> list[tuple[int, ...]] | None:
+    """Sets of team indices (in increasing order) that can do the need; None when the team is too big to list."""
+    if len(team) > EXACT_COALITIONS:
+        return None
+    return [c for n in range(1, len(team) + 1) for c in combinations(range(len(team)), n)
+            if can_do([team[i] for i in c], need)]
+
+
+def shortest_list(whole: bool, max_index: int, team_size: int, *, notional: bool) -> int:
+    """How many robots a function's list needs: enough for its highest ``robot_list[i]``. A function
+    that names the whole ``robot_list`` may be run by part of the team when each list is dry-run with
+    the team's own robots (a restated allocation); a notional dry run moves every slot for such a
+    step, so there it takes them all."""
+    return team_size if whole and notional else max(1, max_index + 1)
+
+
+def feasible_lists(team: Sequence[Robot], steps: Sequence[Step], min_length: int) -> list[tuple[int, ...]] | None:
+    """Ordered robot lists (robot_list[i] is the i-th) under which every step has a capable actor.
+
+    None when the team is too big to list; empty when no list works.
+    """
+    if len(team) > EXACT_ALLOCATIONS:
+        return None
+    good = []
+    for n in range(max(1, min_length), len(team) + 1):
+        for order in permutations(range(len(team)), n):
+            if all(_step_ok([team[i] for i in order], step) for step in steps):
+                good.append(order)
+    return good
+
+
+def _step_ok(listed: Sequence[Robot], step: Step) -> bool:
+    actors = listed if step.slot is None else [listed[step.slot]]
+    demand = step.demand
+    if demand is not None and not all(demand.place.reachable_by(r) for r in actors):
+        return False
+    return can_do(actors, Need(frozenset({step.skill}), step.mass, frozenset({demand} if demand else ())))

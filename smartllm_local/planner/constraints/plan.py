@@ -1,0 +1,520 @@
+"""Stage 1 (decomposed) and stage 3 (allocated) plans, written line by line under a grammar.
+
+Beyond syntax, the constraint keeps a plan's shape sensible: a function ends
+with an action (not a bare GoToObject), a summary lists distinct skills in the
+vocabulary's order, bodies respect simple preconditions, and the orchestration
+launches every function exactly once, in threads or directly, then stops.
+
+The budget is kept by construction. Every state has a cheapest completion (an
+order line of one character, the owed functions with one short action each,
+a direct call for every function not yet launched), and a line is offered only
+if, after the longest text that line can hold, the cheapest completion of the
+state it leads to still fits what is left. Free text (names, comments, summary
+and order lines) is cut to the room there is; object choices too long for it are
+left out. Since the cheapest completion of the state reached is always offered,
+generation can always go on and ends by completing the plan. Costs are counted
+in characters, an upper bound on tokens (every token spells at least one).
+Whatever the budget kept from being offered is recorded in ``capped``.
+
+With a world check (:mod:`.world_check`), a body offers only the calls that
+succeed from the state the steps so far produce: a function acts after it has
+gone somewhere, goes only where one of its next calls succeeds, and puts down what
+it picked up before it ends; functions are launched in the order they were
+checked in. The budget is kept on the unchecked choices, so the check never costs
+a plan its ending: where no checked line fits, the unchecked ones that do are
+offered (a dead end, counted).
+
+Its candidate calls are in :mod:`.candidates`, its costs in :mod:`.budget`. A restated
+allocation (:mod:`.restated`) is a plan constraint whose bodies are the
+decomposition's.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from ...robots import Robot
+from ...skills import SkillSet
+from ..decoding.grammar import Node, Ref, alt, chars, rep, seq
+from ..decoding.line_ends import COMMENT_NEXT, INDENTED_NEXT
+from ..decoding.protocol import Choose, Constraint, Forced, longest
+from ..prompting.scene_context import SceneObjects
+from .budget import Budget
+from .candidates import RELEASE, STATE_ACTIONS, Candidates
+from .feasibility import Step, call_demand, feasible_lists, shortest_list
+from .format import (
+    COMMENT_LEN,
+    INDENT,
+    MAX_STEPS,
+    MAX_SUBTASKS,
+    NAME_FIRST,
+    NAME_LEN,
+    NAME_REST,
+    ORDER_CHARS,
+    ORDER_LEN,
+    STEP_COMMENT_LEN,
+    SUMMARY_CHARS,
+    SUMMARY_LEN,
+    comment_text,
+    ordered_subset,
+    refusal_line,
+    refusal_text_len,
+    robot_list,
+    text_run,
+)
+from .world_check import Call, WorldCheck
+
+_CALL = re.compile(r"^\s+(\w+)\((?:robot_list(?:\[(\d+)\])?, )?'([^']+)'(?:, '([^']+)')?\)$")
+STEP_LINE = re.compile(r"^    (\w+)\((.*)\)\n$")
+#: What may start the text after a line of each kind, in its last token (see :mod:`..decoding.line_ends`): a summary
+#: line is followed by another or by the order line, a header and a body line by an indented line (or a blank
+#: one, ending the function where it may end).
+FOLLOWS: dict[str, Node] = {"summary": COMMENT_NEXT, "header": INDENTED_NEXT, "goto": INDENTED_NEXT,
+                            "action": INDENTED_NEXT, "comment": INDENTED_NEXT, "sleep": INDENTED_NEXT}
+
+
+@dataclass
+class WrittenFunction:
+    """What the constraint knows of a function written so far."""
+
+    name: str
+    steps: int = 0
+    max_index: int = -1  # the highest robot_list[i] used; -1: none (robot_list alone counts as 0)
+    last: str = ""  # the kind of the last line: "action", "goto", "sleep" or "comment"
+    last_step: str = ""  # the same, comments aside
+    comments: int = 0
+    held: set[str] = field(default_factory=set)  # object types picked up and not yet put down
+    states: dict[str, str] = field(default_factory=dict)  # type -> the last state action on it
+    last_call: tuple[str, str] = ("", "")  # (AI2-THOR action, object) of the last step
+    calls: list[Call] = field(default_factory=list)  # (robot_list slot, skill, objects)
+    written: int = 0  # lines of a restated body written so far
+    went: bool = False  # whether it has gone somewhere (with a world check, it acts only after that)
+    slots_went: set[int] = field(default_factory=set)  # robot_list slots that went somewhere in it
+    together: bool = False  # the last GoToObject took the whole robot_list
+    whole: bool = False  # a step named the whole robot_list (see feasibility.shortest_list)
+
+    def track(self, line: str, actions: dict[str, str]) -> None:
+        match = _CALL.match(line.rstrip("\n"))
+        if not match:
+            self.last_call = ("", "")
+            return
+        skill, first = match.group(1), match.group(3)
+        slot = int(match.group(2)) if match.group(2) is not None else None
+        self.calls.append((slot, skill, tuple(o for o in match.group(3, 4) if o is not None)))
+        action = actions.get(skill, "")
+        self.last_call = (action, first) if action else ("", "")
+        if action == "PickupObject":
+            self.held.add(first)
+        elif action in RELEASE:
+            self.held.discard(first)
+        elif action in STATE_ACTIONS:
+            self.states[first] = action
+
+
+class PlanConstraint(Constraint):
+    """A decomposed plan (no team) or an allocated one (``team_size`` or ``team`` given)."""
+
+    def __init__(
+        self,
+        scene: SceneObjects,
+        skills: SkillSet,
+        *,
+        team_size: int | None = None,
+        comments: bool = True,
+        summary: bool = True,
+        function_names: Sequence[str] | None = None,
+        max_subtasks: int = MAX_SUBTASKS,
+        max_steps: int = MAX_STEPS,
+        allow_refusal: bool = True,
+        team: Sequence[Robot] | None = None,
+        world: WorldCheck | None = None,
+    ):
+        super().__init__()
+        if team is not None:
+            team_size = len(team)
+        self.team = list(team) if team is not None else None
+        self.allocated = team_size is not None
+        self.team_size = team_size or 0
+        self.comments = comments
+        self.summary = summary and not self.allocated and not function_names
+        self.fixed_names = list(function_names or [])
+        self.max_subtasks = len(self.fixed_names) or max_subtasks
+        self.max_steps = max(2, max_steps)
+        self.allow_refusal = allow_refusal
+        self.scene = scene
+        self.skills = [s for s in skills.values() if all(scene.types_for(a) for a in s.arguments[: s.required])]
+        self.skill_names = [s.name for s in self.skills]
+        self.skill_actions = {s.name: s.action for s in self.skills}
+        self.by_name = {s.name: s for s in skills.values()}
+        goto = [s for s in self.skills if s.action == ""]
+        if not goto or len(goto) == len(self.skills):
+            raise ValueError("the skills cannot act on any object of this scene")
+        self.rules: dict[str, Node] = {"refusal": refusal_line(), "skills": ordered_subset(self.skill_names, ", ")}
+        self.robot_args = ["robot_list", *(f"robot_list[{i}]" for i in range(self.team_size))] if self.allocated else []
+        self.robot_arg_len = max((len(a) + 2 for a in self.robot_args), default=0)  # with its ", "
+        self.sleep_len = len(INDENT) + len("time.sleep(9)\n")
+        self.world = world
+        self._lists: dict[tuple[str, int], list[tuple[int, ...]]] = {}
+        self.candidates = Candidates(scene, self.skills, robot_arg_len=self.robot_arg_len, allocated=self.allocated,
+                                     world=world, max_steps=self.max_steps)
+        self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
+        self.budget = Budget(allocated=self.allocated, team_size=self.team_size, fixed_names=self.fixed_names,
+                             fresh_action=self.fresh_action, body_cost=self._body_cost)
+        self.skills_len = longest(Ref("skills"), self.rules)
+        self.phase = "start"
+        self.summary_lines = 0
+        self.owed = len(self.fixed_names) or None  # defs promised (by the summary, or the decomposition)
+        self.functions: list[WrittenFunction] = []
+        self.launched: list[str] = []
+        self.threads: list[str] = []  # targets of the block being written
+        self.pending = ""  # boilerplate to write next (the rest of a block's starts and joins)
+
+    # ---------------------------------------------------------------- costs
+
+    def _body_cost(self, index: int) -> int:
+        """The cheapest body of the function at ``index``: one action."""
+        return self.fresh_action
+
+    def _owed_cost(self) -> int:
+        return sum(self.budget.def_cost(k) for k in range(len(self.functions) + 1, (self.owed or 0) + 1))
+
+    def _closing_cost(self) -> int:
+        """The cheapest completion once the current function's body is finished: its end,
+        the owed functions, and a direct call for every function not launched."""
+        return 1 + self._owed_cost() + self.budget.calls_cost(self._unlaunched())
+
+    def minimum_budget(self) -> int:
+        if self.fixed_names:
+            return sum(self.budget.def_cost(k) for k in range(1, len(self.fixed_names) + 1))
+        if self.summary:
+            return len("# SubTask 1: x (skills: )\n") + self.skills_len + self.budget.summary_after(1)
+        return self.budget.def_cost(1)
+
+    def world_counts(self) -> tuple[int, int]:
+        return (self.world.tries, self.world.dead_ends) if self.world is not None else (0, 0)
+
+    def _cap(self, what: str) -> None:
+        if what not in self.capped:
+            self.capped.append(what)
+
+    # ------------------------------------------------------------- choices
+
+    def next(self, remaining: int) -> Forced | Choose | None:
+        if self.pending:
+            return Forced(self.pending)
+        if self.phase == "order-blank":
+            return Forced("\n")
+        handler = {
+            "start": self._start, "summary": self._summary, "header": self._header_choice, "body": self._body,
+            "orch": self._orch, "threads": self._threads,
+        }.get(self.phase)
+        return handler(remaining) if handler else None
+
+    def _choose(self, rules: dict[str, Node], options: dict[str, Node]) -> Choose:  # type: ignore[override]
+        if self.allocated:
+            rules = {**rules, "robot-arg": alt(*self.robot_args)}
+        return super()._choose(rules, options, FOLLOWS)
+
+    def _refusal(self, remaining: int) -> Node | None:
+        cap = min(refusal_text_len(), remaining - len("# INFEASIBLE: \n"))
+        return refusal_line(cap) if cap >= 1 else None
+
+    def _summary_line(self, k: int, room: int) -> Node | None:
+        fixed = len(f"# SubTask {k}:  (skills: )\n") + self.skills_len
+        cap = min(SUMMARY_LEN, room - fixed)
+        if cap < 1:
+            return None
+        return seq(f"# SubTask {k}: ", text_run(SUMMARY_CHARS, cap), " (skills: ", Ref("skills"), ")\n")
+
+    def _start(self, remaining: int) -> Choose:
+        options: dict[str, Node] = {}
+        refusal = self._refusal(remaining) if self.allow_refusal else None
+        if refusal is not None:
+            options["refusal"] = refusal
+        if self.summary:
+            options["summary"] = self._summary_line(1, remaining - self.budget.summary_after(1))
+        elif self.fixed_names:
+            options["header"] = f"def {self.fixed_names[0]}(robot_list):\n"
+        else:
+            options["header"] = self._header(1, remaining)
+        return self._choose(self.rules, options)
+
+    def _summary(self, remaining: int) -> Choose:
+        options: dict[str, Node] = {}
+        k = self.summary_lines
+        if k < self.max_subtasks:
+            line = self._summary_line(k + 1, remaining - self.budget.summary_after(k + 1))
+            if line is None:
+                self._cap(f"sub-task {k + 1}")
+            else:
+                options["summary"] = line
+        cap = min(ORDER_LEN, remaining - (self.budget.summary_after(k) - 1))
+        options["order"] = seq("# ", text_run(ORDER_CHARS, cap), "\n")
+        return self._choose(self.rules, options)
+
+    def _header(self, k: int, remaining: int) -> Node | None:
+        """A ``def subtask<k>_<name>():`` line whose name leaves room for the function and its call."""
+        base = f"subtask{k}_"
+        rest = self.budget.calls_cost(self._unlaunched()) + sum(
+            self.budget.def_cost(i) for i in range(k + 1, (self.owed or 0) + 1))
+        fixed = len(f"def {base}():\n") + self.fresh_action + 1 + len(base) + 3
+        cap = min(NAME_LEN, (remaining - rest - fixed) // 2)
+        if cap < 1:
+            return None
+        return seq(f"def {base}", chars(NAME_FIRST), rep(chars(NAME_REST), 0, cap - 1), "():\n")
+
+    def _header_choice(self, remaining: int) -> Forced | Choose | None:
+        k = len(self.functions) + 1
+        if self.fixed_names:
+            return Forced(f"def {self.fixed_names[k - 1]}(robot_list):\n")
+        options: dict[str, Node] = {}
+        if self.owed or k <= self.max_subtasks:
+            header = self._header(k, remaining)
+            if header is None:
+                self._cap(f"sub-task {k}")
+            else:
+                options["header"] = header
+        if not self.owed:
+            options.update(self._orch_options(remaining))
+        return self._choose({**self.rules, **self._orch_rules(remaining)}, options)
+
+    def _body(self, remaining: int) -> Forced | Choose:
+        """A body line. The budget is kept on the unchecked choices (the world check's preferences give
+        way to it): a line is offered if the cheapest unchecked completion still fits after it, and
+        when no checked line fits, the unchecked ones that do are offered (a dead end, counted)."""
+        fn = self.functions[-1]
+        calls = self.candidates
+        options: dict[str, Node] = {}
+        closing = self._closing_cost()
+        unchecked = calls.of(fn)
+        actions = calls.succeeding(fn, self._members(fn, None))
+        room = fn.steps < self.max_steps - 1  # leave a step for the closing action
+        goto_room = fn.steps < self.max_steps if calls.goto_acts else room
+        # The cheapest way on to an action: one that succeeds now, or else a GoToObject and one after it.
+        cheapest = min(calls.line_len(c) for c in unchecked)
+        to_action = min((calls.line_len(c) for c in actions),
+                        default=calls.goto_max + calls.action_max if self.world is not None else cheapest)
+        # Going somewhere twice in a row is never useful, comment or not (on a site, a move is a step of its own).
+        if goto_room and (fn.last_step != "goto" or calls.goto_acts):
+            goto = calls.goto_node(fn, remaining - closing, self._members(fn, None))
+            if goto is not None:
+                options["goto"] = goto
+            else:
+                self._cap("a GoToObject step")
+        if room and fn.last_call[0] == "ToggleObjectOn" and self.sleep_len + cheapest + closing <= remaining:
+            options["sleep"] = seq(INDENT, "time.sleep(", chars("123456789"), ")\n")  # wait for what was switched on
+        if fn.steps < self.max_steps:
+            action = calls.node([c for c in actions
+                                 if calls.line_len(c) + calls.hold_after(fn, c) <= remaining - closing])
+            if action is not None:
+                options["action"] = action
+        # With a world check a function puts down what it holds before it ends, if there is room to.
+        must_release = self.world is not None and not self.allocated and fn.held and "action" in options
+        step_follows = self.world is None or bool({"goto", "action"} & set(options))
+        if (fn.last == "action" or (calls.goto_acts and fn.last == "goto")) and not must_release:
+            options["end"] = "\n"
+        elif not step_follows:
+            # Nothing checked fits or succeeds (a dead end, counted): the unchecked actions that fit.
+            self.world.dead_ends += 1  # type: ignore[union-attr]
+            options["action"] = calls.node([c for c in unchecked if calls.line_len(c) <= remaining - closing])
+        # Line-by-line comments: at most one before each step, and only where a step can follow it.
+        if self.comments and step_follows and fn.last != "comment" and fn.steps < self.max_steps \
+                and fn.comments <= fn.steps:
+            comment_max = COMMENT_LEN if self.allocated else STEP_COMMENT_LEN
+            cap = min(comment_max, remaining - to_action - closing - len(INDENT) - len("# \n"))
+            if cap >= 1:
+                options["comment"] = seq(INDENT, "# ", comment_text(cap), "\n")
+        return self._choose(self.rules, options)
+
+    def _members(self, fn: WrittenFunction, slot: int | None) -> list[int]:
+        """The dry run's robots for a call: the function's own (decomposition), or its robot_list slot
+        (allocation; a function that names the whole list is run by the whole team)."""
+        if not self.allocated:
+            return [len(self.functions) - 1]
+        return [slot] if slot is not None else list(range(self.team_size))
+
+    def _mark_went(self, fn: WrittenFunction, slot: int | None) -> None:
+        fn.went = True
+        fn.whole = fn.whole or slot is None
+        fn.together = slot is None
+        fn.slots_went |= set(range(self.team_size)) if slot is None else {slot}
+
+    def _steps(self, fn: WrittenFunction) -> list[Step]:
+        pickups = {s.name for s in self.skills if s.action == "PickupObject"}
+        return [Step(slot, skill, self.scene.masses.get(objects[0], 0.0) if skill in pickups else 0.0,
+                     call_demand(self.scene, skill, objects))
+                for slot, skill, objects in fn.calls]
+
+    # -------------------------------------------------------- orchestration
+
+    def _unlaunched(self) -> list[str]:
+        return [f.name for f in self.functions if f.name not in self.launched and f.name not in self.threads]
+
+    def _orch_rules(self, remaining: int) -> dict[str, Node]:
+        unlaunched = self._unlaunched()
+        # With a world check, functions run in the order they were checked in (a block of threads runs
+        # consecutive ones together); otherwise in any order.
+        names = unlaunched[:1] if self.world is not None else unlaunched
+        index = {f.name: k for k, f in enumerate(self.functions)}
+        rules: dict[str, Node] = {}
+        if not names:
+            return rules
+        if self.allocated:
+            for name in names:
+                rules[f"team-{index[name]}"] = seq("[", self._robot_lists(self.functions[index[name]]), "]")
+            rules["direct"] = alt(*(seq(n, "(", Ref(f"team-{index[n]}"), ")\n") for n in names))
+        else:
+            rules["direct"] = alt(*(f"{n}()\n" for n in names))
+        n = len(self.threads) + 1
+        budget = self.budget
+        cost = budget.calls_cost(unlaunched)
+        targets = [t for t in names
+                   if budget.thread_len(t, n) + budget.starts_joins(n) + cost - budget.call_len(t) <= remaining]
+        if targets:
+            if self.allocated:
+                rules["target"] = alt(*(seq(f"{t}, args=(", Ref(f"team-{index[t]}"), ",)") for t in targets))
+            else:
+                rules["target"] = alt(*targets)
+        return rules
+
+    def _robot_lists(self, fn: WrittenFunction) -> Node:
+        """The robot lists a function may be run with: long enough for its robot_list[i], and, when
+        the team is known, such that every step has an actor with the skill and the strength."""
+        need = self._need(fn)
+        if self.team is not None:
+            lists = self._checked_lists(fn, need)
+            if lists:
+                return alt(*(", ".join(f"robots[{i}]" for i in order) for order in lists))
+        return robot_list(self.team_size, need, ", ", ordered=True)
+
+    def _checked_lists(self, fn: WrittenFunction, need: int) -> list[tuple[int, ...]] | None:
+        """Capable robot lists (and of those, the ones the world allows), kept for this point of the plan."""
+        key = (fn.name, len(self.launched) + len(self.threads))
+        if key not in self._lists:
+            lists = feasible_lists(self.team, self._steps(fn), need)
+            self._lists[key] = self._working_lists(fn, lists) if lists else lists
+        return self._lists[key]
+
+    def _working_lists(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
+        """Of the capable robot lists, those the world allows (all, without a team world check)."""
+        return lists
+
+    def _need(self, fn: WrittenFunction) -> int:
+        """How many robots the function's list needs (see :func:`.feasibility.shortest_list`)."""
+        return shortest_list(fn.whole, fn.max_index, self.team_size,
+                             notional=self.world is not None and not self._team_checks_lists())
+
+    def _team_checks_lists(self) -> bool:
+        """Whether each robot list is dry-run with the team's own robots (see :func:`.feasibility.shortest_list`)."""
+        return False
+
+    def _orch_options(self, remaining: int) -> dict[str, Node]:
+        rules = self._orch_rules(remaining)
+        options: dict[str, Node] = {}
+        if "target" in rules:
+            options["thread"] = seq(f"t{len(self.threads) + 1} = threading.Thread(target=", Ref("target"), ")\n")
+        elif self._unlaunched():
+            self._cap("a thread")
+        if "direct" in rules:
+            options["direct"] = Ref("direct")
+        return options
+
+    def _orch(self, remaining: int) -> Choose | None:
+        options = self._orch_options(remaining)
+        if not options:
+            return None
+        return self._choose({**self.rules, **self._orch_rules(remaining)}, options)
+
+    def _threads(self, remaining: int) -> Choose:
+        options = {k: v for k, v in self._orch_options(remaining).items() if k == "thread"}
+        options["start"] = "t1.start()\n"
+        return self._choose({**self.rules, **self._orch_rules(remaining)}, options)
+
+    def _launch(self, name: str, piece: str) -> None:
+        """A function was launched with the robot list of ``piece`` (nothing to do without a team world)."""
+
+    # --------------------------------------------------------------- feeding
+
+    def _advance(self, kind: str, piece: str) -> None:
+        if kind == "forced":
+            kind = self._forced_kind(piece)
+        if kind == "refusal":
+            self.phase = "done"
+        elif kind == "summary":
+            self.summary_lines += 1
+            self.owed = self.summary_lines
+            self.phase = "summary"
+        elif kind == "order":
+            self.phase = "order-blank"
+        elif kind == "blank":
+            self.phase = "header"
+        elif kind == "pending":
+            self.pending = ""
+            self.phase = "orch" if self._unlaunched() else "done"
+        elif kind == "header":
+            self.functions.append(WrittenFunction(piece[4:piece.index("(")]))
+            self.phase = "body"
+        elif kind in ("goto", "sleep", "action", "comment"):
+            self._step_written(kind, piece)
+        elif kind == "end":
+            done = self.owed is not None and len(self.functions) >= self.owed
+            self.phase = "orch" if done else "header"
+        elif kind == "start":
+            n = len(self.threads)
+            self.launched += self.threads
+            self.threads = []
+            self.pending = "".join(f"t{i}.start()\n" for i in range(2, n + 1))
+            self.pending += "".join(f"t{i}.join()\n" for i in range(1, n + 1))
+        elif kind == "thread":
+            name = piece.split("target=", 1)[1].split(",")[0].split(")")[0]
+            self._launch(name, piece)
+            self.threads.append(name)
+            self.phase = "threads"
+        elif kind == "direct":
+            self._launch(piece.split("(", 1)[0], piece)
+            self.launched.append(piece.split("(", 1)[0])
+            self.phase = "orch" if self._unlaunched() else "done"
+
+    def _forced_kind(self, piece: str) -> str:
+        """What a piece of forced text was, from where the plan stands."""
+        if self.pending:
+            return "pending"
+        if self.phase == "order-blank":
+            return "blank"
+        if piece.startswith("def "):
+            return "header"
+        if piece == "\n":
+            return "end"
+        if piece.lstrip().startswith("#"):
+            return "comment"
+        return "sleep"
+
+    def _step_written(self, kind: str, piece: str) -> None:
+        fn = self.functions[-1]
+        fn.written += 1
+        fn.last = kind
+        fn.last_step = kind if kind != "comment" else fn.last_step
+        if kind == "comment":
+            fn.comments += 1
+            return
+        fn.steps += 1
+        match = _CALL.match(piece.rstrip("\n"))
+        if match and self.world is not None:
+            slot = int(match.group(2)) if match.group(2) is not None else None
+            fn.whole = fn.whole or (self.allocated and slot is None)
+            objects = [o for o in match.group(3, 4) if o is not None]
+            self.world.apply(self._members(fn, slot), match.group(1), objects)
+        if kind == "action":
+            fn.track(piece, self.skill_actions)
+        else:
+            fn.last_call = ("", "")
+            if kind == "goto":
+                self._mark_went(fn, int(match.group(2)) if match and match.group(2) is not None else None)
+            if match:
+                fn.calls.append((int(match.group(2)) if match.group(2) else None, match.group(1),
+                                 tuple(o for o in match.group(3, 4) if o is not None)))
+        for i in range(self.team_size):
+            if f"robot_list[{i}]" in piece:
+                fn.max_index = max(fn.max_index, i)

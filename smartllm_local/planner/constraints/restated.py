@@ -1,0 +1,241 @@
+"""Stage 3 restating stage 1: the allocation writes the decomposition's steps itself.
+
+In SMART-LLM's allocated examples the steps are the decomposition's, with robots
+added. Here the comments and sleeps of each function are forced text and each
+skill call is offered with its robot argument left open, so the model chooses only
+the robot of each step and the orchestration: a plan cannot drift between stages,
+and its longest output is known to the character (its budget).
+
+With a world check, a robot argument is offered only if the call succeeds for
+that ``robot_list`` slot where the slots stand (notional robots, one per slot)
+and leaves every later step of the body a robot under which it succeeds (a search
+over the rest of the body, so that a robot chosen early cannot strand a later
+step); and a robot list only if every step of the function succeeds with the team's own robots from the state the
+functions launched before it leave, as the executor decides it (skills, mass,
+reach, team lifting).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import replace
+
+from ...robots import Robot
+from ...skills import Skill, SkillSet
+from ..decoding.grammar import alt, seq
+from ..decoding.protocol import Choose, Forced
+from ..prompting.scene_context import SceneObjects
+from .candidates import acts_on
+from .feasibility import Step, call_demand, feasible_lists
+from .format import INDENT
+from .plan import STEP_LINE, PlanConstraint, WrittenFunction
+from .world_check import WorldCheck
+
+#: Robot arguments a search for the rest of a body may try before it gives up (and offers the step).
+COMPLETION_TRIES = 400
+
+
+def restated_bodies(decomposition: str, names: Sequence[str]) -> list[list[str]]:
+    """The body lines (comments, skill calls, sleeps) of each named function of a decomposed plan."""
+    bodies: dict[str, list[str]] = {}
+    current: list[str] | None = None
+    for line in decomposition.splitlines(keepends=True):
+        if line.startswith("def "):
+            current = bodies.setdefault(line[4:line.index("(")], [])
+        elif line.startswith(INDENT) and current is not None:
+            current.append(line if line.endswith("\n") else line + "\n")
+        else:
+            current = None
+    return [bodies[name] for name in names]
+
+
+class RestatedAllocation(PlanConstraint):
+    """An allocated plan whose function bodies are the decomposition's, robots left to the model."""
+
+    def __init__(self, scene: SceneObjects, skills: SkillSet, *, team: Sequence[Robot] | int,
+                 function_names: Sequence[str], bodies: Sequence[Sequence[str]], world: WorldCheck | None = None):
+        if len(bodies) != len(function_names):
+            raise ValueError("a restated allocation needs one body per function name")
+        self.bodies = [list(body) for body in bodies]
+        known = {"team": team} if not isinstance(team, int) else {"team_size": team}
+        # Refusing is the coalition stage's answer; once teams are formed, the plan is written.
+        super().__init__(scene, skills, function_names=function_names, world=world, allow_refusal=False, **known)
+        # Robot lists are checked with the team's own robots, in launch order.
+        self.team_world = WorldCheck(world.floor_plan, world.skills, robots=self.team, site=world.site) \
+            if world is not None and self.team is not None else None
+        # While bodies are written, the team's own robots run each finished body (with the first robot
+        # list under which it succeeds), so a body is checked from the state its predecessors leave.
+        self.body_world = WorldCheck(world.floor_plan, world.skills, robots=self.team, site=world.site) \
+            if self.team_world is not None else None
+        self._bodies_run: set[str] = set()
+
+    def _body_cost(self, index: int) -> int:
+        return sum(self._line_cost(line) for line in self.bodies[index])
+
+    def _line_cost(self, line: str) -> int:
+        return len(line) + (self.robot_arg_len if STEP_LINE.match(line) and "time.sleep" not in line else 0)
+
+    def maximum_output(self) -> int:
+        """The longest output: every body with its longest robot arguments, every function in a thread."""
+        names = self.fixed_names
+        bodies = sum(len(f"def {n}(robot_list):\n") + self._body_cost(k) + 1 for k, n in enumerate(names))
+        threads = sum(self.budget.thread_len(n, k + 1) for k, n in enumerate(names))
+        return bodies + threads + self.budget.starts_joins(len(names))
+
+    def world_counts(self) -> tuple[int, int]:
+        worlds = [w for w in (self.world, self.team_world, self.body_world) if w is not None]
+        return sum(w.tries for w in worlds), sum(w.dead_ends for w in worlds)
+
+    def _body(self, remaining: int) -> Forced | Choose:
+        """The decomposition's next line: comments and sleeps as they are, a skill call with the robot
+        left to the model (only robots that keep a capable robot list possible), then the blank line."""
+        fn = self.functions[-1]
+        body = self.bodies[len(self.functions) - 1]
+        if fn.written == len(body):
+            self._run_body(fn)
+            return Forced("\n")
+        line = body[fn.written]
+        call = self._skill_call(line)
+        if call is None:
+            return Forced(line)
+        skill, objects, args = call
+        able, working = self._robot_args(fn, skill, objects)
+        if self.world is not None and working:
+            # Only robots after whose step the rest of the body can still be done by some robots.
+            found = [(a, self._completes(fn, a, skill, objects)) for a in working]
+            working = [a for a, ok in found if ok] or [a for a, ok in found if ok is None]
+        if self.world is not None and not working:
+            self.world.dead_ends += 1
+        # No robot can: the coalition stage refuses such plans, and free teams leave it to the model.
+        robots = working or able or self.robot_args
+        text = seq(f"{INDENT}{skill.name}(", alt(*robots), f", {args})\n")
+        return self._choose(self.rules, {"goto" if skill.action == "" else "action": text})
+
+    def _skill_call(self, line: str) -> tuple[Skill, list[str], str] | None:
+        """A body line's skill, objects and argument text; None for a comment or a sleep."""
+        match = STEP_LINE.match(line)
+        if match is None or match.group(1) == "time.sleep":
+            return None
+        return self.by_name[match.group(1)], re.findall(r"'([^']+)'", match.group(2)), match.group(2)
+
+    def _rest(self, fn: WrittenFunction) -> list[tuple[Skill, list[str]]]:
+        """The restated body's skill calls after the current line."""
+        calls = (self._skill_call(line) for line in self.bodies[len(self.functions) - 1][fn.written + 1:])
+        return [(skill, objects) for skill, objects, _ in filter(None, calls)]
+
+    def _completes(self, fn: WrittenFunction, arg: str, skill: Skill, objects: Sequence[str]) -> bool | None:
+        """Whether, after this step by ``arg``, every later step of the body can be given a robot
+        argument under which it succeeds (a depth-first search, the last step's robot tried first);
+        None if the search ran out of tries before it knew."""
+        budget = [COMPLETION_TRIES]
+        saved = self.world.run.snapshot()
+        try:
+            trial = self._after(fn, arg, skill, objects)
+            return self._search(trial, self._rest(fn), arg, budget)
+        finally:
+            self.world.run.restore(saved)
+
+    def _search(self, fn: WrittenFunction, rest: Sequence[tuple[Skill, list[str]]], last: str,
+                budget: list[int]) -> bool | None:
+        if not rest:
+            return bool(self._team_lists(fn, budget))
+        skill, objects = rest[0]
+        unknown = False
+        args = self._robot_args(fn, skill, objects)[1]
+        # The robot of the last step first, then the whole list for a GoToObject (it brings every slot).
+        args.sort(key=lambda a: (a != last, not (skill.action == "" and a == "robot_list")))
+        for arg in args:
+            if budget[0] <= 0:
+                return None
+            budget[0] -= 1
+            saved = self.world.run.snapshot()
+            try:
+                found = self._search(self._after(fn, arg, skill, objects), rest[1:], arg, budget)
+            finally:
+                self.world.run.restore(saved)
+            if found:
+                return True
+            unknown = unknown or found is None
+        return None if unknown else False
+
+    def _team_lists(self, fn: WrittenFunction, budget: list[int] | None = None) -> list[tuple[int, ...]]:
+        """The robot lists under which the team's own robots do every step of the whole body from the
+        state the bodies before it leave (one is enough with a budget); every list without a team."""
+        need = self._need(fn)
+        lists = feasible_lists(self.team, self._steps(fn), need) if self.team is not None else None
+        if self.body_world is None or lists is None:
+            return lists or [tuple(range(need))]
+        working = []
+        for order in lists:
+            if budget is not None:
+                if budget[0] <= 0:
+                    break
+                budget[0] -= 1
+            if self.body_world.runs(fn.calls, order):
+                working.append(order)
+                if budget is not None:
+                    break
+        return working
+
+    def _team_checks_lists(self) -> bool:
+        return self.team_world is not None
+
+    def _run_body(self, fn: WrittenFunction) -> None:
+        """Once a body is written, let the team run it (with its first working list) for the next body."""
+        if self.body_world is not None and fn.name not in self._bodies_run:
+            self._bodies_run.add(fn.name)
+            lists = self._team_lists(fn) or feasible_lists(self.team, self._steps(fn), self._need(fn)) or []
+            if lists:
+                self.body_world.perform(fn.calls, lists[0])
+
+    def _after(self, fn: WrittenFunction, arg: str, skill: Skill, objects: Sequence[str]) -> WrittenFunction:
+        """A copy of the function with one more step by ``arg``, applied to the world check's dry run."""
+        slot = self._slot(arg)
+        trial = replace(fn, slots_went=set(fn.slots_went), calls=list(fn.calls))
+        self.world.apply(self._members(trial, slot), skill.name, objects)
+        trial.calls.append((slot, skill.name, tuple(objects)))
+        trial.max_index = max(trial.max_index, -1 if slot is None else slot)
+        if skill.action == "":
+            self._mark_went(trial, slot)
+        return trial
+
+    @staticmethod
+    def _slot(arg: str) -> int | None:
+        return int(arg[len("robot_list["):-1]) if "[" in arg else None
+
+    def _robot_args(self, fn: WrittenFunction, skill: Skill, objects: Sequence[str]) -> tuple[list[str], list[str]]:
+        """Robot arguments that leave some robot list able to do every step so far (skills, strength),
+        and of those, with a world check, the ones under which the call succeeds where the slots stand."""
+        mass = self.scene.masses.get(objects[0], 0.0) if skill.action == "PickupObject" and objects else 0.0
+        able, working = [], []
+        for arg in self.robot_args:
+            slot = self._slot(arg)
+            if self.world is not None and skill.action and (
+                    not (fn.together if slot is None else slot in fn.slots_went)
+                    or acts_on((skill, tuple(objects))) not in (self.candidates.place(fn, slot), None)):
+                continue  # with a world check, robots act on what they went to in this function
+            if self.team is not None:
+                steps = self._steps(fn) + [Step(slot, skill.name, mass, call_demand(self.scene, skill.name, objects))]
+                lists = feasible_lists(self.team, steps, max(1, fn.max_index + 1, (slot or 0) + 1))
+                if lists is not None and not lists:
+                    continue
+            able.append(arg)
+            if self.world is not None and self.world.succeeds(self._members(fn, slot), skill.name, objects):
+                working.append(arg)
+        return able, working
+
+    def _working_lists(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
+        """With a world check, the lists under which every step of the function succeeds from the state
+        the functions launched before it leave; if none does, all of them (a dead end, counted)."""
+        if self.team_world is None:
+            return lists
+        working = [order for order in lists if self.team_world.runs(fn.calls, order)]
+        self.team_world.dead_ends += not working
+        return working or lists
+
+    def _launch(self, name: str, piece: str) -> None:
+        """Run a launched function's steps in the team's dry run, with the robot list the line gives."""
+        if self.team_world is not None:
+            fn = next(f for f in self.functions if f.name == name)
+            self.team_world.perform(fn.calls, [int(i) for i in re.findall(r"robots\[(\d+)\]", piece)])

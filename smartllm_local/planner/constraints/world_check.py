@@ -1,0 +1,80 @@
+"""The world a plan is written for: which skill calls will succeed from the state the lines so far produce.
+
+While a stage writes a plan line by line, the steps written are applied to an
+in-process dry run of the scene (the executor's own decisions, see
+:mod:`smartllm_local.executor.dry_run`), and a line is offered only if its call
+succeeds there. A decomposition is checked for notional robots with every skill
+and no mass limit, one per sub-task (a sub-task's robot holds what it picked up
+and nothing another sub-task's robot holds); an allocation for one notional robot
+per ``robot_list`` slot (whether a robot has the skill and the strength is the
+team feasibility's question). Sub-tasks are checked in the order they are
+written; what runs concurrently may still interleave differently (see docs/planner.md, "The world
+check"). A site domain's plan is tried on its site simulator the same way
+(:class:`~smartllm_local.executor.site.SiteDryRun`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ...domain import Domain
+from ...executor.dry_run import DryRun, notional_robot
+from ...executor.site import SiteDryRun, notional_site_robot
+from ...robots import Robot
+from ...skills import SkillSet
+
+#: One step of a function: its robot_list slot (None: the whole list), skill and objects.
+Call = tuple[int | None, str, tuple[str, ...]]
+
+
+class WorldCheck:
+    """A dry run of the scene with a team (notional robots unless given), and counts of what it decided."""
+
+    def __init__(self, floor_plan: int | str, skills: SkillSet, agents: int = 1,
+                 robots: Sequence[Robot] | None = None, site: Domain | None = None):
+        self.floor_plan, self.skills, self.site = floor_plan, skills, site
+        if site is not None:
+            team = list(robots) if robots else [notional_site_robot(site)] * max(1, agents)
+            self.run: DryRun | SiteDryRun = SiteDryRun(site, team)
+        else:
+            self.run = DryRun(floor_plan, list(robots) if robots else [notional_robot(skills)] * max(1, agents), skills)
+        self.tries = 0
+        self.dead_ends = 0  # lines for which nothing that succeeds could be offered
+
+    def succeeds(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> bool:
+        self.tries += 1
+        return self.run.succeeds(members, skill, objects).success
+
+    def apply(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> None:
+        self.run.apply(members, skill, objects)
+
+    def leads_somewhere(self, members: Sequence[int], goto: str, target: str,
+                        then: Sequence[tuple[str, Sequence[str]]]) -> bool:
+        """Whether, after going to ``target``, one of the calls ``then`` succeeds (so a GoToObject
+        is offered only where there is something to do)."""
+        saved = self.run.snapshot()
+        try:
+            self.tries += 1
+            if not self.run.apply(members, goto, [target]).success:
+                return False
+            return any(self.succeeds(members, skill, objects) for skill, objects in then)
+        finally:
+            self.run.restore(saved)
+
+    def runs(self, calls: Sequence[Call], robots: Sequence[int]) -> bool:
+        """Whether a function's calls all succeed with ``robots`` (team indices) as its robot_list."""
+        saved = self.run.snapshot()
+        try:
+            return all(self._call(call, robots) for call in calls)
+        finally:
+            self.run.restore(saved)
+
+    def perform(self, calls: Sequence[Call], robots: Sequence[int]) -> bool:
+        """Apply a function's calls with ``robots`` as its robot_list (all of them, as the executor goes
+        on after a failure); whether they all succeeded."""
+        return all([self._call(call, robots) for call in calls])
+
+    def _call(self, call: Call, robots: Sequence[int]) -> bool:
+        slot, skill, objects = call
+        self.tries += 1
+        return self.run.apply(list(robots) if slot is None else [robots[slot]], skill, objects).success

@@ -1,0 +1,343 @@
+"""Driving a stage's constraint: each offered line goes to a writer (the model, or an adversary in tests) as a
+grammar, until the constraint says the output is complete.
+
+Text the constraint forces is not put into the context on its own: it is carried into the next line the
+writer writes, which begins with it (a backend writes it in its own tokens up to the last one, and the model
+picks that last one under the grammar: token healing, so ``# SubTask 1:`` is followed by the model's own
+`` put``). A line's end is opened (:mod:`.line_ends`): the writer's last token may run past the newline into
+blank lines or the start of the next line, which is then checked against what the constraint offers next
+and goes on from there. A writer that ends the sequence before the output is complete has it completed by
+the constraint's shortest way, and the count of lines so completed is reported.
+
+Every cost is in tokens, and the constraint counts characters, an upper bound: text carried and not yet
+written is counted at its length until it is. What a line's opened end adds beyond the characters the
+constraint counts (spaces before a newline, blank lines read as none) is paid from a slack held back from the
+constraint; ends are opened only while the slack can pay for the most a line end can add, so a writer that
+pays a token a character keeps within the budget too.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from ...errors import SmartLLMError
+from .grammar import Grammar, alt, seq
+from .line_ends import MOST_ADDED, opened, split_spill
+from .matcher import Matcher
+from .protocol import Choose, Constraint, Forced
+
+#: Tokens held back from the constraint for what opened line ends add (see above).
+SLACK = 64
+
+#: Writes one line for an offered grammar; returns the text and the tokens it cost (the line-by-line writers
+#: of tests and of ``accepts``: a complete line, nothing past its newline).
+LineWriter = Callable[[Choose, int], tuple[str, int]]
+#: Puts text into the context; returns the tokens it cost.
+Forcer = Callable[[str], int]
+
+
+class BudgetError(Exception):
+    """The output budget cannot hold even the shortest complete output."""
+
+
+class GuaranteeError(SmartLLMError):
+    """A stage's output broke a guarantee its constraint gives (a bug in the planner)."""
+
+
+@dataclass(frozen=True)
+class Line:
+    """What a writer is asked to write: ``carry`` (text the constraint forced, not yet in the context), then the
+    line ``choose`` offers, as ``grammar`` admits it (its end opened). It stops after the token that writes the
+    ``lines``-th newline. ``ahead`` is text already in the context that the line begins with (it is not written
+    again, and ``grammar`` admits what follows it)."""
+
+    choose: Choose
+    grammar: Grammar
+    carry: str = ""
+    ahead: str = ""
+
+    @property
+    def lines(self) -> int:
+        return self.carry.count("\n") + 1
+
+
+@dataclass
+class Written:
+    """A writer's answer: its text (the carry, the line, maybe the start of the next in the same token), what it
+    cost, and whether the model ended the sequence instead of completing the line (``text`` is then a
+    beginning of it)."""
+
+    text: str
+    cost: int
+    ended: bool = False
+
+
+@dataclass
+class Report:
+    """What happened at line ends: lines the planner completed after the model ended the sequence, tokens that
+    ran past a line's end, and blank lines read as none."""
+
+    completed_lines: int = 0
+    spilled: int = 0
+    ignored_blank_lines: int = 0
+    notes: list[str] = field(default_factory=list)
+
+
+class TokenWriter:
+    """A writer of whole answers (see :class:`Line`); ``force`` puts text into the context as it is."""
+
+    def write(self, line: Line, remaining: int) -> Written:  # pragma: no cover - protocol
+        raise NotImplementedError
+
+    def force(self, text: str) -> int:  # pragma: no cover - protocol
+        raise NotImplementedError
+
+
+class _ByLines(TokenWriter):
+    """A line-by-line writer as a token writer: the carry forced, then one complete line."""
+
+    def __init__(self, write: LineWriter, force: Forcer):
+        self._write, self._force = write, force
+
+    def write(self, line: Line, remaining: int) -> Written:
+        cost = self._force(line.carry) if line.carry else 0
+        text, spent = self._write(line.choose, remaining - cost)
+        return Written(line.carry + text, cost + spent)
+
+    def force(self, text: str) -> int:
+        return self._force(text)
+
+
+def run_constraint(constraint: Constraint, write: LineWriter, force: Forcer, budget: int) -> str:
+    """Produce a stage's output within ``budget`` tokens, a line at a time (each a complete line)."""
+    return run_tokens(constraint, _ByLines(write, force), budget)
+
+
+def run_tokens(constraint: Constraint, writer: TokenWriter, budget: int, report: Report | None = None, *,
+               open_ends: bool = True) -> str:
+    """Produce a stage's output within ``budget`` tokens, with a writer that writes as a model does (each line's
+    end opened, unless ``open_ends`` is off: to measure what opening them changes)."""
+    if constraint.minimum_budget() > budget:
+        raise BudgetError(
+            f"{budget} output tokens cannot hold the shortest complete output "
+            f"({constraint.minimum_budget()} characters); raise the output budget or --n-ctx"
+        )
+    return _Driver(constraint, writer, budget, report or Report(), open_ends).run()
+
+
+class _Driver:
+    def __init__(self, constraint: Constraint, writer: TokenWriter, budget: int, report: Report, opens: bool):
+        self.constraint, self.writer, self.budget, self.report, self.opens = constraint, writer, budget, report, opens
+        self.used = 0
+        self.carry = ""  # fed to the constraint, not yet written
+        self.pending = ""  # written (in the context), not yet fed: blank lines, then the start of a line
+        self.ended = False  # the model ended the sequence: the planner completes the output
+        self.slack = max(0, min(SLACK, budget - constraint.minimum_budget())) if opens else 0
+
+    def held(self) -> int:
+        """The slack left: what is held back, less the tokens spent beyond the characters fed (a carry counted
+        at its length, as the constraint counts it)."""
+        return max(0, self.slack - max(0, self.used + len(self.carry) - len(self.constraint.text)))
+
+    def run(self) -> str:
+        while (step := self.constraint.next(self.budget - self.used - len(self.carry) - self.held())) is not None:
+            if self.ended:
+                self._complete(step)
+            elif isinstance(step, Forced):
+                self._forced(step.text)
+            elif not self._pending_fed(step):
+                self._write(step)
+            self._check()
+        if self.carry:
+            self._spend(self.writer.force(self.carry))
+            self.carry = ""
+            self._check()
+        if self.pending.strip():
+            raise GuaranteeError(f"{self.pending!r} was written after the output's end: {self.constraint.text!r}")
+        return self.constraint.text
+
+    def _spend(self, cost: int) -> None:
+        self.used += cost
+
+    def _check(self) -> None:
+        if self.used > self.budget:  # the constraint's bookkeeping failed: a bug, reported, never a plan
+            raise GuaranteeError(f"the output used {self.used} tokens of a budget of {self.budget}: "
+                                 f"{self.constraint.text!r}")
+
+    def _forced(self, text: str) -> None:
+        """Forced text: fed now, written with the next line (or matched against what is already written)."""
+        while self.pending.startswith("\n") and not text.startswith("\n"):
+            self._ignore_blank()
+        if text.startswith("\n") and not self.pending.strip(" "):
+            self.pending = ""  # spaces before a newline: a blank line's, which Python ignores
+        self.constraint.feed(text)
+        if self.pending.startswith(text):
+            self.pending = self.pending[len(text):]
+        elif text.startswith(self.pending):
+            self.carry += text[len(self.pending):]
+            self.pending = ""
+        else:
+            raise GuaranteeError(f"{self.pending!r} was written where the plan goes on with {text!r}")
+
+    def _ignore_blank(self) -> None:
+        self.pending = self.pending[1:]
+        self.report.ignored_blank_lines += 1
+
+    def _pending_fed(self, step: Choose) -> bool:
+        """Feed a blank line already written, if it is one the step offers (ending a function); drop it if not
+        (Python ignores it). True if something was fed (the constraint then offers its next step)."""
+        if not self.pending.startswith("\n"):
+            return False
+        if step.kind_of("\n"):
+            self.pending = self.pending[1:]
+            self.constraint.feed("\n")
+            return True
+        while self.pending.startswith("\n"):
+            self._ignore_blank()
+        return False
+
+    def _write(self, step: Choose) -> None:
+        ahead, self.pending = self.pending, ""
+        kinds = {k: g.rules["root"] for k, g in step.options.items()}
+        if self.opens and self.held() >= MOST_ADDED:
+            kinds = opened(kinds, step.grammar.rules, step.follows)
+        elif ahead and step.kind_of("\n") and not Matcher(step.grammar).advance(ahead):
+            kinds[step.kind_of("\n")] = alt(kinds[step.kind_of("\n")], seq(ahead, "\n"))  # a blank line's spaces
+        rules = step.grammar.rules
+        wire = Grammar({**rules, "root": seq(self.carry, alt(*kinds.values()))})
+        if ahead:
+            if not Matcher(wire).advance(ahead):
+                raise GuaranteeError(f"{ahead!r} was written where the plan goes on with a line it does not begin")
+            wire = wire.after(ahead)
+        line = Line(step, wire, self.carry, ahead)
+        written = self.writer.write(line, self.budget - self.used)
+        self._spend(written.cost)
+        text = written.text
+        if written.ended:
+            rest = _rest_of_line({k: Grammar({**rules, "root": seq(self.carry, v)}) for k, v in kinds.items()},
+                                 ahead, text)
+            self._spend(self.writer.force(rest) if rest else 0)
+            text += rest
+            self.ended = True
+            self.report.completed_lines += 1
+            self.report.notes.append(f"the model ended the sequence after {self.constraint.text + ahead + text!r}")
+        if not text.startswith(self.carry):
+            raise GuaranteeError(f"the writer wrote {text!r} for a line that begins with {self.carry!r}")
+        body = ahead + text[len(self.carry):]
+        self.carry = ""
+        if "\n" not in body:  # a line writer's empty answer: the model ended where the grammar may end
+            self.constraint.feed(body)
+            return
+        raw, _, spill = body.partition("\n")
+        self.constraint.feed(_as_offered(step, raw))
+        if spill:
+            self.report.spilled += 1
+            blanks, rest = split_spill(spill)
+            self.pending = "\n" * blanks + rest
+
+    def _complete(self, step: Forced | Choose) -> None:
+        """The model ended the sequence: the output goes on by its shortest way (see :func:`shortest_line`)."""
+        text = step.text if isinstance(step, Forced) else shortest_line(step)
+        self.constraint.feed(text)
+        self._spend(self.writer.force(text))
+        if isinstance(step, Choose):
+            self.report.completed_lines += 1
+
+
+#: Kinds of line a completion does not write where it has another: asides (they take an output nowhere), and
+#: a refusal (the model did not refuse; it ended).
+_ASIDES = ("comment", "sleep", "refusal")
+
+
+def _rest_of_line(kinds: dict[str, Grammar], ahead: str, text: str) -> str:
+    """How a line the model left unfinished is finished: the shortest way, among the kinds of line it may still
+    be, those a completion writes first (:data:`_ASIDES`)."""
+    ways = {}
+    for kind, grammar in kinds.items():
+        follow = Matcher(grammar)
+        if follow.advance(ahead + text):
+            ways[kind] = grammar.after(ahead + text).sample(_PLAIN, "shortest")  # type: ignore[arg-type]
+    chosen = [w for k, w in ways.items() if k not in _ASIDES] or list(ways.values())
+    return min(chosen, key=len)
+
+
+def shortest_line(step: Choose) -> str:
+    """The line a completion writes: a blank line where one ends something, else the shortest line of a kind
+    that takes the output on (no comment, no sleep, no refusal), spelled plainly (letters where it may
+    choose), the same every time."""
+    kinds = [k for k in step.options if k not in _ASIDES] or list(step.options)
+    if step.kind_of("\n") in kinds:
+        return "\n"
+    lines = [step.options[k].sample(_PLAIN, "shortest") for k in kinds]  # type: ignore[arg-type]
+    return min(lines, key=len)
+
+
+class _Plain:
+    """Grammar.sample's choices made plainly: the first option, the fewest repetitions, a letter where a
+    character may be one."""
+
+    @staticmethod
+    def choice(options):
+        return next((o for o in options if isinstance(o, str) and o.isalpha() and o.islower()), options[0])
+
+    @staticmethod
+    def randint(low: int, high: int) -> int:
+        return low
+
+
+_PLAIN = _Plain()
+
+
+def _as_offered(step: Choose, raw: str) -> str:
+    """A written line as the constraint offered it: without the spaces it ended with (those of them the line's
+    own text does not hold)."""
+    for cut in range(len(raw) - len(raw.rstrip(" ")), -1, -1):
+        line = raw[: len(raw) - cut] + "\n"
+        if step.kind_of(line):
+            return line
+    raise GuaranteeError(f"the line {raw!r} is not one the grammar offered")
+
+
+def sample_output(constraint: Constraint, rng: random.Random, budget: int = 10_000) -> str:
+    """A random output of a stage's grammar (every line sampled from the grammar offered)."""
+    def write(choose: Choose, remaining: int) -> tuple[str, int]:
+        text = choose.grammar.sample(rng)
+        return text, len(text) + (1 if text == "" else 0)
+
+    return run_constraint(constraint, write, len, budget)
+
+
+def accepts(constraint: Constraint, text: str, budget: int = 100_000) -> bool:
+    """Whether ``text`` is an output of the stage's grammar."""
+    rest = text
+
+    def write(choose: Choose, remaining: int) -> tuple[str, int]:
+        nonlocal rest
+        if rest == "":
+            line = ""
+        else:
+            cut = rest.find("\n")
+            line = rest if cut < 0 else rest[: cut + 1]
+        if not choose.grammar.matches(line):
+            raise _Rejected
+        rest = rest[len(line):]
+        return line, len(line) + 1
+
+    def force(forced: str) -> int:
+        nonlocal rest
+        if not rest.startswith(forced):
+            raise _Rejected
+        rest = rest[len(forced):]
+        return len(forced)
+
+    try:
+        run_constraint(constraint, write, force, budget)
+    except (_Rejected, BudgetError):
+        return False
+    return rest == ""
+
+
+class _Rejected(Exception):
+    pass

@@ -1,0 +1,75 @@
+"""A domain's prompt examples, checked as the planner will use them.
+
+The constraints force the parts of a stage's output that are facts (a coalition line's needs, an
+allocation's restated steps), so an example that states them otherwise teaches the model text it can
+never write. Each example must be in its stage's grammar for its own team, and an allocated one must
+reach SR 1 in its world (its floor plan in AI2-THOR, or the domain's site).
+"""
+
+from __future__ import annotations
+
+from ...domain import Domain
+from ...errors import SmartLLMError
+from ...executor import run_plan
+from ...plan_language import parse_plan
+from ...scoring import parse_goals, score_execution
+from ..constraints.coalition import CoalitionConstraint
+from ..constraints.feasibility import function_needs
+from ..constraints.plan import PlanConstraint
+from ..constraints.restated import RestatedAllocation, restated_bodies
+from ..constraints.world_check import WorldCheck
+from ..decoding.writer import accepts
+from .prompts import STAGES, load_examples
+from .scene_context import scene_objects, site_objects
+
+
+def check_examples(domain: Domain) -> tuple[int, list[str]]:
+    """How many examples the domain has, and every problem with them (each naming the example's file)."""
+    folder = domain.examples_dir()
+    try:
+        examples = load_examples(folder)
+    except (SmartLLMError, KeyError, TypeError) as exc:
+        return 0, [f"{folder}/examples.json: {exc}; each stage needs worked examples (see `domain new`)"]
+    problems = []
+    missing = [stage for stage in STAGES if not any(stage in e.stages for e in examples)]
+    if missing:
+        problems.append(f"{folder}/examples.json: no example for the {', '.join(missing)} stage(s)")
+    skills = domain.catalogue.skills
+    pickups = [s.name for s in skills.values() if s.action == "PickupObject"]
+    for ex in examples:
+        where = f"{folder}/decomposition/{ex.name}.py"
+        try:
+            scene = scene_objects(ex.floor_plan) if domain.is_ai2thor else site_objects(domain)
+            team = domain.catalogue.team(ex.robots)
+            plan = parse_plan(ex.decomposition, form="decomposed", skills=skills, scene_types=scene.types, name=where)
+        except SmartLLMError as exc:
+            problems.append(f"{where}: {exc}")
+            continue
+        world = WorldCheck(scene.floor_plan, skills, 8, site=scene.site)
+        if not accepts(PlanConstraint(scene, skills, world=world), ex.decomposition):
+            problems.append(f"{where}: not in the decomposition grammar (a step that fails on the site, a comment "
+                            "too long, a bare move that ends nothing?)")
+        names = [f.name for f in plan.functions]
+        if ex.coalition is not None:
+            needs = function_needs(plan, scene, pickups)
+            coalition = CoalitionConstraint(names, team, needs=[needs[n] for n in names])
+            if not accepts(coalition, ex.coalition):
+                problems.append(f"{folder}/coalition/{ex.name}.txt: not in the coalition grammar; each line states "
+                                f"its needs as the planner does (e.g. `# SubTask 1 ({names[0]}): {coalition.heads[0]}"
+                                "...`), reasons in words, and names a team that can do it")
+        if ex.allocation is not None:
+            where = f"{folder}/allocation/{ex.name}.py"
+            restated = RestatedAllocation(scene, skills, team=team, function_names=names,
+                                          bodies=restated_bodies(ex.decomposition, names),
+                                          world=WorldCheck(scene.floor_plan, skills, len(team), site=scene.site))
+            if not accepts(restated, ex.allocation):
+                problems.append(f"{where}: not in the allocation grammar (its steps and comments must be the "
+                                "decomposition's, with robots that can do them)")
+                continue
+            allocated = parse_plan(ex.allocation, form="allocated", skills=skills, team_size=len(team), name=where)
+            scores = score_execution(run_plan(allocated, ex.floor_plan, team, skills=skills, site=scene.site),
+                                     parse_goals(list(ex.goals), states=domain.states), trans=ex.trans,
+                                     max_trans=ex.max_trans)
+            if scores.SR != 1.0:
+                problems.append(f"{where}: scores SR {scores.SR}; an example must reach SR 1")
+    return len(examples), problems
