@@ -41,7 +41,8 @@ def list_tasks(
 @app.command("check")
 def check(
     tasks: Path | None = typer.Option(None, help="A task file (default: the domain's benchmark)."),
-    plans: Path | None = typer.Option(None, help="Reference plans folder (default: the domain's reference_plans)."),
+    plans: Path | None = typer.Option(None, help="Reference plans folder (default: the domain's "
+                                                 "benchmark/reference_plans)."),
     thor_build: Path | None = typer.Option(None, help="A Unity AI2-THOR executable (default: the stand-in)."),
     domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:

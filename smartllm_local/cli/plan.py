@@ -357,7 +357,7 @@ def benchmark_run(
     for s in chosen_seeds:  # every run folder is checked before the model loads
         folder = out if seeds is None else out / f"seed-{s}"
         manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
-                                Path(cat.path), dom.examples_dir())
+                                Path(cat.path), dom.prompts_dir())
         runs.append((s, RunStore(folder, manifest, restart=restart)))
     planners = [] if method == "reference" else options.planners(cat, dom)
     try:

@@ -16,7 +16,7 @@ output, never by running out of tokens mid-statement, for any model and any
 sampling settings. The plans' constraint is in :mod:`.plan_constraint`, the
 coalition's in :mod:`.coalition`.
 
-Output formats (the prompt examples under domains/household/examples/ follow them):
+Output formats (the prompt examples under domains/household/prompts/ follow them):
 
 - decomposition: summary lines ``# SubTask k: <what> (skills: A, B)``, an
   order line ``# <how they are ordered>``, a blank line, functions

@@ -27,7 +27,7 @@ from smartllm_local.tasks import load_tasks
 PATROL = load_domain("patrol")
 SCENE = site_objects(PATROL)
 SKILLS = PATROL.catalogue.skills
-EXAMPLES = load_examples(PATROL.folder / "examples")
+EXAMPLES = load_examples(PATROL.prompts_dir())
 
 
 def decomposer() -> PlanConstraint:
