@@ -2,10 +2,10 @@
 
 A domain is a folder::
 
-    DIR/domain.toml          the skills, robots and world (schema-checked)
-    DIR/examples/            the prompts' worked examples (laid out as household's)
-    DIR/tasks.jsonl          its benchmark tasks, then any other *.jsonl (optional)
-    DIR/reference_plans/     a plan per feasible task that scores SR = 1 (optional)
+    DIR/domain.toml                    the skills, robots and world (schema-checked)
+    DIR/prompts/                       the prompts' worked examples (laid out as household's)
+    DIR/benchmark/tasks.jsonl          its benchmark tasks, then any other *.jsonl (optional)
+    DIR/benchmark/reference_plans/     a plan per feasible task that scores SR = 1 (optional)
 
 Its world is AI2-THOR (``world = "ai2thor"``: tasks name iTHOR floor plans, each skill performs an
 AI2-THOR action on objects with the affordances its arguments name, a team pools mass to lift) or a
@@ -41,6 +41,10 @@ from .skills import Skill, SkillSet, thor_skill
 
 HOUSEHOLD = "household"
 DOMAIN_FILE = "domain.toml"
+PROMPTS = "prompts"  # the prompts' worked examples
+BENCHMARK = "benchmark"  # the task files and the reference plans
+TASKS_FILE = "tasks.jsonl"
+PLANS = "reference_plans"
 AI2THOR = "ai2thor"
 
 #: What a skill does in the site simulator, and the argument type it takes.
@@ -100,16 +104,23 @@ class Domain:
         """The goal states its tasks may ask for (AI2-THOR: the scorer's AI2-THOR states)."""
         return STATES if self.is_ai2thor else tuple(SITE_STATES)
 
+    def benchmark_dir(self) -> Path:
+        """Its benchmark: the task files and the reference plans."""
+        return self.folder / BENCHMARK
+
     def task_files(self) -> list[Path]:
-        """Its benchmark's task files: tasks.jsonl, then any other ``*.jsonl`` (household: its infeasible tasks)."""
-        others = sorted(p for p in self.folder.glob("*.jsonl") if p.name != "tasks.jsonl")
-        return [self.folder / "tasks.jsonl", *others]
+        """Its benchmark's task files: benchmark/tasks.jsonl, then any other ``benchmark/*.jsonl`` (household:
+        its infeasible tasks)."""
+        folder = self.benchmark_dir()
+        others = sorted(p for p in folder.glob("*.jsonl") if p.name != TASKS_FILE)
+        return [folder / TASKS_FILE, *others]
 
     def plans_dir(self) -> Path:
-        return self.folder / "reference_plans"
+        return self.benchmark_dir() / PLANS
 
-    def examples_dir(self) -> Path:
-        return self.folder / "examples"
+    def prompts_dir(self) -> Path:
+        """The prompts' worked examples (``examples.json`` and a folder per stage)."""
+        return self.folder / PROMPTS
 
     def place(self, name: str) -> Place | None:
         """The site entry a plan names (case-insensitively), or None."""
@@ -141,6 +152,7 @@ def load_domain(name_or_dir: str | Path | None = None, *, catalogue: str | Path 
     name = str(name_or_dir) if name_or_dir is not None else HOUSEHOLD
     folder = Path(name)
     if (folder / DOMAIN_FILE).is_file():
+        check_layout(folder)
         domain = read_domain_file(folder / DOMAIN_FILE)
     elif name in builtin_domains():
         domain = _builtin(name)
@@ -156,6 +168,20 @@ def load_domain(name_or_dir: str | Path | None = None, *, catalogue: str | Path 
         raise DomainError(f"--catalogue gives an AI2-THOR domain other robots; the {domain.name} domain's robots "
                           f"are in its {DOMAIN_FILE}")
     return dataclasses.replace(domain, catalogue=load_catalogue(catalogue))
+
+
+def check_layout(folder: Path) -> None:
+    """Refuse a domain folder in the layout before prompts/ and benchmark/ (examples/, tasks.jsonl and
+    reference_plans/ beside domain.toml): read as it is, it would silently have no prompts and no tasks."""
+    moves = [(folder / "examples", folder / PROMPTS)] if (folder / "examples").is_dir() else []
+    moves += [(path, folder / BENCHMARK / path.name) for path in sorted(folder.glob("*.jsonl")) if path.is_file()]
+    if (folder / PLANS).is_dir():
+        moves.append((folder / PLANS, folder / BENCHMARK / PLANS))
+    if moves:
+        what = ", ".join(f"{old}{'/' if old.is_dir() else ''} to {new}{'/' if old.is_dir() else ''}"
+                         for old, new in moves)
+        raise DomainError(f"{folder} has the old domain layout: move {what} (a domain keeps its prompts' worked "
+                          f"examples in {PROMPTS}/, its task files and reference plans in {BENCHMARK}/)")
 
 
 @cache

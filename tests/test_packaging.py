@@ -16,12 +16,15 @@ def test_the_wheel_holds_the_domains(tmp_path):
     wheel = next(tmp_path.glob("smartllm_local-*.whl"))
     names = set(zipfile.ZipFile(wheel).namelist())
     household = "smartllm_local/_data/domains/household"
-    for required in (f"{household}/domain.toml", f"{household}/tasks.jsonl", f"{household}/infeasible.jsonl",
-                     f"{household}/reference_plans/kitchen-01.py", f"{household}/examples/examples.json",
-                     f"{household}/examples/decomposition/toast.py", "smartllm_local/_data/domains/task.schema.json",
+    for required in (f"{household}/domain.toml", f"{household}/benchmark/tasks.jsonl",
+                     f"{household}/benchmark/infeasible.jsonl", f"{household}/benchmark/reference_plans/kitchen-01.py",
+                     f"{household}/prompts/examples.json", f"{household}/prompts/decomposition/toast.py",
+                     "smartllm_local/_data/domains/task.schema.json",
                      "smartllm_local/_data/domains/patrol/domain.toml",
-                     "smartllm_local/_data/domains/patrol/reference_plans/patrol-01.py",
+                     "smartllm_local/_data/domains/patrol/benchmark/reference_plans/patrol-01.py",
                      "smartllm_local/_data/domains/_starter/domain.toml",
+                     "smartllm_local/_data/domains/_starter/benchmark/tasks.jsonl",
+                     "smartllm_local/_data/domains/_starter/prompts/examples.json",
                      "smartllm_local/world/thor_server.py"):
         assert required in names, required
     entry_points = next(n for n in names if n.endswith("entry_points.txt"))

@@ -1,6 +1,6 @@
 """Checking the benchmark: run every reference plan and sum up per category.
 
-A feasible task's reference plan (``domains/<domain>/reference_plans/<id>.py``) is the
+A feasible task's reference plan (``domains/<domain>/benchmark/reference_plans/<id>.py``) is the
 proof that the task can be done as written, by that team, in the world the
 planners are scored in: it must reach SR = 1 with every action succeeding
 (Exe = 1). An infeasible task has no plan; what can be checked without running

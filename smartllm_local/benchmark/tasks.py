@@ -139,7 +139,7 @@ def check_task(data: Any, catalogue: Catalogue, where: str,
 
 def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
                catalogue: Catalogue | None = None, domain: Domain | None = None) -> list[Task]:
-    """Read task files (default: the domain's benchmark, household's by default) and check every line.
+    """Read task files (default: the domain's benchmark/*.jsonl, household's by default) and check every line.
 
     Raises:
         TaskFileError: listing every bad line as ``file:line: problem``.

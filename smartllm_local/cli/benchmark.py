@@ -65,7 +65,8 @@ def list_tasks(
 @app.command("check")
 def check(
     tasks: Path | None = typer.Option(None, help="A task file (default: the domain's benchmark)."),
-    plans: Path | None = typer.Option(None, help="Reference plans folder (default: the domain's reference_plans)."),
+    plans: Path | None = typer.Option(None, help="Reference plans folder (default: the domain's "
+                                                 "benchmark/reference_plans)."),
     thor_build: Path | None = typer.Option(None, help="A Unity AI2-THOR executable (default: the stand-in)."),
     domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:
@@ -157,7 +158,7 @@ def run(
     for s in chosen_seeds:  # every run folder is checked before the model loads
         folder = out if seeds is None else out / f"seed-{s}"
         manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
-                                Path(dom.catalogue.path), dom.examples_dir())
+                                Path(dom.catalogue.path), dom.prompts_dir())
         runs.append((s, RunStore(folder, manifest, restart=restart)))
     _run_seeds(runs, chosen, options, method, dom, thor_build, labelled=seeds is not None)
     per_run = [[lines[t.id] for t in chosen if t.id in lines] for lines in (store.results() for _, store in runs)]

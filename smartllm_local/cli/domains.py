@@ -9,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from ..domain import DOMAIN_FILE, builtin_domains, load_domain, starter_domain
+from ..domain import BENCHMARK, DOMAIN_FILE, PROMPTS, builtin_domains, load_domain, starter_domain
 from ..errors import UserError
 
 app = typer.Typer(help="Domains: your own robots, skills and site (see docs/domains.md).",
@@ -48,8 +48,8 @@ def new(folder: Path = typer.Argument(..., help="The folder to create (it must n
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
-    typer.echo(f"wrote {folder}/{DOMAIN_FILE}, examples/, its tasks and reference_plans/: edit them, then run "
-               f"`smartllm-local domain check {folder}`")
+    typer.echo(f"wrote {folder}/{DOMAIN_FILE}, {PROMPTS}/ (prompt examples) and {BENCHMARK}/ (its tasks and "
+               f"reference_plans/): edit them, then run `smartllm-local domain check {folder}`")
 
 
 @app.command("check")
@@ -70,7 +70,7 @@ def check(domain: str = typer.Argument(..., help="A domain folder, or a built-in
                f"{count} prompt examples in their grammars")
     files = [f for f in loaded.task_files() if f.is_file()]
     if not files:
-        typer.echo(f"no tasks: add {loaded.folder}/tasks.jsonl to benchmark it")
+        typer.echo(f"no tasks: add {loaded.task_files()[0]} to benchmark it")
         return
     results = check_reference_plans(load_tasks(files, domain=loaded), domain=loaded)
     typer.echo(category_table(results))

@@ -183,100 +183,134 @@ class World(Protocol):
 def run(plan: Plan, world: World, team: Sequence[Robot], *, skills: SkillSet = DEFAULT_SKILL_SET,
         max_ticks: int = DEFAULT_MAX_TICKS) -> Execution:
     """Run a checked allocated plan (see :func:`check_team`) with ``world`` carrying out its steps."""
-    team_size = len(team)
-    trace: list[TraceEntry] = []
-    pending: list[_Task] = []
-    running: list[_Task] = []
-    claimed: set[int] = set()
-    starts: list[tuple[str, int]] = []
-    begin_ticks: set[int] = set()
-    threads: dict[str, tuple[Function, Env]] = {}
-    launched: dict[str, _Task] = {}
+    return _Run(plan, world, team, skills).until_done(max_ticks)
 
-    def launch(fn: Function, env: Env) -> _Task:
-        task = _Task(fn.name, _expand(plan, fn, env, team_size), _robots_used(plan, fn, env, team_size))
+
+Acting = list[tuple[str, SkillCall, tuple[int, ...]]]  # one tick's (sub-task, skill call, team slots)
+
+
+class _Run:
+    """One run's state: the main flow, where it waits, the sub-tasks waiting for their robots and those
+    working, the robots they hold, and what the run has recorded so far."""
+
+    def __init__(self, plan: Plan, world: World, team: Sequence[Robot], skills: SkillSet):
+        self.plan, self.world, self.team, self.skills = plan, world, team, skills
+        self.team_size = len(team)
+        self.trace: list[TraceEntry] = []
+        self.pending: list[_Task] = []  # launched, waiting for their robots
+        self.running: list[_Task] = []  # holding their robots, one step a tick
+        self.claimed: set[int] = set()
+        self.starts: list[tuple[str, int]] = []
+        self.begin_ticks: set[int] = set()
+        self.threads: dict[str, tuple[Function, Env]] = {}
+        self.launched: dict[str, _Task] = {}
+        self.tick = 0
+        self.main = self._main_flow()
+        self.waiting_for: _Task | int | None = None
+        self.main_done = False
+
+    def until_done(self, max_ticks: int) -> Execution:
+        """Tick until the main flow and every sub-task it launched are done, or ``max_ticks`` have passed
+        (then the execution is marked truncated)."""
+        truncated = False
+        self._advance_main()
+        while not (self.main_done and not self.pending and not self.running):
+            if self.tick >= max_ticks:
+                truncated = True
+                break
+            self._admit()
+            self._perform(self._step())
+            self.tick += 1
+            if isinstance(self.waiting_for, int):
+                self.waiting_for -= 1
+            self._advance_main()
+        self.world.release()
+        return Execution(
+            trace=self.trace,
+            transitions=max(0, len(self.begin_ticks) - 1),
+            ticks=self.tick,
+            starts=self.starts,
+            final_objects=self.world.objects,
+            truncated=truncated,
+        )
+
+    def _launch(self, fn: Function, env: Env) -> _Task:
+        """Queue a sub-task; it starts working at the next tick whose robots are all free."""
+        task = _Task(fn.name, _expand(self.plan, fn, env, self.team_size),
+                     _robots_used(self.plan, fn, env, self.team_size))
         task.upcoming = next(task.steps, _END)
-        pending.append(task)
+        self.pending.append(task)
         return task
 
-    def main_flow() -> Iterator[_Task | int]:
-        """Yields what the main flow waits for: a task, or a number of idle ticks."""
+    def _main_flow(self) -> Iterator[_Task | int]:
+        """The plan's top level as a generator, so that it pauses where the plan waits: it yields what the
+        main flow waits for, a sub-task (a direct call or a join) or a number of idle ticks (a sleep)."""
+        plan, team_size = self.plan, self.team_size
         for step in plan.main:
             if isinstance(step, NewThread):
                 fn = plan.by_name[step.function]
-                threads[step.var] = (fn, bind(fn, step.args, {}, team_size))
+                self.threads[step.var] = (fn, bind(fn, step.args, {}, team_size))
             elif isinstance(step, Start):
-                fn, env = threads[step.var]
-                launched[step.var] = launch(fn, env)
+                fn, env = self.threads[step.var]
+                self.launched[step.var] = self._launch(fn, env)
             elif isinstance(step, Join):
-                yield launched[step.var]
+                yield self.launched[step.var]
             elif isinstance(step, Call):
                 fn = plan.by_name[step.function]
-                yield launch(fn, bind(fn, step.args, {}, team_size))
+                yield self._launch(fn, bind(fn, step.args, {}, team_size))
             elif isinstance(step, Sleep):
                 yield math.ceil(step.seconds)
 
-    tick = 0
-    main = main_flow()
-    waiting_for: _Task | int | None = None
-    main_done = False
-    truncated = False
-
-    def advance_main() -> None:
-        nonlocal waiting_for, main_done
-        while not main_done:
-            if isinstance(waiting_for, _Task) and not waiting_for.done:
+    def _advance_main(self) -> None:
+        """Run the main flow on until it waits for a sub-task not yet done or for idle ticks, or ends: what it
+        launches in between starts together at the next tick."""
+        while not self.main_done:
+            if isinstance(self.waiting_for, _Task) and not self.waiting_for.done:
                 return
-            if isinstance(waiting_for, int) and waiting_for > 0:
+            if isinstance(self.waiting_for, int) and self.waiting_for > 0:
                 return
             try:
-                waiting_for = next(main)
+                self.waiting_for = next(self.main)
             except StopIteration:
-                main_done = True
+                self.main_done = True
 
-    advance_main()
-    while not (main_done and not pending and not running):
-        if tick >= max_ticks:
-            truncated = True
-            break
-        for task in list(pending):
+    def _admit(self) -> None:
+        """Start, in launch order, each waiting sub-task whose robots no working one holds (a sub-task with no
+        steps is done at once and never begins)."""
+        for task in list(self.pending):
             if task.upcoming is _END:
-                pending.remove(task)
+                self.pending.remove(task)
                 task.done = True
-            elif not task.robots & claimed:
-                claimed.update(task.robots)
-                pending.remove(task)
-                running.append(task)
-        acting: list[tuple[str, SkillCall, tuple[int, ...]]] = []
-        for task in list(running):
+            elif not task.robots & self.claimed:
+                self.claimed.update(task.robots)
+                self.pending.remove(task)
+                self.running.append(task)
+
+    def _step(self) -> Acting:
+        """Advance each working sub-task by one step, in launch order; one that has just taken its last step
+        frees its robots (for the next tick). Returns the tick's skill calls (idle seconds make none)."""
+        acting: Acting = []
+        for task in list(self.running):
             step = task.advance()
             if task.upcoming is _END:
                 task.done = True
-                running.remove(task)
-                claimed.difference_update(task.robots)
-            if task.began_at is None:
-                task.began_at = tick
-                begin_ticks.add(tick)
-                starts.append((task.name, tick))
+                self.running.remove(task)
+                self.claimed.difference_update(task.robots)
+            if task.began_at is None:  # its first step: it begins working now (a transition, if the first)
+                task.began_at = self.tick
+                self.begin_ticks.add(self.tick)
+                self.starts.append((task.name, self.tick))
             if step is not None:
                 acting.append((task.name, *step))
-        outcomes = world.perform_all([(skills[call.skill], call.objects, members) for _, call, members in acting])
+        return acting
+
+    def _perform(self, acting: Acting) -> None:
+        """Have the world carry out the tick's calls together, and trace each with its outcome."""
+        outcomes = self.world.perform_all([(self.skills[call.skill], call.objects, members)
+                                           for _, call, members in acting])
         for (name, call, members), outcome in zip(acting, outcomes):
-            trace.append(TraceEntry(
-                tick=tick, subtask=name, robots=[team[m].id for m in members], skill=call.skill,
+            self.trace.append(TraceEntry(
+                tick=self.tick, subtask=name, robots=[self.team[m].id for m in members], skill=call.skill,
                 objects=list(call.objects), action=outcome.action, object_id=outcome.object_id,
                 success=outcome.success, error=outcome.error,
             ))
-        tick += 1
-        if isinstance(waiting_for, int):
-            waiting_for -= 1
-        advance_main()
-    world.release()
-    return Execution(
-        trace=trace,
-        transitions=max(0, len(begin_ticks) - 1),
-        ticks=tick,
-        starts=starts,
-        final_objects=world.objects,
-        truncated=truncated,
-    )

@@ -125,7 +125,7 @@ class Planner:
         self.config = config
         self.site = site
         self.examples = list(examples) if examples is not None else load_examples(
-            site.examples_dir() if site is not None else None)
+            site.prompts_dir() if site is not None else None)
         self.chat, self.chat_status = chat_format(backend, config.chat_template)
         self._shared: bool | None = None  # whether coalition and allocation share a prompt (see _shares_context)
 

@@ -58,7 +58,7 @@ def test_check_fails_on_a_bad_reference_plan(tmp_path, broken):
     from smartllm_local.domain import load_domain
 
     tasks = tmp_path / "tasks.jsonl"
-    rows = [r for r in (load_domain().folder / "tasks.jsonl").read_text().splitlines()
+    rows = [r for r in load_domain().task_files()[0].read_text().splitlines()
             if '"id": "living-01"' in r or '"id": "bathroom-01"' in r]
     tasks.write_text("\n".join(rows) + "\n")
     plans = tmp_path / "plans"

@@ -80,18 +80,40 @@ def test_benchmark_list_and_check_take_the_domain(tmp_path):
 def test_domain_new_writes_a_domain_that_checks_and_runs(tmp_path):
     made = cli("domain", "new", "mine", cwd=tmp_path)
     assert made.returncode == 0, made.stderr
-    assert sorted(p.name for p in (tmp_path / "mine").iterdir()) == ["domain.toml", "examples", "reference_plans",
-                                                                     "tasks.jsonl"]
+    assert sorted(p.name for p in (tmp_path / "mine").iterdir()) == ["benchmark", "domain.toml", "prompts"]
+    assert sorted(p.name for p in (tmp_path / "mine" / "benchmark").iterdir()) == ["reference_plans", "tasks.jsonl"]
     assert [p.name for p in tmp_path.iterdir()] == ["mine"]  # nothing left of the staging folder
     checked = cli("domain", "check", "mine", cwd=tmp_path)
     assert checked.returncode == 0, checked.stdout + checked.stderr
     assert checked.stdout.startswith("my_site: 3 skills, 2 robots, 4 site entries on yard, 2 prompt examples in "
                                      "their grammars")
     assert "1/1" in checked.stdout
-    ran = cli("execute", "mine/reference_plans/yard-01.py", "--domain", "mine", "--task", "yard-01", cwd=tmp_path)
+    ran = cli("execute", "mine/benchmark/reference_plans/yard-01.py", "--domain", "mine", "--task", "yard-01",
+              cwd=tmp_path)
     assert ran.returncode == 0 and "SR 1.00" in ran.stdout
     again = cli("domain", "new", "mine", cwd=tmp_path)
     assert_one_line_error(again, "mine already exists")
+
+
+def test_a_domain_in_the_old_layout_is_told_what_to_move(tmp_path):
+    """examples/, tasks.jsonl and reference_plans/ beside domain.toml (before prompts/ and benchmark/): an
+    error naming each move, not a domain that silently has no prompts and no tasks."""
+    cli("domain", "new", "mine", cwd=tmp_path)
+    mine = tmp_path / "mine"
+    (mine / "prompts").rename(mine / "examples")
+    (mine / "benchmark" / "tasks.jsonl").rename(mine / "tasks.jsonl")
+    (mine / "benchmark" / "reference_plans").rename(mine / "reference_plans")
+    (mine / "benchmark").rmdir()
+    result = cli("domain", "check", "mine", cwd=tmp_path)
+    assert_one_line_error(result, "error: mine has the old domain layout: move mine/examples/ to mine/prompts/, "
+                                  "mine/tasks.jsonl to mine/benchmark/tasks.jsonl, mine/reference_plans/ to "
+                                  "mine/benchmark/reference_plans/")
+    listed = cli("benchmark", "list", "--domain", "mine", cwd=tmp_path)  # loading it for any command says the same
+    assert_one_line_error(listed, "mine has the old domain layout: move mine/examples/ to mine/prompts/")
+    (mine / "examples").rename(mine / "prompts")  # half moved: what is left is named
+    assert_one_line_error(cli("domain", "check", "mine", cwd=tmp_path),
+                          "mine has the old domain layout: move mine/tasks.jsonl to mine/benchmark/tasks.jsonl, "
+                          "mine/reference_plans/ to mine/benchmark/reference_plans/ (")
 
 
 def test_domain_check_reports_a_broken_domain_at_its_line(tmp_path):
@@ -108,7 +130,7 @@ def test_domain_check_reports_a_broken_domain_at_its_line(tmp_path):
 
 def test_domain_check_fails_a_reference_plan_that_falls_short(tmp_path):
     cli("domain", "new", "mine", cwd=tmp_path)
-    plan = tmp_path / "mine" / "reference_plans" / "yard-01.py"
+    plan = tmp_path / "mine" / "benchmark" / "reference_plans" / "yard-01.py"
     plan.write_text(plan.read_text().replace("GoToLocation(robot_list[0], 'ShedDoor')",
                                              "GoToLocation(robot_list[0], 'Chimney')"))
     result = cli("domain", "check", "mine", cwd=tmp_path)
@@ -162,14 +184,14 @@ def test_dispatch_hands_a_patrol_plan_to_the_lab_s_functions(tmp_path):
 
 def test_domain_check_names_an_example_outside_its_grammar(tmp_path):
     cli("domain", "new", "mine", cwd=tmp_path)
-    coalition = tmp_path / "mine" / "examples" / "coalition" / "door_and_yard.txt"
+    coalition = tmp_path / "mine" / "prompts" / "coalition" / "door_and_yard.txt"
     coalition.write_text(coalition.read_text().replace("pooling 800 visibility_area", "pooling 80 visibility_area"))
     result = cli("domain", "check", "mine", cwd=tmp_path)
-    assert_one_line_error(result, "mine/examples/coalition/door_and_yard.txt: not in the coalition grammar; each "
+    assert_one_line_error(result, "mine/prompts/coalition/door_and_yard.txt: not in the coalition grammar; each "
                                   "line states its needs as the planner does")
-    (tmp_path / "mine" / "examples" / "examples.json").unlink()
+    (tmp_path / "mine" / "prompts" / "examples.json").unlink()
     result = cli("domain", "check", "mine", cwd=tmp_path)
-    assert_one_line_error(result, "mine/examples/examples.json: cannot read the prompt examples")
+    assert_one_line_error(result, "mine/prompts/examples.json: cannot read the prompt examples")
 
 
 def test_an_ai2thor_domain_of_your_own_runs_its_own_skill_names(tmp_path):
@@ -177,7 +199,7 @@ def test_an_ai2thor_domain_of_your_own_runs_its_own_skill_names(tmp_path):
     AI2-THOR action, given to one robot, is checked, validated and executed as that action."""
     made = cli("domain", "new", "lab", "--from", "household", cwd=tmp_path)
     assert made.returncode == 0, made.stderr
-    assert (tmp_path / "lab" / "reference_plans" / "kitchen-01.py").is_file()
+    assert (tmp_path / "lab" / "benchmark" / "reference_plans" / "kitchen-01.py").is_file()
     toml = tmp_path / "lab" / "domain.toml"
     text = toml.read_text().replace('world = "ai2thor"\n',
                                     'world = "ai2thor"\n\n[skills.Grab]\naction = "PickupObject"\n'

@@ -27,7 +27,7 @@ from smartllm_local.scoring import parse_goals, score_execution
 PATROL = load_domain("patrol")
 SCENE = site_objects(PATROL)
 SKILLS = PATROL.catalogue.skills
-EXAMPLES = load_examples(PATROL.folder / "examples")
+EXAMPLES = load_examples(PATROL.prompts_dir())
 
 
 def decomposer() -> PlanConstraint:

@@ -1,4 +1,4 @@
-"""Household's worked examples (domains/household/examples/): written as the paper's stages write, in the
+"""Household's worked examples (domains/household/prompts/): written as the paper's stages write, in the
 grammars the planner uses, and correct plans."""
 
 from __future__ import annotations

@@ -54,8 +54,8 @@ def test_a_unit_repeated_to_three_copies_and_nine_characters_is_found_after_any_
 
 
 def _hand_written() -> list[Path]:
-    files = [p for p in DOMAINS.glob("*/examples/*/*") if p.suffix in (".py", ".txt")]
-    return files + list(DOMAINS.glob("*/reference_plans/*.py"))
+    files = [p for p in DOMAINS.glob("*/prompts/*/*") if p.suffix in (".py", ".txt")]
+    return files + list(DOMAINS.glob("*/benchmark/reference_plans/*.py"))
 
 
 def test_no_line_any_domain_writes_by_hand_is_ever_a_loop():

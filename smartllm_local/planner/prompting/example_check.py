@@ -25,7 +25,7 @@ from .scene_context import scene_objects, site_objects
 
 def check_examples(domain: Domain) -> tuple[int, list[str]]:
     """How many examples the domain has, and every problem with them (each naming the example's file)."""
-    folder = domain.examples_dir()
+    folder = domain.prompts_dir()
     try:
         examples = load_examples(folder)
     except (SmartLLMError, KeyError, TypeError) as exc:

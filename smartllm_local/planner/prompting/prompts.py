@@ -1,4 +1,4 @@
-"""The stages' prompts, assembled from the worked examples under a domain's examples/ folder.
+"""The stages' prompts, assembled from the worked examples in a domain's prompts/ folder.
 
 Prompts are Python source, as in SMART-LLM: the skills as an import line,
 worked examples (each a task description followed by its plan), then the new
@@ -70,7 +70,7 @@ class PromptOptions:
 
 def load_examples(folder: Path | None = None) -> list[Example]:
     """The worked examples in ``folder`` (default: the household domain's), in the order examples.json lists them."""
-    folder = folder or load_domain().examples_dir()
+    folder = folder or load_domain().prompts_dir()
     try:
         meta = json.loads((folder / "examples.json").read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
