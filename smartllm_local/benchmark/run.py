@@ -152,12 +152,40 @@ def run_benchmark(
             _restore(store, catalogue, outcome, site, methods[0].stages())
         if _goes_on(outcome):
             live.append(outcome)
+    counts = _Counts(len(methods[0].stages()), len(outcomes), progress)
+    _plan_all(outcomes, live, methods, store, counts)
+    _execute_all(outcomes, catalogue, site, build, out, store, counts)
+    if out is not None:
+        lines = store.results() if store is not None else {o.task.id: o.as_json() for o in outcomes}
+        if store is None:
+            write_atomic(out / "results.jsonl", "".join(json.dumps(line) + "\n" for line in lines.values()))
+        write_atomic(out / "summary.txt", summary_table([lines[t.id] for t in tasks if t.id in lines]) + "\n")
+    return outcomes
 
-    stages = methods[0].stages()
-    total = (len(stages) + 1) * len(outcomes)  # a unit per stage and per execution of each task
-    scored: list[TaskOutcome] = []
+
+@dataclass
+class _Counts:
+    """A run's progress: a unit per stage and per execution of each task, and the tasks scored so far."""
+
+    stages: int
+    tasks: int
+    report: Callable[[Progress], None]
+    scored: list[TaskOutcome] = field(default_factory=list)
+
+    @property
+    def total(self) -> int:
+        return (self.stages + 1) * self.tasks
+
+    def step(self, stage: str, task_id: str, done: int) -> None:
+        self.report(Progress(stage, task_id, done, self.total, self.scored))
+
+
+def _plan_all(outcomes: list[TaskOutcome], live: list[TaskOutcome], methods: Sequence[Method],
+              store: RunStore | None, counts: _Counts) -> None:
+    """Take the live tasks through the method's stages, a pass of stages at a time, spread over the workers;
+    a failure costs its task (recorded as its error), and each finished stage is saved at once."""
     lock = threading.Lock()
-    for group in _passes(stages):
+    for group in _passes(methods[0].stages()):
         # Where each stage's progress count starts: after the tasks done before, or out of the run.
         order = {number: itertools.count(len(outcomes) - sum(not _has(o, stage.name) for o in live))
                  for number, stage in group}
@@ -171,8 +199,7 @@ def run_benchmark(
                 if not _goes_on(outcome):
                     return
                 with lock:
-                    progress(Progress(stage.name, outcome.task.id, number * len(outcomes) + next(order[number]),
-                                      total, scored))
+                    counts.step(stage.name, outcome.task.id, number * len(outcomes) + next(order[number]))
                 try:
                     worker.stages()[number].run(outcome.task, result)
                 except SmartLLMError as exc:
@@ -186,48 +213,53 @@ def run_benchmark(
         _spread([o for o in live if not all(_has(o, stage.name) for _, stage in group)], methods, run)
         live = [o for o in live if _goes_on(o)]
 
+
+def _execute_all(outcomes: list[TaskOutcome], catalogue: Catalogue, site: Domain | None, build: str | None,
+                 out: Path | None, store: RunStore | None, counts: _Counts) -> None:
+    """Execute and score every planned task on one Controller (a fresh one after a failure leaves it in an
+    unknown state), writing each task's artifacts and results line as soon as it is scored."""
     controller = None
     try:
         for k, outcome in enumerate(outcomes):
             result = outcome.result
             assert result is not None
-            progress(Progress("execution", outcome.task.id, len(stages) * len(outcomes) + k, total, scored))
+            counts.step("execution", outcome.task.id, counts.stages * len(outcomes) + k)
             Planner.conclude(result)
             if not outcome.error and result.error:
                 outcome.error = result.error
             started = time.perf_counter()
             if outcome.task.feasible and result.plan is not None and not outcome.error:
-                try:
-                    if controller is None and site is None:
-                        controller = open_controller(outcome.task.floor_plan, len(outcome.task.robots), build=build)
-                    scores = execute_and_score(
-                        result, outcome.task.goals, catalogue, trans=outcome.task.trans,
-                        max_trans=outcome.task.max_trans, controller=controller, site=site)
-                    outcome.scores = scores.with_speed(reference_ticks(outcome.task, catalogue, controller, site=site))
-                except SmartLLMError as exc:
-                    outcome.error = f"execution: {exc}"
-                except Exception as exc:
-                    outcome.error = f"execution: {type(exc).__name__}: {exc}"
-                    if controller is not None:  # in an unknown state: the next task gets a fresh one
-                        controller.stop()
-                        controller = None
+                controller = _execute(outcome, catalogue, site, build, controller)
             outcome.seconds = time.perf_counter() - started + sum(r.seconds for r in result.stages)
             if out is not None:
                 write_artifacts(result, out / outcome.task.id, {"outcome": outcome.as_json()})
             if store is not None:
                 store.append_result(outcome.as_json())
-            scored.append(outcome)
+            counts.scored.append(outcome)
         if outcomes:
-            progress(Progress("done", "", total, total, scored))
+            counts.step("done", "", counts.total)
     finally:
         if controller is not None:
             controller.stop()
-    if out is not None:
-        lines = store.results() if store is not None else {o.task.id: o.as_json() for o in outcomes}
-        if store is None:
-            write_atomic(out / "results.jsonl", "".join(json.dumps(line) + "\n" for line in lines.values()))
-        write_atomic(out / "summary.txt", summary_table([lines[t.id] for t in tasks if t.id in lines]) + "\n")
-    return outcomes
+
+
+def _execute(outcome: TaskOutcome, catalogue: Catalogue, site: Domain | None, build: str | None,
+             controller: Any) -> Any:
+    """Execute and score one task's plan; the Controller to go on with (None after one failed oddly)."""
+    try:
+        if controller is None and site is None:
+            controller = open_controller(outcome.task.floor_plan, len(outcome.task.robots), build=build)
+        scores = execute_and_score(outcome.result, outcome.task.goals, catalogue, trans=outcome.task.trans,
+                                   max_trans=outcome.task.max_trans, controller=controller, site=site)
+        outcome.scores = scores.with_speed(reference_ticks(outcome.task, catalogue, controller, site=site))
+    except SmartLLMError as exc:
+        outcome.error = f"execution: {exc}"
+    except Exception as exc:
+        outcome.error = f"execution: {type(exc).__name__}: {exc}"
+        if controller is not None:  # in an unknown state: the next task gets a fresh one
+            controller.stop()
+            controller = None
+    return controller
 
 
 def _spread(batch: Sequence[TaskOutcome], workers: Sequence[Method],

@@ -18,7 +18,7 @@ from ..domain import Domain
 from ..errors import UserError
 from ..planner.backends import BACKENDS, Backend, LoopGuard, Sampling, check_server_options, load_backends
 from ..planner.backends.prefix_cache import open_store
-from ..planner.models import DEFAULT_MODEL, EMBEDDED, default_model
+from ..planner.models import DEFAULT_MODEL, EMBEDDED, WITHOUT_SUMMARY, default_model, summary_for
 from ..planner.pipeline import Planner, PlannerConfig
 from ..planner.prompting.chat import CHAT_TEMPLATE_MODES, mode_for
 from ..planner.prompting.prompts import PromptOptions
@@ -37,7 +37,7 @@ class ModelOptions:
 
     def __init__(self, *, model: str | None = None, backend: str = "llamacpp", n_ctx: int = 8192,
                  threads: int | None = None, n_gpu_layers: int = 0, seed: int = 0, temperature: float = 0.0,
-                 no_comments: bool = False, no_summary: bool = False, no_coalition: bool = False,
+                 no_comments: bool = False, summary: bool | None = None, no_coalition: bool = False,
                  no_grammar: bool = False, free_teams: bool = False, chat_template: str = "auto",
                  free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None,
                  endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None,
@@ -50,7 +50,8 @@ class ModelOptions:
             raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
         if n_ctx < 512:
             raise UserError("--n-ctx must be at least 512 tokens")
-        chat_template = mode_for(model if backend == "server" else model or default_model(), chat_template)
+        known = model if backend == "server" else model or default_model()
+        chat_template = mode_for(known, chat_template)
         self.endpoints = [e.strip() for e in endpoint.split(",") if e.strip()] if endpoint else []
         check_server_options(backend, self.endpoints, workers)
         if server_timeout is not None and not (math.isfinite(server_timeout) and server_timeout > 0):
@@ -66,7 +67,8 @@ class ModelOptions:
                               aligned=not no_token_alignment),
             grammar=not no_grammar,
             free_teams=free_teams,
-            prompts=PromptOptions(comments=not no_comments, summary=not no_summary, coalition=not no_coalition),
+            prompts=PromptOptions(comments=not no_comments, summary=summary_for(known, summary),
+                                  coalition=not no_coalition),
             chat_template=chat_template,
             restate=not free_allocation,
             world_check=not no_world_check,
@@ -118,7 +120,10 @@ _GPU = typer.Option(0, "--n-gpu-layers", help="Layers to offload to a GPU (needs
 _SEED = typer.Option(0, help="Sampling seed.")
 _TEMPERATURE = typer.Option(0.0, help="0 is greedy decoding.")
 _NO_COMMENTS = typer.Option(False, "--no-comments", help="Ablation: examples without comments.")
-_NO_SUMMARY = typer.Option(False, "--no-summary", help="Ablation: decompositions without the summary.")
+_SUMMARY = typer.Option(None, "--summary/--no-summary", help=(
+    "Decompositions that start by listing the sub-tasks (# SubTask k: ...), as the paper's prompts do, or not "
+    f"(an ablation). Default: with it, but for the embedded models measured better without it: "
+    f"{', '.join(sorted(WITHOUT_SUMMARY))}."), show_default=False)
 _NO_COALITION = typer.Option(False, "--no-coalition", help="Ablation: skip coalition formation.")
 _NO_GRAMMAR = typer.Option(False, "--no-grammar", help="Generate freely (for comparison); the output may be invalid.")
 _FREE_TEAMS = typer.Option(False, "--free-teams", help="Let the model pick any team and refuse at will, rather than "
@@ -157,7 +162,7 @@ MODEL_PARAMETERS = [
         ("model", str | None, _MODEL), ("backend", str, _BACKEND), ("n_ctx", int, _N_CTX),
         ("threads", int | None, _THREADS), ("n_gpu_layers", int, _GPU), ("seed", int, _SEED),
         ("temperature", float, _TEMPERATURE), ("no_comments", bool, _NO_COMMENTS),
-        ("no_summary", bool, _NO_SUMMARY), ("no_coalition", bool, _NO_COALITION),
+        ("summary", bool | None, _SUMMARY), ("no_coalition", bool, _NO_COALITION),
         ("no_grammar", bool, _NO_GRAMMAR), ("free_teams", bool, _FREE_TEAMS),
         ("chat_template", str, _CHAT_TEMPLATE), ("free_allocation", bool, _FREE_ALLOCATION),
         ("no_world_check", bool, _NO_WORLD_CHECK), ("no_loop_guard", bool, _NO_LOOP_GUARD),

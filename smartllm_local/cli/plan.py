@@ -26,7 +26,7 @@ from .options import CATALOGUE, DOMAIN, TASKS, THOR_BUILD, ModelOptions, model_o
 
 
 @model_options("model", "backend", "n_ctx", "threads", "n_gpu_layers", "seed", "temperature", "no_comments",
-               "no_summary", "no_coalition", "no_grammar", "free_teams", "chat_template", "free_allocation",
+               "summary", "no_coalition", "no_grammar", "free_teams", "chat_template", "free_allocation",
                "no_world_check", "no_loop_guard", "no_token_alignment", "prefix_cache", "endpoint",
                "server_timeout")
 def plan_command(

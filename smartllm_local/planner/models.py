@@ -146,7 +146,17 @@ DEFAULT_MODEL = "qwen2.5-coder-0.5b"
 #: Embedded instruct models whose plans measured better as raw completion (few-shot, as the paper prompts) than
 #: as a chat turn, over the household benchmark: ``--chat-template auto`` gives them raw text (docs/planner.md).
 RAW_COMPLETION = frozenset({"qwen2.5-coder-1.5b", "qwen2.5-coder-0.5b"})
+#: Embedded models whose plans measured better without the decomposition's summary lines (``# SubTask k: ...``)
+#: over the household benchmark: with them Qwen2.5-Coder-1.5B restated an elemental task as several sub-tasks
+#: (SR 0.17 against 0.25 without, GCR 0.38 against 0.49; docs/measurements.md). ``--summary`` gives them it.
+WITHOUT_SUMMARY = frozenset({"qwen2.5-coder-1.5b"})
 GGUF_MAGIC = b"GGUF"
+
+
+def summary_for(model: str | None, summary: bool | None) -> bool:
+    """Whether decompositions start with the summary: as asked, else for every model but those measured better
+    without it (``model`` None is one not known here, a server's own)."""
+    return summary if summary is not None else model not in WITHOUT_SUMMARY
 
 
 def default_model() -> str:

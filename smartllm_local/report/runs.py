@@ -37,6 +37,15 @@ class Run:
     def arguments(self) -> Mapping[str, Any]:
         return self.manifests[0].get("identity", {}).get("arguments", {})
 
+    def _given(self, key: str) -> bool:
+        """Whether a run had the variant ``key``: the summary from what the run planned with (its default
+        depends on the model), every other one from the arguments it was given."""
+        if key == "no_summary":
+            prompts = self.manifests[0].get("identity", {}).get("settings", {}).get("prompts", {})
+            if "summary" in prompts:
+                return prompts["summary"] is False and self.method not in ("reference",)
+        return bool(self.arguments.get(key))
+
     @property
     def method(self) -> str:
         return str(self.arguments.get("method") or "smartllm")
@@ -52,7 +61,7 @@ class Run:
     @property
     def variant(self) -> str:
         """The switches that set this run apart from the default SMART-LLM ("" for none)."""
-        tags = [label for key, label in _VARIANTS if self.arguments.get(key)]
+        tags = [label for key, label in _VARIANTS if self._given(key)]
         chat = self.arguments.get("chat_template")
         if chat in ("on", "none"):  # set by hand: auto is the default
             tags.append(f"chat template {chat}")
@@ -64,7 +73,7 @@ class Run:
     @property
     def ablation(self) -> str:
         """The paper's Table III row name: which parts of the prompts were left out."""
-        left_out = [label for key, label in _VARIANTS if key in ABLATIONS and self.arguments.get(key)]
+        left_out = [label for key, label in _VARIANTS if key in ABLATIONS and self._given(key)]
         return ", ".join(left_out) if left_out else "full"
 
     @property

@@ -79,6 +79,17 @@ def test_a_variant_names_each_switch_set_by_hand():
     assert variant(chat_template="on", temperature=0.7) == "chat template on, T=0.7"
 
 
+def test_the_summary_variant_is_what_a_run_planned_with_whatever_its_model_default():
+    def run(planned, **arguments):
+        identity = {"arguments": arguments, "settings": {"prompts": {"summary": planned}}}
+        return Run(Path("run"), [{"identity": identity}])
+
+    assert run(False, model="qwen2.5-coder-1.5b").ablation == "no summary"  # the model's default: left out
+    assert run(True, model="qwen2.5-coder-1.5b", summary=True).variant == ""
+    assert run(False, summary=False).variant == "no summary"
+    assert Run(Path("old"), [{"identity": {"arguments": {"no_summary": True}}}]).ablation == "no summary"
+
+
 def test_table_two_gives_the_spread_over_seeds(runs, report):
     out, _ = report
     rows = _rows(out / "table2.csv")

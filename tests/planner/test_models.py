@@ -29,6 +29,15 @@ def test_the_default_model_is_qwen_0_5b_unless_smartllm_model_names_another(monk
     assert ModelOptions().config.chat_template == "auto"
 
 
+def test_decompositions_start_with_the_summary_but_for_the_models_measured_better_without(monkeypatch):
+    monkeypatch.delenv("SMARTLLM_MODEL", raising=False)
+    assert ModelOptions().config.prompts.summary, "the default model (0.5B) keeps the summary"
+    assert not ModelOptions(model="qwen2.5-coder-1.5b").config.prompts.summary
+    assert ModelOptions(model="qwen2.5-coder-1.5b", summary=True).config.prompts.summary
+    assert not ModelOptions(model="smollm2", summary=False).config.prompts.summary
+    assert ModelOptions(backend="server", endpoint="http://127.0.0.1:1").config.prompts.summary
+
+
 def test_the_qwen_models_are_instruct_models_with_their_template_and_32k_context():
     from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
 

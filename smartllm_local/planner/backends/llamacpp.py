@@ -39,6 +39,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -57,6 +58,27 @@ def _trained_context(metadata: dict[str, str]) -> int | None:
     """The context the model was trained on, from its GGUF metadata (a vocabulary file has none)."""
     value = metadata.get(f"{metadata.get('general.architecture', '')}.context_length", "")
     return int(value) if value.isdigit() and int(value) > 0 else None
+
+
+def _open(model_path: str | Path, *, n_ctx: int, threads: int, n_gpu_layers: int, seed: int, n_batch: int,
+          vocab_only: bool) -> tuple[Any, Any]:
+    """llama-cpp-python and a model loaded in it, or a clear error where either cannot be had."""
+    try:
+        import llama_cpp
+    except ImportError as exc:
+        raise BackendUnavailableError("llama-cpp-python is not installed: pip install 'llama-cpp-python>=0.3.36'") \
+            from exc
+    # A vocabulary has no training context, which llama.cpp warns about on stderr as it loads one.
+    quiet = contextlib.redirect_stderr(io.StringIO()) if vocab_only else contextlib.nullcontext()
+    try:
+        # On the CPU flash attention stays off: there it decoded Qwen2.5-Coder-1.5B 30% slower over the
+        # benchmark's decompositions (docs/measurements.md); on a GPU llama.cpp decides (auto).
+        with quiet, _flash_attention_auto(llama_cpp, wanted=bool(n_gpu_layers)):
+            return llama_cpp, llama_cpp.Llama(model_path=str(model_path), n_ctx=n_ctx, n_threads=threads,
+                                              n_gpu_layers=n_gpu_layers, seed=seed, n_batch=n_batch, n_ubatch=UBATCH,
+                                              logits_all=False, vocab_only=vocab_only, verbose=False)
+    except (ValueError, RuntimeError) as exc:
+        raise ModelError(f"llama.cpp could not load {model_path}: {exc}") from exc
 
 
 @contextlib.contextmanager
@@ -97,36 +119,12 @@ class LlamaCppBackend(PrefixReuse):
         ``prefix_store`` keeps the examples' states for later processes (None: this process only). ``n_batch``
         (tokens per evaluation call) follows the device unless given: llama.cpp's own 2,048 where layers are on a
         GPU, 512 on the CPU (whose speed it does not change); either way llama.cpp computes 512 at a time."""
-        try:
-            import llama_cpp
-        except ImportError as exc:
-            raise BackendUnavailableError(
-                "llama-cpp-python is not installed: pip install 'llama-cpp-python>=0.3.36'"
-            ) from exc
-        self._lib = llama_cpp
-        self.model = str(model_path)
         n_batch = n_batch or (GPU_BATCH if n_gpu_layers else CPU_BATCH)
         self._threads = threads or max(1, os.cpu_count() or 1)
-        # A vocabulary has no training context, which llama.cpp warns about on stderr as it loads one.
-        quiet = contextlib.redirect_stderr(io.StringIO()) if vocab_only else contextlib.nullcontext()
-        try:
-            # On the CPU flash attention stays off: there it decoded Qwen2.5-Coder-1.5B 30% slower over the
-            # benchmark's decompositions (docs/measurements.md); on a GPU llama.cpp decides (auto).
-            with quiet, _flash_attention_auto(llama_cpp, wanted=bool(n_gpu_layers)):
-                self.llm = llama_cpp.Llama(
-                    model_path=str(model_path),
-                    n_ctx=n_ctx,
-                    n_threads=self._threads,
-                    n_gpu_layers=n_gpu_layers,
-                    seed=seed,
-                    n_batch=n_batch,
-                    n_ubatch=UBATCH,
-                    logits_all=False,
-                    vocab_only=vocab_only,
-                    verbose=False,
-                )
-        except (ValueError, RuntimeError) as exc:
-            raise ModelError(f"llama.cpp could not load {model_path}: {exc}") from exc
+        llama_cpp, self.llm = _open(model_path, n_ctx=n_ctx, threads=self._threads, n_gpu_layers=n_gpu_layers,
+                                    seed=seed, n_batch=n_batch, vocab_only=vocab_only)
+        self._lib = llama_cpp
+        self.model = str(model_path)
         self.n_ctx = self.llm.n_ctx()
         self.n_vocab = self.llm.n_vocab()
         self._vocab = self.llm._model.vocab
