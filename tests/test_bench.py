@@ -76,7 +76,7 @@ def test_every_model_option_is_declared_once_and_reaches_model_options():
 
     from smartllm_local.cli.bench import bench_command
     from smartllm_local.cli.benchmark import run
-    from smartllm_local.cli.options import MODEL_PARAMETERS, ModelOptions
+    from smartllm_local.cli.options import MODEL_PARAMETERS, ModelOptions, model_options
     from smartllm_local.cli.plan import plan_command
 
     wanted = set(inspect.signature(ModelOptions).parameters)
@@ -85,6 +85,8 @@ def test_every_model_option_is_declared_once_and_reaches_model_options():
     assert wanted - {"workers"} <= set(inspect.signature(plan_command).parameters)
     bench = set(inspect.signature(bench_command).parameters)
     assert {"backend", "endpoint", "n_gpu_layers", "chat_template"} <= bench and "model_settings" not in bench
+    with pytest.raises(ValueError, match="no model option modle"):
+        model_options("modle")
 
 
 def test_later_prompt_costs_reads_what_a_run_reused_per_stage():

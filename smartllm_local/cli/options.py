@@ -173,13 +173,17 @@ MODEL_PARAMETERS = [
 ]
 
 
-def model_options(*names: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """Give a command the model options ``names`` (all of them when none is named) after its own, passed to
-    it as one ``model_settings`` dict of what the user gave (for :class:`ModelOptions`, which checks them).
+def model_options(*names: str, without: tuple[str, ...] = ()) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Give a command the model options ``names`` (all of them when none is named, less ``without``) after its
+    own, passed to it as one ``model_settings`` dict of what the user gave (for :class:`ModelOptions`, which
+    checks them).
 
     typer reads a command's options from its signature: the wrapper's signature is the command's own
     parameters (less ``model_settings``) and the chosen model parameters, so each option is declared once."""
-    chosen = [p for p in MODEL_PARAMETERS if not names or p.name in names]
+    unknown = set(names + without) - {p.name for p in MODEL_PARAMETERS}
+    if unknown:
+        raise ValueError(f"no model option {', '.join(sorted(unknown))}")
+    chosen = [p for p in MODEL_PARAMETERS if (not names or p.name in names) and p.name not in without]
 
     def decorate(command: Callable[..., Any]) -> Callable[..., Any]:
         own = [p for p in inspect.signature(command).parameters.values() if p.name != "model_settings"]

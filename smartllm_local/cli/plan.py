@@ -25,10 +25,7 @@ from .dispatch import dispatch_report, dispatch_succeeded, run_record
 from .options import CATALOGUE, DOMAIN, TASKS, THOR_BUILD, ModelOptions, model_options, refuse_household_options
 
 
-@model_options("model", "backend", "n_ctx", "threads", "n_gpu_layers", "seed", "temperature", "no_comments",
-               "summary", "no_coalition", "no_grammar", "free_teams", "chat_template", "free_allocation",
-               "no_world_check", "no_loop_guard", "no_token_alignment", "prefix_cache", "endpoint",
-               "server_timeout")
+@model_options(without=("workers",))  # one task: nothing to spread over workers
 def plan_command(
     instruction: str | None = typer.Argument(None, help="What the robots should do (or use --task)."),
     floor_plan: str | None = typer.Option(None, help="Floor plan, e.g. 15 or FloorPlan15."),
