@@ -36,7 +36,7 @@ from typing import Any
 
 from ..errors import SmartLLMError
 from ..executor import run_plan
-from ..planner.backends import Backend
+from ..planner.backends import Backend, Sampling
 from ..planner.pipeline import Planner, PlannerConfig, PlanResult
 from ..planner.prompting.prompts import STAGES
 from ..planner.prompting.scene_context import scene_objects
@@ -87,10 +87,14 @@ def prefill_cost(load: Load, config: PlannerConfig, catalogue: Catalogue, task: 
 
 def _timed_prefill(backend: Backend, tokens: list[int], prefixes: Sequence[int],
                    warm: Sequence[int] = ()) -> dict[str, Any]:
+    """Seconds from the prompt to its first token: ``prefill``, then one token drawn (in process the prompt's
+    logits are then read; through a server, whose slot evaluates a prompt's last batch with the first request,
+    that request is made)."""
     if warm:  # another prompt in the cache first, as a later task finds it
         backend.prefill(list(warm), ())
     started = time.perf_counter()
     reused = backend.prefill(tokens, prefixes)
+    backend.generate(tokens, grammar=None, max_tokens=1, sampling=Sampling(loop_guard=None))
     return {"seconds": round(time.perf_counter() - started, 3), "reused": reused}
 
 

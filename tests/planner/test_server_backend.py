@@ -264,7 +264,9 @@ def test_bench_measures_through_a_server_what_it_measures_in_process(tmp_path):
     report = json.loads(out.read_text())
     served = report["models"]["served"]
     assert served["prefill"]["prefill_over_engine"] is None and served["prefill"]["first"]["seconds"] > 0
-    assert served["prefill"]["kept"]["reused"] > 2000  # the slot held the prompt
+    # The time to the first token includes the request that evaluates the prompt's last batch in the slot; a
+    # slot holds one context, so after another prompt (the "kept" measure's) it holds only what the two share.
+    assert served["prefill"]["kept"]["reused"] < 16 < served["prefill"]["prompt_tokens"]
     assert served["decode"]["free"]["generated_tokens"] > 0 < served["decode"]["constrained"]["tokens_per_s"]
     assert served["prefix"]["stages"]["decomposition"]["later_evaluated_mean"] is not None
     assert report["machine"]["backend"] == "server" and report["executor"] is None
