@@ -18,7 +18,7 @@ from ..executor import Execution
 from ..executor.dispatch import Dispatch, dispatch_plan, load_dispatch
 from ..files import check_output_folder
 from ..planner.pipeline import PlanResult, write_artifacts
-from ..robots import Catalogue, parse_robot_ids
+from ..robots import Catalogue, Robot, parse_robot_ids
 from ..scoring import Scores
 from ..world.scenes import floor_plan_name
 from .dispatch import dispatch_report, dispatch_succeeded, run_record
@@ -52,9 +52,10 @@ def plan_command(
     cat = dom.catalogue
     refuse_household_options(dom, floor_plan, thor_build)
     instruction, scene, team_ids, chosen = _what_to_plan(dom, instruction, floor_plan, robots, tasks, task)
+    team = cat.team(team_ids)
     if execute and dispatch is not None:
         raise UserError("give --execute (in AI2-THOR) or --dispatch (on the lab's robots), not both")
-    functions = _dispatch_functions(dispatch, cat, team_ids)
+    functions = _dispatch_functions(dispatch, cat, team)
     planner = options.planners(cat, dom)[0]
     try:
         result = planner.plan(instruction, scene, team_ids)
@@ -71,7 +72,7 @@ def plan_command(
                                    build=str(thor_build) if thor_build else None, site=dom.as_site)
     dispatched = None
     if functions is not None and planned and not result.plan.is_refusal:
-        dispatched = dispatch_plan(result.plan, cat.team(team_ids), functions, skills=cat.skills)
+        dispatched = dispatch_plan(result.plan, team, functions, skills=cat.skills)
     extra: dict[str, Any] = {"model": planner.backend.model, "backend": planner.backend.name,
                              "chat_template": planner.chat_status}
     if scores is not None:
@@ -93,9 +94,7 @@ def _what_to_plan(dom: Domain, instruction: str | None, floor_plan: str | None, 
         if instruction or floor_plan or robots:
             raise UserError("give either --task (with --tasks) or an instruction with --floor-plan and --robots")
         chosen = find_task(load_tasks(tasks or dom.task_files(), catalogue=dom.catalogue, domain=dom), task)
-        team_ids = list(chosen.robots)
-        dom.catalogue.team(team_ids)
-        return chosen.instruction, chosen.floor_plan, team_ids, chosen
+        return chosen.instruction, chosen.floor_plan, list(chosen.robots), chosen
     if tasks is not None:
         raise UserError("--tasks needs --task ID")
     if not (instruction and (floor_plan or not dom.is_ai2thor) and robots):
@@ -103,17 +102,15 @@ def _what_to_plan(dom: Domain, instruction: str | None, floor_plan: str | None, 
                         'smartllm-local plan "Put the apple in the fridge" --floor-plan 6 --robots 1,2'
                         if dom.is_ai2thor else "plan needs an instruction and --robots (or --task ID)")
     scene = floor_plan_name(floor_plan) if dom.is_ai2thor else dom.site
-    team_ids = parse_robot_ids(robots)
-    dom.catalogue.team(team_ids)
-    return instruction, scene, team_ids, None
+    return instruction, scene, parse_robot_ids(robots), None
 
 
-def _dispatch_functions(dispatch: Path | None, cat: Catalogue, team_ids: list[int]) -> Dispatch | None:
+def _dispatch_functions(dispatch: Path | None, cat: Catalogue, team: list[Robot]) -> Dispatch | None:
     """The lab's functions for ``--dispatch``: one for every skill of the team, since the grammars offer them all."""
     if dispatch is None:
         return None
     functions = load_dispatch(dispatch, cat.skills)
-    missing = functions.unnamed(skill for robot in cat.team(team_ids) for skill in robot.skills)
+    missing = functions.unnamed(skill for robot in team for skill in robot.skills)
     if missing:
         raise UserError(f"the team's robots have skill(s) {', '.join(missing)}, which the dispatch file "
                         f"{dispatch} names no function for; add them under [skills]")
