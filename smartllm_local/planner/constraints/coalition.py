@@ -19,7 +19,7 @@ from ...robots import Robot
 from ..decoding.grammar import Node, Ref, alt, chars, opt, rep, seq
 from ..decoding.line_ends import COMMENT_NEXT
 from ..decoding.protocol import Choose, Constraint, Forced, longest
-from .feasibility import Need, feasible_teams
+from .feasibility import Need, feasible_teams, minimal_teams
 from .format import REASON_CHARS, refusal_line, robot_list, text_run
 
 # A word of free text: letters and punctuation, never the ";" that ends a part of the line.
@@ -72,7 +72,7 @@ class CoalitionConstraint(Constraint):
         self.head_written = False
         teams: list[list[tuple[int, ...]] | None] = [None] * len(self.names)
         if needs is not None and not free and not isinstance(team, int):
-            teams = [feasible_teams(team, need) for need in needs]
+            teams = [minimal_teams(feasible_teams(team, need)) for need in needs]
         # The model decides on refusing, and states the needs, unless every sub-task's teams are known.
         self.free = any(t is None for t in teams)
         self.must_refuse = allow_refusal and any(t == [] for t in teams)

@@ -5,9 +5,10 @@ pools skills and capacities. On a site, a call also asks that its robots get
 where it acts (a roof: aerial robots only) and, for a patrol, that the members
 with the skill pool the region's area. The coalition grammar admits, for each sub-task,
 only the teams that have every skill its function uses and can lift the
-heaviest thing it picks up, and admits only a refusal when some sub-task has
-no such team. The allocation grammar admits only robot lists that give every
-step a robot (or team) able to do it. This is the catalogue's knowledge, not
+heaviest thing it picks up (and of those, the minimal ones: no member it could do
+without), and admits only a refusal when some sub-task has no such team. The
+allocation grammar admits only robot lists that give every step a robot (or team)
+able to do it, again with no robot to spare. This is the catalogue's knowledge, not
 the model's: the model still chooses among the teams that can do the work.
 """
 
@@ -121,6 +122,22 @@ def feasible_teams(team: Sequence[Robot], need: Need) -> list[tuple[int, ...]] |
         return None
     return [c for n in range(1, len(team) + 1) for c in combinations(range(len(team)), n)
             if can_do([team[i] for i in c], need)]
+
+
+def minimal_teams(teams: list[tuple[int, ...]] | None) -> list[tuple[int, ...]] | None:
+    """The teams none of whose members could be left out: a robot the sub-task does not need stays free
+    for another one (a coalition names no more robots than the work asks for)."""
+    if teams is None:
+        return None
+    able = set(teams)
+    return [t for t in teams if not any(t[:k] + t[k + 1:] in able for k in range(len(t)))]
+
+
+def minimal_lists(lists: list[tuple[int, ...]], named: int) -> list[tuple[int, ...]]:
+    """The robot lists none of whose unnamed robots could be left out. Robots past the ``named`` slots a
+    function calls by index only join its whole-list steps, so a list has them only where they are needed."""
+    able = set(lists)
+    return [o for o in lists if not any(o[:k] + o[k + 1:] in able for k in range(named, len(o)))]
 
 
 def shortest_list(whole: bool, max_index: int, team_size: int, *, notional: bool) -> int:

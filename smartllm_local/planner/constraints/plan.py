@@ -43,7 +43,7 @@ from ..decoding.protocol import Choose, Constraint, Forced, longest
 from ..prompting.scene_context import SceneObjects
 from .budget import Budget
 from .candidates import RELEASE, STATE_ACTIONS, Candidates
-from .feasibility import Step, call_demand, feasible_lists, shortest_list
+from .feasibility import Step, call_demand, feasible_lists, minimal_lists, shortest_list
 from .format import (
     COMMENT_LEN,
     INDENT,
@@ -156,7 +156,7 @@ class PlanConstraint(Constraint):
         self.robot_arg_len = max((len(a) + 2 for a in self.robot_args), default=0)  # with its ", "
         self.sleep_len = len(INDENT) + len("time.sleep(9)\n")
         self.world = world
-        self._lists: dict[tuple[str, int], list[tuple[int, ...]]] = {}
+        self._lists: dict[tuple[str, int, frozenset[int]], list[tuple[int, ...]]] = {}
         self.candidates = Candidates(scene, self.skills, robot_arg_len=self.robot_arg_len, allocated=self.allocated,
                                      world=world, max_steps=self.max_steps)
         self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
@@ -169,6 +169,7 @@ class PlanConstraint(Constraint):
         self.functions: list[WrittenFunction] = []
         self.launched: list[str] = []
         self.threads: list[str] = []  # targets of the block being written
+        self.busy: set[int] = set()  # robots given to the threads of that block
         self.pending = ""  # boilerplate to write next (the rest of a block's starts and joins)
 
     # ---------------------------------------------------------------- costs
@@ -390,11 +391,18 @@ class PlanConstraint(Constraint):
         return robot_list(self.team_size, need, ", ", ordered=True)
 
     def _checked_lists(self, fn: WrittenFunction, need: int) -> list[tuple[int, ...]] | None:
-        """Capable robot lists (and of those, the ones the world allows), kept for this point of the plan."""
-        key = (fn.name, len(self.launched) + len(self.threads))
+        """Capable robot lists (and of those, the ones the world allows), kept for this point of the plan.
+
+        Of those, a list adds no robot the function can do without, and a thread is given robots that
+        no thread of its block has where such lists exist: a robot cannot work on two sub-tasks at once,
+        so booking it twice only makes one wait while another robot stands idle."""
+        key = (fn.name, len(self.launched) + len(self.threads), frozenset(self.busy))
         if key not in self._lists:
             lists = feasible_lists(self.team, self._steps(fn), need)
-            self._lists[key] = self._working_lists(fn, lists) if lists else lists
+            if lists:
+                lists = minimal_lists(self._working_lists(fn, lists), need)
+                lists = [o for o in lists if not self.busy.intersection(o)] or lists
+            self._lists[key] = lists
         return self._lists[key]
 
     def _working_lists(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
@@ -465,12 +473,14 @@ class PlanConstraint(Constraint):
             n = len(self.threads)
             self.launched += self.threads
             self.threads = []
+            self.busy = set()
             self.pending = "".join(f"t{i}.start()\n" for i in range(2, n + 1))
             self.pending += "".join(f"t{i}.join()\n" for i in range(1, n + 1))
         elif kind == "thread":
             name = piece.split("target=", 1)[1].split(",")[0].split(")")[0]
             self._launch(name, piece)
             self.threads.append(name)
+            self.busy.update(int(i) for i in re.findall(r"robots\[(\d+)\]", piece))
             self.phase = "threads"
         elif kind == "direct":
             self._launch(piece.split("(", 1)[0], piece)

@@ -211,6 +211,8 @@ class RestatedAllocation(PlanConstraint):
         able, working = [], []
         for arg in self.robot_args:
             slot = self._slot(arg)
+            if slot is not None and slot > fn.max_index + 1:
+                continue  # slots are numbered as they first act: robot_list[1] comes after robot_list[0]
             if self.world is not None and skill.action and (
                     not (fn.together if slot is None else slot in fn.slots_went)
                     or acts_on((skill, tuple(objects))) not in (self.candidates.place(fn, slot), None)):

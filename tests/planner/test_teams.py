@@ -1,0 +1,101 @@
+"""Teams of the right size: a coalition or a robot list names no robot the work can do without, the
+threads of one block are given robots none of the others has while free ones remain, and a function
+numbers its robot slots in the order they first act."""
+
+from __future__ import annotations
+
+import pytest
+
+from smartllm_local.domain import load_domain
+from smartllm_local.planner.constraints.coalition import CoalitionConstraint, needs_clause
+from smartllm_local.planner.constraints.feasibility import Need, minimal_lists, minimal_teams
+from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
+from smartllm_local.planner.constraints.world_check import WorldCheck
+from smartllm_local.planner.decoding.writer import accepts
+from smartllm_local.planner.prompting.scene_context import scene_objects
+
+CATALOGUE = load_domain().catalogue
+KITCHEN = 6
+ITEMS = ["Apple", "Tomato", "Lettuce"]  # 0.2, 0.12 and 0.47 kg in FloorPlan6
+DECOMPOSITION = "".join(
+    f"def subtask{k}_{item.lower()}():\n    GoToObject('{item}')\n    PickupObject('{item}')\n"
+    f"    GoToObject('CounterTop')\n    PutObject('{item}', 'CounterTop')\n\n"
+    for k, item in enumerate(ITEMS, start=1))
+NAMES = [f"subtask{k}_{item.lower()}" for k, item in enumerate(ITEMS, start=1)]
+
+
+def _coalition_line(need: Need, team: str) -> str:
+    return f"# SubTask 1 (f): {needs_clause(need)} one of them carries it; so {team}\n"
+
+
+def _allocated(lists: list[str], slots: list[str] | None = None) -> str:
+    """The decomposition restated, each function run in a thread of one block with the given lists."""
+    slots = slots or ["robot_list[0]"] * len(ITEMS)
+    bodies = "".join(
+        f"def {name}(robot_list):\n    GoToObject({slot}, '{item}')\n    PickupObject({slot}, '{item}')\n"
+        f"    GoToObject({slot}, 'CounterTop')\n    PutObject({slot}, '{item}', 'CounterTop')\n\n"
+        for name, item, slot in zip(NAMES, ITEMS, slots))
+    threads = "".join(f"t{k} = threading.Thread(target={name}, args=([{robots}],))\n"
+                      for k, (name, robots) in enumerate(zip(NAMES, lists), start=1))
+    n = len(NAMES)
+    return bodies + threads + "".join(f"t{k}.start()\n" for k in range(1, n + 1)) \
+        + "".join(f"t{k}.join()\n" for k in range(1, n + 1))
+
+
+def _allocator(*robot_ids: int) -> RestatedAllocation:
+    team = CATALOGUE.team(robot_ids)
+    return RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=NAMES,
+                              bodies=restated_bodies(DECOMPOSITION, NAMES),
+                              world=WorldCheck(KITCHEN, CATALOGUE.skills, len(team)))
+
+
+def test_minimal_teams_and_lists_drop_only_robots_that_are_not_needed():
+    assert minimal_teams([(0,), (1,), (0, 1)]) == [(0,), (1,)]
+    assert minimal_teams([(0, 1), (0, 1, 2)]) == [(0, 1)]
+    assert minimal_teams(None) is None
+    # Robots in named slots stay; one past them goes where a list without it works.
+    assert minimal_lists([(0,), (1,), (0, 1), (1, 0)], named=1) == [(0,), (1,)]
+    assert minimal_lists([(0, 1), (1, 0), (0, 1, 2)], named=2) == [(0, 1), (1, 0)]
+    assert minimal_lists([(0, 1, 2)], named=1) == [(0, 1, 2)]
+
+
+def test_a_coalition_names_no_robot_the_sub_task_can_do_without():
+    apple = Need(frozenset({"GoToObject", "PickupObject", "PutObject"}), 0.2)
+    strong = CATALOGUE.team([1, 2])  # each lifts 100 kg
+    assert accepts(CoalitionConstraint(["f"], strong, needs=[apple]), _coalition_line(apple, "robots[1]"))
+    assert not accepts(CoalitionConstraint(["f"], strong, needs=[apple]),
+                       _coalition_line(apple, "robots[0] and robots[1]"))
+    # The paper's setting leaves it to the model.
+    assert accepts(CoalitionConstraint(["f"], strong, needs=[apple], free=True),
+                   "# SubTask 1 (f): needs GoToObject; both; so robots[0] and robots[1]\n")
+    # 0.4 kg and 0.08 kg: only the two together lift the 0.47 kg lettuce.
+    lettuce = Need(frozenset({"GoToObject", "PickupObject", "PutObject"}), 0.47)
+    weak = CATALOGUE.team([8, 7])
+    assert accepts(CoalitionConstraint(["f"], weak, needs=[lettuce]),
+                   _coalition_line(lettuce, "robots[0] and robots[1]"))
+    assert not accepts(CoalitionConstraint(["f"], weak, needs=[lettuce]), _coalition_line(lettuce, "robots[0]"))
+
+
+def test_threads_of_one_block_get_robots_of_their_own_while_some_are_free():
+    assert accepts(_allocator(1, 2, 3), _allocated(["robots[0]", "robots[1]", "robots[2]"]))
+    assert not accepts(_allocator(1, 2, 3), _allocated(["robots[0]", "robots[0]", "robots[2]"]))
+    assert not accepts(_allocator(1, 2, 3), _allocated(["robots[0]", "robots[1]", "robots[1]"]))
+    # Two robots for three threads: the third shares, with either.
+    assert accepts(_allocator(1, 2), _allocated(["robots[0]", "robots[1]", "robots[0]"]))
+    assert accepts(_allocator(1, 2), _allocated(["robots[1]", "robots[0]", "robots[1]"]))
+
+
+def test_a_robot_list_adds_no_robot_the_function_does_without():
+    assert not accepts(_allocator(1, 2, 3), _allocated(["robots[0], robots[1]", "robots[2]", "robots[1]"]))
+    # Robot 8 lifts 0.4 kg, robot 7 0.08 kg, robot 1 100 kg: with robot 1 busy, the lettuce is a team lift
+    # for 8 and 7, while robot 1 alone would not need either.
+    whole = ["robot_list[0]", "robot_list[0]", "robot_list"]
+    assert accepts(_allocator(1, 8, 7), _allocated(["robots[0]", "robots[1]", "robots[1], robots[2]"], whole))
+    assert not accepts(_allocator(1, 8, 7), _allocated(["robots[1]", "robots[2]", "robots[0], robots[1]"], whole))
+
+
+@pytest.mark.parametrize("first", ["robot_list[1]", "robot_list[2]"])
+def test_robot_slots_are_numbered_in_the_order_they_first_act(first):
+    slots = [first, "robot_list[0]", "robot_list[0]"]
+    lists = ["robots[0], robots[1], robots[2]", "robots[1]", "robots[2]"]
+    assert not accepts(_allocator(1, 2, 3), _allocated(lists, slots))
