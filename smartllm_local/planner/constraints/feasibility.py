@@ -127,10 +127,7 @@ def feasible_teams(team: Sequence[Robot], need: Need) -> list[tuple[int, ...]] |
 def minimal_teams(teams: list[tuple[int, ...]] | None) -> list[tuple[int, ...]] | None:
     """The teams none of whose members could be left out: a robot the sub-task does not need stays free
     for another one (a coalition names no more robots than the work asks for)."""
-    if teams is None:
-        return None
-    able = set(teams)
-    return [t for t in teams if not any(t[:k] + t[k + 1:] in able for k in range(len(t)))]
+    return None if teams is None else minimal_lists(teams, named=0)
 
 
 def minimal_lists(lists: list[tuple[int, ...]], named: int) -> list[tuple[int, ...]]:

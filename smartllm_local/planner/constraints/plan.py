@@ -68,6 +68,12 @@ from .world_check import Call, WorldCheck
 
 _CALL = re.compile(r"^\s+(\w+)\((?:robot_list(?:\[(\d+)\])?, )?'([^']+)'(?:, '([^']+)')?\)$")
 STEP_LINE = re.compile(r"^    (\w+)\((.*)\)\n$")
+_ROBOT = re.compile(r"robots\[(\d+)\]")
+
+
+def robots_named(piece: str) -> list[int]:
+    """The team indices a launch line gives its function, in order (``[robots[2], robots[0]]``: 2, 0)."""
+    return [int(i) for i in _ROBOT.findall(piece)]
 #: What may start the text after a line of each kind, in its last token (see :mod:`..decoding.line_ends`): a summary
 #: line is followed by another or by the order line, a header and a body line by an indented line (or a blank
 #: one, ending the function where it may end).
@@ -480,7 +486,7 @@ class PlanConstraint(Constraint):
             name = piece.split("target=", 1)[1].split(",")[0].split(")")[0]
             self._launch(name, piece)
             self.threads.append(name)
-            self.busy.update(int(i) for i in re.findall(r"robots\[(\d+)\]", piece))
+            self.busy.update(robots_named(piece))
             self.phase = "threads"
         elif kind == "direct":
             self._launch(piece.split("(", 1)[0], piece)

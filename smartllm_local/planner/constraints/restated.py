@@ -29,7 +29,7 @@ from ..prompting.scene_context import SceneObjects
 from .candidates import acts_on
 from .feasibility import Step, call_demand, feasible_lists
 from .format import INDENT
-from .plan import STEP_LINE, PlanConstraint, WrittenFunction
+from .plan import STEP_LINE, PlanConstraint, WrittenFunction, robots_named
 from .world_check import WorldCheck
 
 #: Robot arguments a search for the rest of a body may try before it gives up (and offers the step).
@@ -240,4 +240,4 @@ class RestatedAllocation(PlanConstraint):
         """Run a launched function's steps in the team's dry run, with the robot list the line gives."""
         if self.team_world is not None:
             fn = next(f for f in self.functions if f.name == name)
-            self.team_world.perform(fn.calls, [int(i) for i in re.findall(r"robots\[(\d+)\]", piece)])
+            self.team_world.perform(fn.calls, robots_named(piece))
