@@ -22,7 +22,7 @@ from .backends.base import Backend, Generated, Sampling
 from .decoding.matcher import Matcher
 from .decoding.protocol import Constraint
 from .decoding.writer import BudgetError, GuaranteeError, Line, Report, TokenWriter, Written, run_tokens
-from .prompting.chat import ChatFormat, prompt_tokens
+from .prompting.chat import APPLIED, ChatFormat, answer_code, prompt_tokens
 from .prompting.prompts import Example, Prompt
 
 STOP_STRINGS = {
@@ -173,12 +173,15 @@ def run_stage(
     record.reused_tokens = backend.prefill(context, () if prompt.continues else prompt.prefixes)
     record.prompt_seconds = time.perf_counter() - started
     if constraint is None:
+        stops = STOP_STRINGS[record.stage]
+        chat = record.chat_template == APPLIED  # a chat answer's prose has paragraphs: its code is cut afterwards
         result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,
-                                  stop=STOP_STRINGS[record.stage], rng=rng)
+                                  stop=[s for s in stops if s != "\n\n"] if chat else stops, rng=rng)
         record.generated_tokens = len(result.tokens)
         record.loops_ended = result.loops
         record.note(result)
-        record.raw = record.output = result.text.rstrip() + "\n"
+        record.raw = result.text.rstrip() + "\n"
+        record.output = answer_code(record.raw, stops) if chat else record.raw
         record.seconds = time.perf_counter() - started
         return
     writer = _StageWriter(record, backend, context, sampling, rng)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from smartllm_local.benchmark.tasks import find_task, load_tasks
@@ -15,18 +16,21 @@ from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner import pipeline
 from smartllm_local.planner.backends import load_backend
+from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult, write_artifacts
 from smartllm_local.planner.prompting.chat import (
     APPLIED,
     BASE_MODEL,
     OFF,
+    answer_code,
     chat_format,
     mode_for,
     prompt_tokens,
 )
 from smartllm_local.planner.prompting.prompts import Prompt
 from smartllm_local.planner.prompting.scene_context import scene_objects
-from smartllm_local.planner.stages import StageRecord, fit_prompt
+from smartllm_local.planner.stages import STOP_STRINGS, Fitted, StageRecord, fit_prompt, run_stage
+from tests.planner.fakes import FakeBackend
 from tests.test_cli_errors import cli, one_line_error
 
 
@@ -191,3 +195,57 @@ def test_the_transformers_backend_reads_the_template_and_tokenizes_as_llama_cpp_
     text, tokens, _ = prompt_tokens(hf, body, chat_format(hf, "auto")[0])
     assert (text, tokens, ()) == prompt_tokens(smollm2, body, chat_format(smollm2, "auto")[0])
     assert tokens.count(special(hf, "<|im_end|>")[0]) == 2  # the system and user turns' ends, not the body's
+
+
+ANSWER = """To put the apple in the fridge, the robot first walks to it.
+
+1. **Go to the apple**: move next to it.
+
+```python
+def subtask1_reach_apple():
+    GoToObject('Apple')
+
+subtask1_reach_apple()
+```
+
+This code moves the robot to the apple.
+"""
+CODE = "def subtask1_reach_apple():\n    GoToObject('Apple')\n\nsubtask1_reach_apple()\n"
+
+
+def test_a_free_chat_answer_is_read_from_its_code_blocks_cut_at_the_stages_stop_strings():
+    stops = STOP_STRINGS["decomposition"]
+    assert answer_code(ANSWER, stops) == CODE
+    parse_plan(answer_code(ANSWER, stops), form="decomposition")
+    assert answer_code("Here:\n```\nGoToObject('Apple')\n# Example 2\nobjects = []", stops) == "GoToObject('Apple')\n"
+    assert answer_code("```py\na()\n```\nand then\n```python\nb()\n```\n", ()) == "a()\nb()\n"
+    assert answer_code("a()\n\n# Example 2\n", stops) == "a()\n"  # no block: the answer is the code
+    assert answer_code("see `a()` and ``` inline\n", ()) == "see `a()` and ``` inline\n"  # not a fence
+
+
+COALITION = ("One robot is enough for it.\n\n"
+             "```\n# SubTask 1 (subtask1_reach_apple): needs GoToObject; so robots[0]\n```\n")
+
+
+class _Answers(FakeBackend):
+    """Answers free generation as an instruct model does in its chat turn, and keeps the stop strings asked."""
+
+    stops: list[str] = []
+
+    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None, lines=1):
+        self.stops = list(stop)
+        return Generated([0] * 40, COALITION, "eos")
+
+
+@pytest.mark.parametrize("chat", [APPLIED, OFF])
+def test_free_generation_in_a_chat_turn_reads_the_code_and_keeps_the_whole_answer(chat):
+    """In its chat turn the model's prose has paragraphs: a coalition is not cut at the first of them, and the plan
+    is read from the answer's code; a raw completion is read as written, cut at the stop strings."""
+    backend, record = _Answers(), StageRecord("coalition", chat_template=chat)
+    run_stage(record, backend, Fitted("p", [0, 0]), None, output_budget=64, sampling=Sampling(),
+              rng=np.random.default_rng(0))
+    assert record.raw == COALITION
+    if chat == APPLIED:
+        assert "\n\n" not in backend.stops and record.output == COALITION.split("```\n")[1]
+    else:
+        assert backend.stops == list(STOP_STRINGS["coalition"]) and record.output == COALITION

@@ -166,6 +166,28 @@ def test_the_end_of_sequence_is_the_models_choice_where_the_grammar_cannot_end(s
     assert free.stop == "eos" and 0 < out.refused <= out.choices
 
 
+def test_an_end_of_sequence_far_down_the_models_ranking_is_not_its_choice(smollm2):
+    """Where neither the end of sequence nor any token the grammar admits is among the model's 64 likeliest,
+    the model goes on under the grammar, though the end is likelier than what it writes: there the end is
+    only the least unlikely token left, and a server, which reports the 64 likeliest, would not see it."""
+    from smartllm_local.planner.backends.base import may_end
+
+    grammar = Grammar({"root": alt("zqxj\n", "monary\n")})
+    smollm2._sync(smollm2.tokenize(PROMPT, bos=True))
+    logits = smollm2._logits()
+    end = max(smollm2.end_tokens, key=lambda t: logits[t])
+    sampler = smollm2._grammar_sampler(grammar)
+    try:
+        smollm2._ends = False
+        admitted = smollm2._masked(sampler, logits)
+        assert logits[end] > admitted.max() and not may_end(logits, end)  # what the case needs
+        smollm2._ends = True
+        picked = smollm2._pick(logits, sampler, Sampling(), np.random.default_rng(0))
+        assert picked == int(np.argmax(admitted)) and picked not in smollm2.end_tokens
+    finally:
+        smollm2._lib.llama_sampler_free(sampler)
+
+
 def test_a_process_that_imports_numpy_before_llama_cpp_loads_and_runs_a_model():
     """The order that crashed llama.cpp's model load on a CUDA build (docs/servers-and-gpus.md): numpy first, then a
     model loaded and run; here on the build CI has, on a GPU machine by scripts/gpu_check.sh."""

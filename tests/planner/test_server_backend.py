@@ -246,7 +246,8 @@ def test_llama_server_plans_token_for_token_what_the_in_process_backend_plans(tm
             assert theirs == ours, (task, stage)
             counts = [{k: line[task]["tokens"][stage][k] for k in ("prompt", "generated")} for line in (local, remote)]
             assert counts[0] == counts[1], (task, stage)
-    assert remote["kitchen-02"]["tokens"]["decomposition"]["reused"] > 2000  # the slot held the examples
+    shared = json.loads((tmp_path / "server" / "kitchen-02" / "decomposition" / "timings.json").read_text())
+    assert remote["kitchen-02"]["tokens"]["decomposition"]["reused"] >= shared["shared_tokens"] > 1000  # the examples
 
 
 @pytest.mark.heavy

@@ -39,6 +39,24 @@ def test_constraints_bite_through_llguidance(hf_smollm2):
     assert forced.text in (" London.\n", " Rome.\n")
 
 
+def test_an_end_of_sequence_far_down_the_models_ranking_is_not_its_choice(hf_smollm2):
+    """As in the llama.cpp backend: the end of sequence, likelier than anything this grammar admits but not among
+    the model's 64 likeliest tokens (at the start of its answer), does not end the line."""
+    from smartllm_local.planner.backends.base import may_end
+    from smartllm_local.planner.prompting.chat import chat_format, prompt_tokens
+
+    chat, _ = chat_format(hf_smollm2, "auto")
+    _, context, _ = prompt_tokens(hf_smollm2, "Answer with one word: is the sky blue?", chat)
+    hf_smollm2._sync(context)
+    raw = hf_smollm2._logits[: hf_smollm2.n_vocab]
+    choices = ("qqq\n", "}}}\n")
+    starts = [t for t in range(hf_smollm2.n_vocab)
+              if (text := hf_smollm2.detokenize([t])) and any(c.startswith(text) for c in choices)]
+    assert raw[hf_smollm2.eos] > raw[starts].max() and not may_end(raw, hf_smollm2.eos)  # what the case needs
+    out = hf_smollm2.generate(context, grammar=Grammar({"root": alt(*choices)}), max_tokens=8, sampling=Sampling())
+    assert out.stop == "line" and out.text in choices
+
+
 def test_a_decomposition_is_a_valid_plan_and_its_prompt_state_is_kept(hf_smollm2):
     """A decomposition through the transformers backend; decomposing again evaluates only the instruction (in
     its chat turn), and writes what it wrote from an empty cache. Every stage is in the heavy suite."""

@@ -96,6 +96,18 @@ class Backend(Protocol):
         """Free the model."""
 
 
+#: The end of sequence is the model's choice where it is among its ``END_RANK`` likeliest next tokens (and, greedy,
+#: likelier than every token the grammar admits): there the model means to stop. Further down it is only the least
+#: unlikely of what the grammar leaves, and the model goes on under the grammar instead. A server reports as many of
+#: its likeliest tokens (llama-server's ``n_probs``), so that it decides the same.
+END_RANK = 64
+
+
+def may_end(logits: Sequence[float] | np.ndarray, token: int) -> bool:
+    """Whether the end-of-sequence ``token`` is among the model's ``END_RANK`` likeliest (numpy or torch scores)."""
+    return int((logits > logits[token]).sum()) < END_RANK
+
+
 def shared_prefix(cached: Sequence[int], context: Sequence[int]) -> int:
     """How many leading tokens a cache already holds of a new context."""
     common = 0

@@ -46,11 +46,11 @@ import numpy as np
 from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..decoding.grammar import Grammar, GrammarError
 from ..decoding.matcher import Matcher
-from .base import Generated, Sampling, continuation_tokens, keep_whole, shared_prefix
+from .base import END_RANK, Generated, Sampling, continuation_tokens, keep_whole, may_end, shared_prefix
 from .prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
 from .repetition import TRIES, current_line, draw
 
-_TOP = 64
+_TOP = END_RANK  # the candidates looked at before the whole vocabulary is masked
 CPU_BATCH, GPU_BATCH, UBATCH = 512, 2048, 512
 
 
@@ -318,8 +318,10 @@ class LlamaCppBackend(PrefixReuse):
         self._apply(sampler, self._full, self.n_vocab)
         masked = np.full(self.n_vocab, -np.inf, dtype=np.float32)
         masked[self._full["id"]] = self._full["logit"]
-        if self._ends:
-            masked[self._eog] = logits[self._eog]  # the end of sequence is always the model's to choose
+        if self._ends:  # the end of sequence is the model's to choose (see END_RANK)
+            for end in self.end_tokens:
+                if may_end(logits, end):
+                    masked[end] = logits[end]
         return masked
 
     def _pick(self, logits: np.ndarray, sampler, sampling: Sampling, rng: np.random.Generator,

@@ -41,7 +41,7 @@ from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
 from ..decoding.grammar import Grammar, GrammarError
 from ..decoding.matcher import Matcher
 from ..models import EMBEDDED, default_model, embedded_model_path, is_gguf
-from .base import Generated, Sampling, shared_prefix
+from .base import Generated, Sampling, may_end, shared_prefix
 from .hf_vocabulary import EXTRA as _EXTRA
 from .hf_vocabulary import HFVocabulary
 from .prefix_cache import MemoryStates, PrefixReuse
@@ -277,8 +277,8 @@ class TransformersBackend(PrefixReuse):
                     bits = np.unpackbits(mask.numpy().view(np.uint8), bitorder="little")[: self.n_vocab]
                     blocked = torch.from_numpy(bits == 0).to(logits.device)
                     logits[0, blocked] = -float("inf")
-                    if sampling.aligned:
-                        logits[0, self.eos] = raw[self.eos]  # the end of sequence is always the model's to choose
+                    if sampling.aligned and may_end(raw, self.eos):
+                        logits[0, self.eos] = raw[self.eos]  # the end of sequence is the model's to choose
                 token = self._pick(logits[0], sampling, rng)
                 new = [token]
                 line = current_line(out.text)

@@ -15,6 +15,8 @@ are joined, never the strings.
 
 from __future__ import annotations
 
+import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from jinja2 import TemplateError
@@ -31,6 +33,10 @@ APPLIED, BASE_MODEL, OFF = "applied", "none (base model)", "off"
 
 # Stands for the prompt while the template is rendered, so the template's own text can be told apart.
 _PLACEHOLDER = "\x00smartllm-local prompt\x00"
+
+# A Markdown code block: its opening fence (with or without a language), its text, and its closing fence or the
+# answer's end (an answer cut inside its block).
+_FENCED = re.compile(r"^```[^`\n]*\n(.*?)(?:^```|\Z)", re.S | re.M)
 
 # How a template fails: jinja2's errors, and what its expressions raise (raise_exception gives ValueError).
 _TEMPLATE_ERRORS = (TemplateError, ValueError, TypeError, KeyError)
@@ -148,3 +154,13 @@ def _prefix_tokens(backend: Backend, head: list[int], rest: tuple[str, ...]) -> 
         tokens += backend.tokenize_continuation(part)
         bounds.append(len(tokens))
     return tokens, tuple(bounds)
+
+
+def answer_code(answer: str, stops: Sequence[str]) -> str:
+    """The plan in a chat model's free answer (``--no-grammar``): in its chat turn an instruct model answers in
+    prose around Markdown code blocks, so the blocks are what is read, joined, and cut where the stage's first
+    stop string appears in them, as a raw completion is cut; an answer with no block is read whole."""
+    blocks = _FENCED.findall(answer)
+    code = "".join(block if block.endswith("\n") else block + "\n" for block in blocks) if blocks else answer
+    code = code[:min((code.find(stop) for stop in stops if stop in code), default=len(code))]
+    return code.rstrip() + "\n"

@@ -30,7 +30,7 @@ import numpy as np
 
 from ....errors import ModelError, UserError
 from ...decoding.grammar import Grammar
-from ..base import Generated, Sampling, shared_prefix
+from ..base import END_RANK, Generated, Sampling, shared_prefix
 from .connection import DEFAULT_TIMEOUT, Connection, ServerError
 from .dialects import Dialect, Reply, probe
 from .line_requests import LineRequests, WrongLine
@@ -40,8 +40,9 @@ from .vocabulary import RemoteVocabulary, Vocabulary, check_vocabulary, served_v
 __all__ = ["DEFAULT_TIMEOUT", "ServerBackend", "ServerError", "connect"]
 
 #: The likeliest tokens a server that reports them is asked for with each token it writes: as many as the
-#: in-process backend looks at before it masks the whole vocabulary.
-TOP = 64
+#: in-process backend looks at before it masks the whole vocabulary, and where the model's end of sequence
+#: is its choice.
+TOP = END_RANK
 
 
 class ServerBackend:

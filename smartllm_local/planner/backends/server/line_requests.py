@@ -97,7 +97,8 @@ class LineRequests:
 
     def _end(self, token: int, probs: TokenProbs | None) -> int | None:
         """The end-of-sequence token the model would rather have written than ``token``, if any (greedy
-        decoding, where the server reports the likeliest tokens): ending is always the model's choice."""
+        decoding, where the server reports its likeliest tokens, as many as ``END_RANK``): as in-process, the
+        model ends where the end is among those and likelier than what the grammar let it write."""
         if probs is None or not self.greedy or not self.heal:
             return None
         return next((t for t, p in probs[1] if t in self.end_tokens and p > probs[0]), None)
