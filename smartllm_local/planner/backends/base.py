@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -103,7 +103,7 @@ class Backend(Protocol):
 END_RANK = 64
 
 
-def may_end(logits: Sequence[float] | np.ndarray, token: int) -> bool:
+def may_end(logits: Any, token: int) -> bool:
     """Whether the end-of-sequence ``token`` is among the model's ``END_RANK`` likeliest (numpy or torch scores)."""
     return int((logits > logits[token]).sum()) < END_RANK
 

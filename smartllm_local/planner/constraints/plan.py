@@ -70,15 +70,16 @@ _CALL = re.compile(r"^\s+(\w+)\((?:robot_list(?:\[(\d+)\])?, )?'([^']+)'(?:, '([
 STEP_LINE = re.compile(r"^    (\w+)\((.*)\)\n$")
 _ROBOT = re.compile(r"robots\[(\d+)\]")
 
-
-def robots_named(piece: str) -> list[int]:
-    """The team indices a launch line gives its function, in order (``[robots[2], robots[0]]``: 2, 0)."""
-    return [int(i) for i in _ROBOT.findall(piece)]
 #: What may start the text after a line of each kind, in its last token (see :mod:`..decoding.line_ends`): a summary
 #: line is followed by another or by the order line, a header and a body line by an indented line (or a blank
 #: one, ending the function where it may end).
 FOLLOWS: dict[str, Node] = {"summary": COMMENT_NEXT, "header": INDENTED_NEXT, "goto": INDENTED_NEXT,
                             "action": INDENTED_NEXT, "comment": INDENTED_NEXT, "sleep": INDENTED_NEXT}
+
+
+def robots_named(piece: str) -> list[int]:
+    """The team indices a launch line gives its function, in order (``[robots[2], robots[0]]``: 2, 0)."""
+    return [int(i) for i in _ROBOT.findall(piece)]
 
 
 @dataclass
