@@ -1,5 +1,5 @@
 """``smartllm-local bench`` with the real SmolLM2, llama.cpp and the stand-in: its figures hang together (seven plans
-of two tasks, minutes: in the heavy suite)."""
+of two tasks and four ``plan`` processes, minutes: in the heavy suite)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from tests.test_cli_errors import cli, one_line_error
 @pytest.mark.heavy
 def test_bench_measures_decoding_reuse_and_the_executor(tmp_path):
     out = tmp_path / "bench.json"
-    proc = cli("bench", "--models", "smollm2", "--sample", "2", "--no-benchmark", "--out", out)
+    proc = cli("bench", "--models", "smollm2", "--sample", "2", "--no-benchmark", "--sharing", "--out", out)
     assert proc.returncode == 0, proc.stderr
     report = json.loads(out.read_text())
     decode = report["models"]["smollm2"]["decode"]
@@ -43,6 +43,11 @@ def test_bench_measures_decoding_reuse_and_the_executor(tmp_path):
     feasible = sum(t.feasible for t in load_tasks())
     assert report["executor"]["plans"] == feasible and report["executor_actions_per_s"] > 0
     assert report["benchmark_minutes"] is None
+    shared = report["sharing"]  # plan alone, then two at once (how much slower is a figure, not a test)
+    assert shared["task"] == report["sample_tasks"][0] and shared["copies"] == len(shared["together_s"]) == 2
+    assert shared["alone_s"] > 0 and min(shared["together_s"]) > 0
+    assert report["two_plans_over_one"] == shared["together_over_alone"] == pytest.approx(
+        max(shared["together_s"]) / shared["alone_s"], abs=0.01)
     assert "smollm2" in proc.stdout and "actions/s" in proc.stdout
 
 

@@ -14,6 +14,8 @@ Each model is measured as ``plan`` would run it (its backend, GPU layers, contex
   memory) and the first task again in a new backend (the states from the disk store, as a second
   ``plan`` process finds them);
 - the executor: every feasible task's reference plan, plans and actions per second;
+- sharing the cores: ``plan`` of the first sample task with the first model alone, then two at once
+  (:mod:`.sharing`);
 - optionally, ``benchmark run`` over every task with the first model, one seed, from an empty prefix
   store, timed as a user would time it, with the prompt tokens its later tasks evaluated per stage
   (there tasks on the same floor plan also share their decomposition's scene).
@@ -44,6 +46,7 @@ from ..provenance import versions
 from ..robots import Catalogue
 from ..world.controller import open_controller
 from .reference_plans import load_reference_plan
+from .sharing import core_sharing
 from .tasks import Task
 
 
@@ -225,16 +228,19 @@ def later_prompt_costs(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
 def run_bench(models: dict[str, tuple[Load, PlannerConfig]], catalogue: Catalogue, tasks: Sequence[Task], *,
               sample: int, benchmark_options: Sequence[str] | None = None,
               benchmark_out: Path | None = None, executor: bool = True,
+              sharing_options: Sequence[str] | None = None,
               machine: dict[str, Any] | None = None) -> dict[str, Any]:
     """Everything above, as the JSON ``bench`` writes: per model (named as given, each with how to load it and
     the planner's settings), the prompt path, decoding and prefix reuse; the executor; and, given the first
-    model's ``benchmark_options``, the whole benchmark."""
+    model's ``benchmark_options``, the whole benchmark; given its ``sharing_options``, plans alone and two at
+    once."""
     chosen = spread_tasks(tasks, sample)
     per_model = {name: {"prefill": prefill_cost(load, config, catalogue, chosen[0]),
                         "decode": decode_speed(load, config, catalogue, chosen),
                         "prefix": prefix_reuse(load, config, catalogue, chosen)}
                  for name, (load, config) in models.items()}
     timed = executor_speed(catalogue, tasks) if executor else None
+    shared = core_sharing(sharing_options, chosen[0].id) if sharing_options is not None else None
     whole = time_benchmark(benchmark_options, benchmark_out) if benchmark_options is not None else None
     return {
         "machine": {"cpus": os.cpu_count(), "platform": platform.platform(), **(machine or {})},
@@ -248,6 +254,7 @@ def run_bench(models: dict[str, tuple[Load, PlannerConfig]], catalogue: Catalogu
         "benchmark_model": next(iter(models)) if whole else None,
         "benchmark": whole, "benchmark_minutes": whole["minutes"] if whole else None,
         "executor": timed, "executor_actions_per_s": timed["actions_per_s"] if timed else None,
+        "sharing": shared, "two_plans_over_one": shared["together_over_alone"] if shared else None,
     }
 
 
@@ -274,6 +281,10 @@ def summary(report: dict[str, Any]) -> str:
         lines.append(f"executor: {executor['plans']} reference plans, "
                      f"{executor['actions']} actions in {executor['seconds']} s "
                      f"({executor['plans_per_s']} plans/s, {executor['actions_per_s']} actions/s)")
+    shared = report["sharing"]
+    if shared is not None:
+        lines.append(f"sharing the cores: plan {shared['task']} alone {shared['alone_s']} s, {shared['copies']} at "
+                     f"once {', '.join(map(str, shared['together_s']))} s ({shared['together_over_alone']} x alone)")
     if report["benchmark_minutes"] is not None:
         lines.append(f"whole benchmark with {report['benchmark_model']}: {report['benchmark_minutes']} min")
         for stage, cost in report["benchmark"]["stages"].items():

@@ -30,6 +30,9 @@ def bench_command(
         "Also time the whole benchmark with the first model (minutes).")),
     executor: bool = typer.Option(True, "--executor/--no-executor", help=(
         "Also time the executor on every reference plan.")),
+    sharing: bool = typer.Option(True, "--sharing/--no-sharing", help=(
+        "Also time `plan` of the first sample task with the first model alone, then two such processes at once "
+        "(a user planning beside other work).")),
     benchmark_out: Path | None = typer.Option(None, "--benchmark-out", help=(
         "Keep the whole benchmark's run folder here (a new folder, as `benchmark run --out` writes it), "
         "for `benchmark report`.")),
@@ -60,6 +63,7 @@ def bench_command(
                        household.catalogue, load_tasks(domain=household), sample=sample,
                        benchmark_options=options[0].as_arguments() if whole_benchmark else None,
                        benchmark_out=benchmark_out, executor=executor,
+                       sharing_options=options[0].as_arguments() if sharing else None,
                        machine={"threads": model_settings["threads"] or os.cpu_count(), "backend": backend,
                                 "n_gpu_layers": model_settings["n_gpu_layers"]})
     write_atomic(out, json_text(report))

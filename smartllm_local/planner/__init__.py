@@ -6,6 +6,10 @@ next), :mod:`.backends` (the models: llama.cpp, transformers, servers). :mod:`.p
 task through the stages, :mod:`.stages` runs one.
 """
 
-from .pipeline import Planner, PlannerConfig, PlanResult
+from .backends.cores import share_cores
+
+share_cores()  # before llama.cpp or torch is loaded by anything below: OpenMP reads its wait policy then
+
+from .pipeline import Planner, PlannerConfig, PlanResult  # noqa: E402
 
 __all__ = ["Planner", "PlannerConfig", "PlanResult"]
