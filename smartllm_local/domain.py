@@ -6,6 +6,7 @@ A domain is a folder::
     DIR/prompts/                       the prompts' worked examples (laid out as household's)
     DIR/benchmark/tasks.jsonl          its benchmark tasks, then any other *.jsonl (optional)
     DIR/benchmark/reference_plans/     a plan per feasible task that scores SR = 1 (optional)
+    DIR/benchmark/split.toml           its development/test split (optional)
 
 Its world is AI2-THOR (``world = "ai2thor"``: tasks name iTHOR floor plans, each skill performs an
 AI2-THOR action on objects with the affordances its arguments name, a team pools mass to lift) or a
@@ -44,6 +45,7 @@ DOMAIN_FILE = "domain.toml"
 PROMPTS = "prompts"  # the prompts' worked examples
 BENCHMARK = "benchmark"  # the task files and the reference plans
 TASKS_FILE = "tasks.jsonl"
+SPLIT_FILE = "split.toml"  # the benchmark's development/test split (optional)
 PLANS = "reference_plans"
 AI2THOR = "ai2thor"
 
@@ -114,6 +116,10 @@ class Domain:
         folder = self.benchmark_dir()
         others = sorted(p for p in folder.glob("*.jsonl") if p.name != TASKS_FILE)
         return [folder / TASKS_FILE, *others]
+
+    def split_file(self) -> Path:
+        """Where its benchmark's development/test split is (a domain may have none)."""
+        return self.benchmark_dir() / SPLIT_FILE
 
     def plans_dir(self) -> Path:
         return self.benchmark_dir() / PLANS

@@ -104,9 +104,12 @@ def folder_digest(folder: str | Path) -> str:
 
 
 def run_manifest(arguments: Mapping[str, Any], model: Path | None, settings: Mapping[str, Any],
-                 task_files: Sequence[Path], catalogue: Path, prompts: Path) -> dict[str, Any]:
+                 task_files: Sequence[Path], catalogue: Path, prompts: Path,
+                 split: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """``run.json``: what a run is (``identity``: a run folder is resumed only by the same) and when;
-    ``model`` None: a method that uses no model."""
+    ``model`` None: a method that uses no model; ``split``: the benchmark's development/test split, kept for
+    the report where the run's tasks are a domain's own (beside the identity: ``--split`` is an argument, and
+    a split that grows by a task when the task files do leaves nothing else to compare)."""
     described = model_record(model) if model is not None else {"path": None}
     identity = {
         # as run.json holds them (a tuple reads back as a list), so that the same arguments compare equal
@@ -118,5 +121,8 @@ def run_manifest(arguments: Mapping[str, Any], model: Path | None, settings: Map
         "catalogue": {str(Path(catalogue).resolve()): sha256_file(catalogue)},
         "prompts": folder_digest(prompts),
     }
-    return {"identity": identity, "model_path": described["path"],
-            "started": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    manifest = {"identity": identity, "model_path": described["path"],
+                "started": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    if split is not None:
+        manifest["split"] = dict(split)
+    return manifest

@@ -15,6 +15,15 @@ from ..benchmark.methods import METHODS, make_method
 from ..benchmark.results import summary_table, variability_table
 from ..benchmark.run import run_benchmark
 from ..benchmark.run_store import RunStore
+from ..benchmark.split import (
+    Split,
+    check_half,
+    domain_split,
+    require_split,
+    split_problems,
+    split_summary,
+    split_tasks,
+)
 from ..benchmark.tasks import CATEGORIES, Task, check_category, find_task, load_tasks
 from ..domain import Domain, load_domain
 from ..errors import UserError
@@ -34,6 +43,9 @@ from .options import (
 )
 from .progress import RunProgress
 
+SPLIT_HELP = ("Only this half of the domain's development/test split (benchmark/split.toml): dev or test, "
+              "each with every infeasible task (default: every task).")
+
 app = typer.Typer(help="The benchmark: run it, list its tasks, check it, report on runs, import SMART-LLM's task "
                        "files.",
                   no_args_is_help=True)
@@ -45,11 +57,12 @@ def list_tasks(
     tasks: Path | None = typer.Option(None, help="A task file (default: the domain's benchmark)."),
     as_json: bool = typer.Option(False, "--json", help="Print the tasks as JSON lines."),
     domain: str | None = typer.Option(None, help=DOMAIN_HELP),
+    split: str | None = typer.Option(None, metavar="dev|test", help=SPLIT_HELP),
 ) -> None:
     """Print the tasks: id, category, floor plan (or site), robots and instruction."""
     check_category(category)
     dom = load_domain(domain)
-    chosen = [t for t in load_tasks(tasks or dom.task_files(), domain=dom) if category in (None, t.category)]
+    chosen = [t for t in _load(dom, tasks, split)[1] if category in (None, t.category)]
     if as_json:
         for task in chosen:
             typer.echo(json.dumps(task.as_json()))
@@ -80,8 +93,25 @@ def check(
     failed = [r for r in results if not r.passed]
     for result in failed:
         typer.echo(f"FAILED {result.task.id}: {result.problem}")
+    if tasks is None:  # the split is of the domain's own tasks
+        check_split(dom, loaded)
     if failed:
         raise typer.Exit(1)
+
+
+def check_split(dom: Domain, tasks: list[Task]) -> None:
+    """Print the domain's split, if it has one.
+
+    Raises:
+        UserError: the split does not fit ``tasks`` (every problem named).
+    """
+    split = domain_split(dom)
+    if split is None:
+        return
+    typer.echo(split_summary(split, tasks))
+    problems = split_problems(split, tasks)
+    if problems:
+        raise UserError("\n".join(problems))
 
 
 @app.command("report")
@@ -134,6 +164,7 @@ def run(
     tasks: Path | None = TASKS,
     category: str | None = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
     task: list[str] | None = typer.Option(None, help="Only these task ids (repeatable)."),
+    split: str | None = typer.Option(None, metavar="dev|test", help=SPLIT_HELP),
     catalogue: Path | None = CATALOGUE,
     thor_build: Path | None = THOR_BUILD,
     domain: str | None = DOMAIN,
@@ -145,9 +176,14 @@ def run(
     check_output_folder(out, "--out")
     dom = load_domain(domain, catalogue=catalogue)
     tasks_files = [tasks] if tasks else dom.task_files()
-    chosen = _chosen_tasks(dom, tasks_files, category, task)
+    loaded, half, found = _load(dom, tasks, split)
+    chosen = _chosen_tasks(half, found, category, task, split)
     if method not in METHODS:
         raise UserError(f"--method must be one of {', '.join(METHODS)}, not {method!r}")
+    problems = split_problems(found, loaded) if found is not None and split is None else []
+    if problems:  # a run of every task goes on, and records the split as it is for the report
+        print("warning: " + "\nwarning: ".join(problems) + "\nwarning: the report's test-half rows go by the split "
+              "as it is (`benchmark check` lists the same)", file=sys.stderr)
     chosen_seeds = parse_seeds(seeds, options.seed)
     if len(chosen_seeds) > 1 and options.config.sampling.temperature == 0 and method != "decomp-random":
         raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
@@ -158,10 +194,13 @@ def run(
     for s in chosen_seeds:  # every run folder is checked before the model loads
         folder = out if seeds is None else out / f"seed-{s}"
         manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
-                                Path(dom.catalogue.path), dom.prompts_dir())
+                                Path(dom.catalogue.path), dom.prompts_dir(),
+                                split=found.record() if found is not None else None)
         runs.append((s, RunStore(folder, manifest, restart=restart)))
     _run_seeds(runs, chosen, options, method, dom, thor_build, labelled=seeds is not None)
     per_run = [[lines[t.id] for t in chosen if t.id in lines] for lines in (store.results() for _, store in runs)]
+    if split is not None and found is not None:
+        typer.echo(f"the {split} half of {found.path} (seed {found.seed}), and every infeasible task:")
     if seeds is None:
         typer.echo(summary_table(per_run[0]))
         typer.echo(f"results: {out / 'results.jsonl'}")
@@ -172,13 +211,35 @@ def run(
     typer.echo(f"results: {', '.join(str(store.out / 'results.jsonl') for _, store in runs)}")
 
 
-def _chosen_tasks(dom: Domain, tasks_files: list[Path], category: str | None, ids: list[str] | None) -> list[Task]:
-    """The tasks of the task files that pass ``--category`` and ``--task``; none is an error."""
+def _load(dom: Domain, tasks: Path | None, split: str | None) -> tuple[list[Task], list[Task], Split | None]:
+    """The tasks of ``--tasks`` (default: the domain's task files); those of the ``--split`` half (all of them
+    without one); and the domain's split where the tasks are its own (None for a ``--tasks`` file or a domain
+    without one)."""
+    if split is not None:
+        check_half(split)
+        if tasks is not None:
+            raise UserError(f"--split takes a half of the {dom.name} domain's own benchmark: leave out --tasks, "
+                            "or --split to take every task of the file")
+    loaded = load_tasks(tasks or dom.task_files(), catalogue=dom.catalogue, domain=dom)
+    if tasks is not None:
+        return loaded, loaded, None
+    if split is None:
+        return loaded, loaded, domain_split(dom)
+    found = require_split(dom)
+    return loaded, split_tasks(loaded, found, split), found
+
+
+def _chosen_tasks(half: list[Task], found: Split | None, category: str | None, ids: list[str] | None,
+                  split: str | None) -> list[Task]:
+    """The tasks (of the ``--split`` half) that pass ``--category`` and ``--task``; none is an error, and so is
+    a ``--task`` of the other half."""
     check_category(category)
-    chosen = load_tasks(tasks_files, catalogue=dom.catalogue, domain=dom)
-    if category is not None:
-        chosen = [t for t in chosen if t.category == category]
+    chosen = [t for t in half if category in (None, t.category)]
     if ids:
+        halves = found.halves if found is not None and split is not None else {}
+        for task_id in ids:
+            if halves.get(task_id, split) != split:
+                raise UserError(f"task {task_id!r} is in the {halves[task_id]} half, not in --split {split}")
         chosen = [find_task(chosen, t) for t in ids]
     if not chosen:
         raise UserError("no task matches the filters")

@@ -55,10 +55,12 @@ def new(folder: Path = typer.Argument(..., help="The folder to create (it must n
 @app.command("check")
 def check(domain: str = typer.Argument(..., help="A domain folder, or a built-in domain's name.")) -> None:
     """Check a domain: its file, its prompt examples (each in its stage's grammar), its tasks and its reference
-    plans (run in its world). Exit 2 for a problem in a file, 1 if a reference plan falls short."""
+    plans (run in its world), and its development/test split if it has one. Exit 2 for a problem in a file (a
+    feasible task in neither half of the split too), 1 if a reference plan falls short."""
     from ..benchmark.reference_plans import category_table, check_reference_plans
     from ..benchmark.tasks import load_tasks
     from ..planner.prompting.example_check import check_examples
+    from .benchmark import check_split
 
     loaded = load_domain(domain)
     catalogue = loaded.catalogue
@@ -72,10 +74,12 @@ def check(domain: str = typer.Argument(..., help="A domain folder, or a built-in
     if not files:
         typer.echo(f"no tasks: add {loaded.task_files()[0]} to benchmark it")
         return
-    results = check_reference_plans(load_tasks(files, domain=loaded), domain=loaded)
+    tasks = load_tasks(files, domain=loaded)
+    results = check_reference_plans(tasks, domain=loaded)
     typer.echo(category_table(results))
     failed = [r for r in results if not r.passed]
     for result in failed:
         typer.echo(f"FAILED {result.task.id}: {result.problem}")
+    check_split(loaded, tasks)
     if failed:
         raise typer.Exit(1)

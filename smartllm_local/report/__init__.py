@@ -47,7 +47,9 @@ def markdown(runs: Sequence[Run], tables: Sequence[Table]) -> str:
         versions = identity.get("versions", {})
         scored = len(run.seeds[0]) if len(run.seeds) == 1 else "/".join(str(len(s)) for s in run.seeds)
         seeds = ", ".join(str(m.get("identity", {}).get("arguments", {}).get("seed")) for m in run.manifests)
-        parts.append(f"- **{run.label}**: `{run.folder}`; tasks scored {scored}; seed(s) {seeds}; "
+        half = run.arguments.get("split")
+        tasks = f" (the {half} half of {run.manifests[0].get('split', {}).get('file')})" if half else ""
+        parts.append(f"- **{run.label}**: `{run.folder}`; tasks scored {scored}{tasks}; seed(s) {seeds}; "
                      f"model {model.get('name', '-')}{digest}; smartllm-local {versions.get('smartllm-local')}, "
                      f"llama-cpp-python {versions.get('llama-cpp-python')}, ai2thor {versions.get('ai2thor')}; "
                      f"started {run.manifests[0].get('started')}")

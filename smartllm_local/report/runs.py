@@ -94,6 +94,19 @@ class Run:
         """The same run with only the lines of tasks ``ids``."""
         return replace(self, seeds=[[line for line in lines if line["id"] in ids] for lines in self.seeds])
 
+    def parts(self) -> list[tuple[str, Run]]:
+        """The task sets a table gives this run's rows for, labelled: a run of one half (``--split``) is that
+        half; a run of every task whose run.json keeps the split is its test half (the feasible tasks the
+        split puts there, and every infeasible one), then all; a run without a split is all."""
+        half = self.arguments.get("split")
+        if half:
+            return [(f"{half} half", self)]
+        test = frozenset(self.manifests[0].get("split", {}).get("test", ()))
+        if not test & {line["id"] for line in self.lines if line["feasible"]}:
+            return [("all", self)]
+        infeasible = frozenset(line["id"] for line in self.lines if not line["feasible"])
+        return [("test half", self.restricted(test | infeasible)), ("all", self)]
+
 
 def load_run(folder: str | Path) -> Run:
     """Read a run folder (or a ``--seeds`` folder of them).

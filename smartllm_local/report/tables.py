@@ -106,13 +106,26 @@ def _who(run: Run) -> list[Cell]:
 def table_one(runs: Sequence[Run]) -> Table:
     cats = categories(runs)
     table = Table("table1", "Table I: success by task category",
-                  ["Method", "Model", "Variant", "Seeds"] + [f"{c} {m}" for c in cats for m in PAPER_METRICS])
+                  ["Method", "Model", "Variant", "Tasks", "Seeds"] + [f"{c} {m}" for c in cats for m in PAPER_METRICS])
     for run in runs:
-        table.rows.append(_who(run) + [len(run.seeds)] + [
-            _mean_over_seeds(run, c, m) for c in cats for m in PAPER_METRICS])
+        for tasks, part in run.parts():
+            table.rows.append(_who(run) + [tasks, len(run.seeds)] + [
+                _mean_over_seeds(part, c, m) for c in cats for m in PAPER_METRICS])
     table.notes.append("Means over each category's feasible tasks (a task that errored or was refused scores 0); "
                        "with several seeds, the mean of the seeds' means.")
+    table.notes += _split_notes(runs)
     return table
+
+
+def _split_notes(runs: Sequence[Run]) -> list[str]:
+    """What the Tasks column's halves are, where a row gives one."""
+    files = sorted({run.manifests[0].get("split", {}).get("file", "") for run in runs
+                    if any(tasks != "all" for tasks, _ in run.parts())})
+    if not files:
+        return []
+    return [f"Tasks: a half of the development/test split ({', '.join(files)}) is the feasible tasks it puts "
+            "there and every infeasible task; prompts and settings are chosen on the dev half only, so the test "
+            "half's figures were not tuned on its own tasks. all: every task the run holds."]
 
 
 def table_two(runs: Sequence[Run]) -> Table | None:
@@ -121,12 +134,14 @@ def table_two(runs: Sequence[Run]) -> Table | None:
         return None
     cats = categories(seeded)
     table = Table("table2", "Table II: variability over seeds (mean ± standard deviation)",
-                  ["Method", "Model", "Variant", "Seeds"] + [f"{c} {m}" for c in cats for m in PAPER_METRICS])
+                  ["Method", "Model", "Variant", "Tasks", "Seeds"] + [f"{c} {m}" for c in cats for m in PAPER_METRICS])
     for run in seeded:
-        table.rows.append(_who(run) + [len(run.seeds)] + [
-            mean_sd(per_seed(run, c, m)) for c in cats for m in PAPER_METRICS])
+        for tasks, part in run.parts():
+            table.rows.append(_who(run) + [tasks, len(run.seeds)] + [
+                mean_sd(per_seed(part, c, m)) for c in cats for m in PAPER_METRICS])
     table.notes.append("Each cell: the mean and the sample standard deviation, over the seeds, of the category's "
                        "mean.")
+    table.notes += _split_notes(seeded)
     return table
 
 

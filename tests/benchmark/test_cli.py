@@ -8,7 +8,9 @@ import sys
 
 import pytest
 
+from smartllm_local.benchmark.split import load_split
 from smartllm_local.benchmark.tasks import SMARTLLM_CATEGORIES
+from smartllm_local.domain import load_domain
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
@@ -50,12 +52,17 @@ def test_check_prints_the_table_and_passes(feasible, infeasible):
         assert rows[category][:4] == [category, str(n), f"{n}/{n}", "1.00"]
     assert rows["infeasible"][:3] == ["infeasible", str(len(infeasible)), f"{len(infeasible)}/{len(infeasible)}"]
     assert "FAILED" not in done.stdout
+    # and each half of the development/test split, per category
+    split = load_split(load_domain().split_file())
+    for half in ("dev", "test"):
+        ours = [t for t in feasible if t.id in split.half(half)]
+        counts = ", ".join(f"{c} {sum(t.category == c for t in ours)}" for c in SMARTLLM_CATEGORIES)
+        assert f"{half} half: {len(ours)} feasible ({counts}) and the {len(infeasible)} infeasible" in done.stdout
 
 
 @pytest.mark.parametrize("broken", ["missing", "failing"])
 def test_check_fails_on_a_bad_reference_plan(tmp_path, broken):
     from smartllm_local.benchmark.reference_plans import default_plans_dir
-    from smartllm_local.domain import load_domain
 
     tasks = tmp_path / "tasks.jsonl"
     rows = [r for r in load_domain().task_files()[0].read_text().splitlines()

@@ -14,7 +14,9 @@ from pathlib import Path
 import matplotlib.image
 import pytest
 
+from smartllm_local.benchmark.split import load_split
 from smartllm_local.benchmark.tasks import SMARTLLM_CATEGORIES as CATEGORIES
+from smartllm_local.domain import load_domain
 from smartllm_local.report.runs import Run
 
 CLI = [sys.executable, "-m", "smartllm_local", "benchmark", "report"]
@@ -55,19 +57,36 @@ def report(runs, tmp_path_factory):
 def test_table_one_is_recomputed_from_the_lines_and_the_reference_scores_one_everywhere(runs, report):
     out, proc = report
     rows = _rows(out / "table1.csv")
-    assert [(r["Method"], r["Variant"], r["Seeds"]) for r in rows] == [
-        ("reference", "-", "1"), ("smartllm", "-", "1"), ("smartllm", "no coalition", "1"),
-        ("decomp-random", "-", "2")]
-    assert rows[1]["Model"] == "gemma3-270m-q4_k_m" and rows[3]["Model"].startswith("SmolLM2-135M")
-    for row, name in zip(rows[:3], ("reference", "gemma", "ablation")):
-        lines = _lines(runs[name][0])
+    test = load_split(load_domain().split_file()).half("test")
+    names = ("reference", "gemma", "ablation", "seeds")
+    # A run of the household's tasks without --split: its test half's row (where it ran a test-half task), then all.
+    parts = [(name, tasks) for name in names
+             for tasks in (["test half"] if any(line["feasible"] and line["id"] in test
+                                                 for line in _lines(_first(runs[name][0]))) else []) + ["all"]]
+    method = {"reference": "reference", "seeds": "decomp-random"}
+    assert [(r["Method"], r["Variant"], r["Seeds"], r["Tasks"]) for r in rows] == [
+        (method.get(name, "smartllm"), "no coalition" if name == "ablation" else "-", "2" if name == "seeds" else "1",
+         tasks) for name, tasks in parts]
+    assert parts[0] == ("reference", "test half")
+    assert rows[parts.index(("gemma", "all"))]["Model"] == "gemma3-270m-q4_k_m"
+    assert rows[parts.index(("seeds", "all"))]["Model"].startswith("SmolLM2-135M")
+    for row, (name, tasks) in zip(rows, parts):
+        if name == "seeds":
+            continue
+        lines = [line for line in _lines(runs[name][0])
+                 if tasks == "all" or not line["feasible"] or line["id"] in test]
         for category in CATEGORIES:
             for metric in METRICS:
                 assert _number(row[f"{category} {metric}"]) == pytest.approx(
-                    _expected_mean(lines, category, metric)), (name, category, metric)
-    assert all(float(rows[0][f"{c} {m}"]) == 1.0 for c in CATEGORIES for m in METRICS)
+                    _expected_mean(lines, category, metric)), (name, tasks, category, metric)
+    assert all(float(rows[k][f"{c} {m}"]) == 1.0 for k in (0, 1) for c in CATEGORIES for m in METRICS)
     assert "## Table I: success by task category" in proc.stdout
     assert "**The runs cover different tasks**" in (out / "report.md").read_text()
+
+
+def _first(folder: Path) -> Path:
+    """A run folder, or a --seeds folder's first seed."""
+    return folder if (folder / "results.jsonl").is_file() else folder / "seed-0"
 
 
 def test_a_variant_names_each_switch_set_by_hand():
@@ -92,7 +111,7 @@ def test_the_summary_variant_is_what_a_run_planned_with_whatever_its_model_defau
 
 def test_table_two_gives_the_spread_over_seeds(runs, report):
     out, _ = report
-    rows = _rows(out / "table2.csv")
+    rows = [r for r in _rows(out / "table2.csv") if r["Tasks"] == "all"]
     assert [(r["Method"], r["Seeds"]) for r in rows] == [("decomp-random", "2")]
     seeds = [_lines(runs["seeds"][0] / f"seed-{s}") for s in (0, 1)]
     for metric in METRICS:
