@@ -16,7 +16,7 @@ from ..errors import UserError
 from ..files import check_output_file, check_output_folder, json_text, write_atomic
 from ..planner.backends import model_location
 from ..planner.models import EMBEDDED
-from .options import ModelOptions, model_options
+from .options import ModelOptions, given_path, model_options
 
 
 @model_options("backend", "endpoint", "server_timeout", "n_ctx", "n_gpu_layers", "chat_template", "threads")
@@ -30,10 +30,11 @@ def bench_command(
         "Also time the whole benchmark with the first model (minutes).")),
     executor: bool = typer.Option(True, "--executor/--no-executor", help=(
         "Also time the executor on every reference plan.")),
-    benchmark_out: Path | None = typer.Option(None, "--benchmark-out", help=(
+    benchmark_out: Path | None = typer.Option(None, "--benchmark-out", parser=given_path, metavar="DIR", help=(
         "Keep the whole benchmark's run folder here (a new folder, as `benchmark run --out` writes it), "
         "for `benchmark report`.")),
-    out: Path = typer.Option(Path("bench.json"), "--out", help="The JSON file to write."),
+    out: Path = typer.Option(Path("bench.json"), "--out", parser=given_path, metavar="FILE",
+                             help="The JSON file to write."),
     *,
     model_settings: dict[str, Any],
 ) -> None:

@@ -22,6 +22,7 @@ from ..files import check_output_file, check_output_folder, write_atomic
 from ..planner.backends import model_location
 from ..planner.pipeline import Planner
 from ..provenance import run_manifest
+from ..world.controller import check_build
 from .options import (
     CATALOGUE,
     DOMAIN,
@@ -30,7 +31,9 @@ from .options import (
     TASKS,
     THOR_BUILD,
     ModelOptions,
+    given_path,
     model_options,
+    refuse_household_options,
 )
 from .progress import RunProgress
 
@@ -75,6 +78,11 @@ def check(
 
     dom = load_domain(domain)
     loaded = load_tasks(tasks or dom.task_files(), domain=dom)
+    if plans is not None and not plans.is_dir():
+        raise UserError(f"--plans {plans} is not a folder: give the folder of reference plans (<task id>.py)")
+    refuse_household_options(dom, None, thor_build)
+    if dom.is_ai2thor:
+        check_build(thor_build)
     results = check_reference_plans(loaded, plans, build=str(thor_build) if thor_build else None, domain=dom)
     typer.echo(category_table(results))
     failed = [r for r in results if not r.passed]
@@ -88,8 +96,8 @@ def check(
 def report(
     runs: list[Path] = typer.Argument(..., help="Run folders (the --out of `benchmark run`; a --seeds folder is one "
                                                 "row with its spread)."),
-    out: Path | None = typer.Option(None, "--out", help="Where to write report.md, the CSVs and the figures "
-                                                           "(default: FIRST_RUN/report)."),
+    out: Path | None = typer.Option(None, "--out", parser=given_path, metavar="DIR", help=(
+        "Where to write report.md, the CSVs and the figures (default: FIRST_RUN/report).")),
 ) -> None:
     """The paper's Tables I-III, refusals, efficiency, time and tokens per stage (Markdown and CSV) and
     figures (PNG), from the runs' results.jsonl and run.json alone."""
@@ -103,7 +111,8 @@ def report(
 @app.command("import-smartllm")
 def import_smartllm(
     source: Path = typer.Argument(..., help="SMART-LLM's repository (or its data/final_test folder)."),
-    out: Path = typer.Option(..., "--out", help="The task file (JSON lines) to write."),
+    out: Path = typer.Option(..., "--out", parser=given_path, metavar="FILE",
+                             help="The task file (JSON lines) to write."),
 ) -> None:
     """Import SMART-LLM's data/final_test/FloorPlan<N>.json files as a task file."""
     from ..benchmark.importer import import_smartllm as run_import
@@ -120,7 +129,7 @@ def import_smartllm(
 @model_options()
 def run(
     ctx: typer.Context,
-    out: Path = typer.Option(..., "--out", help=(
+    out: Path = typer.Option(..., "--out", parser=given_path, metavar="DIR", help=(
         "Folder for run.json, per-task artifacts, results.jsonl and summary.txt. A run stopped at any "
         "point (Ctrl-C, a crash, kill -9) and started again with the same arguments resumes here.")),
     restart: bool = typer.Option(False, "--restart", help="Discard the run --out holds and start over."),
@@ -148,11 +157,15 @@ def run(
     chosen = _chosen_tasks(dom, tasks_files, category, task)
     if method not in METHODS:
         raise UserError(f"--method must be one of {', '.join(METHODS)}, not {method!r}")
+    refuse_household_options(dom, None, thor_build)
+    if dom.is_ai2thor:
+        check_build(thor_build)  # every task runs in it
     chosen_seeds = parse_seeds(seeds, options.seed)
     if len(chosen_seeds) > 1 and options.config.sampling.temperature == 0 and method != "decomp-random":
         raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
     arguments = {k: v for k, v in ctx.params.items()
                  if k not in ("out", "restart", "seeds", "prefix_cache", "workers", "server_timeout")}
+    arguments["n_ctx"] = options.n_ctx  # the context asked for, given or not, as run.json has always named it
     model_path = None if method == "reference" else model_location(options.backend, options.model)
     runs = []
     for s in chosen_seeds:  # every run folder is checked before the model loads
