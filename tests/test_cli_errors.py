@@ -139,6 +139,26 @@ def test_an_empty_path_to_write_is_refused_not_taken_for_the_working_folder(tmp_
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_task_named_twice_is_refused_not_run_and_counted_twice(tmp_path):
+    one_line_error(cli("benchmark", "run", "--method", "reference", "--task", "kitchen-01", "--task", "kitchen-02",
+                       "--task", "kitchen-01", "--out", "out", cwd=tmp_path),
+                   "--task kitchen-01 is given more than once")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_model_benched_twice_is_refused(tmp_path):
+    one_line_error(cli("bench", "--models", "smollm2,gemma3-270m,smollm2", "--out", "b.json", cwd=tmp_path),
+                   "--models names smollm2 more than once")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_run_reported_twice_is_refused(tmp_path):
+    (tmp_path / "run").mkdir()
+    one_line_error(cli("benchmark", "report", "run", "./run/", "--out", "report", cwd=tmp_path),
+                   "error: run: a run folder given more than once")
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]
+
+
 def test_a_reference_plans_folder_that_is_not_there_is_refused(tmp_path):
     one_line_error(cli("benchmark", "check", "--plans", "nowhere", cwd=tmp_path),
                    "--plans nowhere is not a folder")

@@ -31,8 +31,8 @@ def _plan(progress: PlanProgress) -> None:
                                              forced_tokens=37, prompt_seconds=12.5, seconds=36.5))
 
 
-SUMMARY = ("prompt 2,000 tokens ({reused} reused) in 12.5 s; 120 tokens written (+37 forced) in 24.0 s, "
-           "5.0 tokens/s; 36.5 s in all")
+SUMMARY = ("prompt 2,000 tokens ({reused} reused) in 12.5 s; 157 tokens written (120 by the model) in 24.0 s, "
+           "6.5 tokens/s; 36.5 s in all")
 NOTE = f"its 1,500 tokens of examples were evaluated, as they are the first time: {KEPT}"
 
 
@@ -48,6 +48,14 @@ def test_on_a_terminal_each_stage_is_left_with_its_summary_and_the_first_evaluat
     for line, reused in zip(final, ("0", "0", "1,500")):
         assert line.rstrip().endswith(SUMMARY.format(reused=reused)), line
     assert "evaluating the prompt (2,000 tokens)" in text  # what each stage showed while its prompt ran
+
+
+def test_on_a_narrow_terminal_the_detail_wraps_and_each_stage_and_its_time_stay_whole():
+    screen = io.StringIO()
+    _plan(PlanProgress(Console(file=screen, force_terminal=True, width=80), kept=KEPT))
+    finished = [line for line in ESCAPE.sub("", screen.getvalue()).splitlines() if line.startswith("✓")][-3:]
+    assert [re.match(r"✓ (\w+) +\d+:\d\d:\d\d prompt 2,000 tokens", line).group(1) for line in finished] == [
+        "decomposition", "coalition", "allocation"]
 
 
 def test_elsewhere_each_stage_is_one_plain_line_and_the_explanation_rides_on_the_first():

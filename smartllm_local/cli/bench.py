@@ -45,9 +45,13 @@ def bench_command(
     if models is None:
         chosen: list[str | None] = [None] if backend == "server" else list(EMBEDDED)
     else:
-        chosen = [m.strip() for m in models.split(",") if m.strip()]
-        if not chosen:
+        names = [m.strip() for m in models.split(",") if m.strip()]
+        if not names:
             raise UserError("--models needs at least one model")
+        twice = sorted({m for m in names if names.count(m) > 1})
+        if twice:
+            raise UserError(f"--models names {', '.join(twice)} more than once")
+        chosen = list(names)
     if sample < 2:
         raise UserError("--sample must be at least 2: reuse shows from the second task on")
     check_output_file(out, "--out")

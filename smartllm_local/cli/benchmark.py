@@ -103,6 +103,10 @@ def report(
     figures (PNG), from the runs' results.jsonl and run.json alone."""
     from ..report import write_report
 
+    folders = [run.resolve() for run in runs]
+    twice = sorted({str(run) for run, folder in zip(runs, folders) if folders.count(folder) > 1})
+    if twice:
+        raise UserError(f"{', '.join(twice)}: a run folder given more than once would be a row of the report twice")
     written = write_report(runs, out if out is not None else runs[0] / "report")
     typer.echo(written[0].read_text(encoding="utf-8"))
     typer.echo(f"wrote {', '.join(str(p) for p in written)}")
@@ -192,6 +196,9 @@ def _chosen_tasks(dom: Domain, tasks_files: list[Path], category: str | None, id
     if category is not None:
         chosen = [t for t in chosen if t.category == category]
     if ids:
+        twice = sorted({t for t in ids if ids.count(t) > 1})
+        if twice:
+            raise UserError(f"--task {', '.join(twice)} is given more than once: each task is run once per seed")
         chosen = [find_task(chosen, t) for t in ids]
     if not chosen:
         raise UserError("no task matches the filters")

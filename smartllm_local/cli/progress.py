@@ -21,6 +21,7 @@ from rich.progress import (
     TimeElapsedColumn,
     TimeRemainingColumn,
 )
+from rich.table import Column
 
 from ..benchmark.run import Progress as Step
 from ..planner.stages import StageRecord
@@ -80,8 +81,13 @@ class PlanProgress:
 
     def __enter__(self) -> PlanProgress:
         if self.console.is_terminal and not self.quiet:
-            self.bar = Progress(SpinnerColumn(finished_text="[green]✓"), TextColumn("[bold]{task.description:<13}"),
-                                TimeElapsedColumn(), TextColumn("{task.fields[detail]}"), console=self.console)
+            # On a narrow terminal the detail wraps: the stage and its time stay whole.
+            fixed = Column(no_wrap=True)
+            self.bar = Progress(SpinnerColumn(finished_text="[green]✓", table_column=fixed),
+                                TextColumn("[bold]{task.description:<13}", table_column=fixed),
+                                TimeElapsedColumn(table_column=fixed),
+                                TextColumn("{task.fields[detail]}", table_column=Column(overflow="fold")),
+                                console=self.console)
             self.bar.start()
         return self
 
@@ -120,8 +126,7 @@ class PlanProgress:
         if self.bar is None or self._task is None:
             return
         seconds = time.perf_counter() - self._writing_since
-        rate = generated / seconds if seconds > 0 else 0.0
-        self.bar.update(self._task, detail=f"{generated:,} tokens written (+{forced:,} forced), {rate:.1f} tokens/s")
+        self.bar.update(self._task, detail=f"{_written(generated, forced)}, {_rate(generated + forced, seconds)}")
 
     def stage_ended(self, record: StageRecord) -> None:
         summary = stage_summary(record)
@@ -135,10 +140,18 @@ class PlanProgress:
 
 
 def stage_summary(record: StageRecord) -> str:
-    """A finished stage in a line: its prompt, the tokens it wrote and how fast, and its time."""
+    """A finished stage in a line: its prompt, the tokens it wrote (the model's and those the grammar forced) and
+    how fast, and its time."""
     writing = max(0.0, record.seconds - record.prompt_seconds)
-    rate = record.generated_tokens / writing if writing > 0 else 0.0
     return (f"prompt {record.prompt_tokens:,} tokens ({record.reused_tokens:,} reused) in "
-            f"{record.prompt_seconds:.1f} s; {record.generated_tokens:,} tokens written "
-            f"(+{record.forced_tokens:,} forced) in {writing:.1f} s, {rate:.1f} tokens/s; "
+            f"{record.prompt_seconds:.1f} s; {_written(record.generated_tokens, record.forced_tokens)} in "
+            f"{writing:.1f} s, {_rate(record.generated_tokens + record.forced_tokens, writing)}; "
             f"{record.seconds:.1f} s in all")
+
+
+def _written(generated: int, forced: int) -> str:
+    return f"{generated + forced:,} tokens written ({generated:,} by the model)"
+
+
+def _rate(tokens: int, seconds: float) -> str:
+    return f"{tokens / seconds if seconds > 0 else 0.0:.1f} tokens/s"
