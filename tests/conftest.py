@@ -42,6 +42,7 @@ class Planned:
     out: Path  # the plan command's --out folder
     states: Path  # its prefix store, empty before it ran
     stdout: str
+    stderr: str  # not a terminal: a line per stage
 
 
 @pytest.fixture(scope="session")
@@ -55,4 +56,4 @@ def kitchen01(tmp_path_factory) -> Planned:
                            "--prefix-cache", str(states), "--out", str(out)],
                           capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr
-    return Planned(out, states, proc.stdout)
+    return Planned(out, states, proc.stdout, proc.stderr)

@@ -6,6 +6,7 @@ Run through the real CLI (``python -m smartllm_local``), as a user runs it; the 
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -71,14 +72,96 @@ def test_help_and_bare_groups_behave_as_before(tmp_path):
     (["--temperature", "inf"], ["--temperature", "not inf"]),
     (["--temperature", "-inf"], ["--temperature", "not -inf"]),
     (["--temperature", "-0.5"], ["--temperature", "not -0.5"]),
+    (["--threads", "0"], ["--threads must be 1 or more, not 0"]),
+    (["--threads", "-4"], ["--threads must be 1 or more, not -4"]),
+    (["--n-gpu-layers", "-2"], ["--n-gpu-layers must be -1 (all), 0 (none, the default) or more, not -2"]),
+    (["--n-ctx", "256"], ["--n-ctx must be at least 512 tokens, not 256"]),
+    # the test suite's model is SmolLM2 (tests/conftest.py), trained on 8,192 tokens: read before it loads
+    (["--n-ctx", "100000"], ["--n-ctx 100000 is more than the 8,192 tokens smollm2 was trained on: give --n-ctx "
+                             "8192 or less (left out, it is 8192)"]),
+    (["--prefix-cache", ""], ["--prefix-cache needs a folder, or off"]),
+    (["--thor-build", "nowhere"], ["AI2-THOR build", "nowhere is not an executable file"]),
 ])
 @pytest.mark.parametrize("command", [
-    ["plan", "Put the apple in the fridge", "--floor-plan", "6", "--robots", "1", "--out", "out"],
+    ["plan", "--task", "kitchen-01", "--execute", "--out", "out"],
     ["benchmark", "run", "--out", "out"],
 ])
-def test_seed_and_temperature_are_checked_before_any_work(tmp_path, command, args, parts):
+def test_model_and_world_options_are_checked_before_any_work(tmp_path, command, args, parts):
     one_line_error(cli(*command, *args, cwd=tmp_path), *parts)
-    assert not (tmp_path / "out").exists()
+    assert list(tmp_path.iterdir()) == []  # no out folder, no prefix states in the working folder
+
+
+def test_a_context_up_to_the_trained_one_is_taken_and_a_longer_one_refused():
+    from smartllm_local.cli.options import ModelOptions
+    from smartllm_local.planner.backends import trained_context
+
+    assert trained_context("llamacpp", "smollm2") == 8192 == trained_context("llamacpp", "gemma3-270m") // 4
+    assert ModelOptions(model="smollm2", n_ctx=8192).n_ctx == 8192
+    assert ModelOptions(model="gemma3-270m", n_ctx=32768).n_ctx == 32768
+    with pytest.raises(UserError, match="--n-ctx 8193 is more than the 8,192 tokens smollm2 was trained on"):
+        ModelOptions(model="smollm2", n_ctx=8193)
+    # left out, the context is 8,192 or the trained one where shorter, as the backends fit it
+    assert ModelOptions(model="smollm2").n_ctx == 8192 and "--n-ctx" not in ModelOptions().as_arguments()
+    # nothing to read: a served model --model does not name, a file that is not there (loading says why)
+    assert trained_context("server", None) is None and trained_context("llamacpp", "missing.gguf") is None
+
+
+@pytest.mark.parametrize("instruction", ["   ", "?!...", " - ", "\t"])
+def test_an_instruction_with_no_words_is_refused_before_any_work(tmp_path, instruction):
+    one_line_error(cli("plan", instruction, "--floor-plan", "6", "--robots", "1", "--out", "out", cwd=tmp_path),
+                   f"the instruction {instruction!r} has no words: say what the robots should do")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_task_whose_instruction_has_no_words_is_refused_before_any_work(tmp_path):
+    task = {"id": "blank-01", "category": "elemental", "floor_plan": 1, "instruction": " ... ", "robots": [1],
+            "goals": [{"name": "Fridge", "contains": ["Apple"], "state": None}], "trans": 0, "max_trans": 0,
+            "feasible": True}
+    (tmp_path / "tasks.jsonl").write_text(json.dumps(task) + "\n")
+    one_line_error(cli("benchmark", "run", "--tasks", "tasks.jsonl", "--out", "out", cwd=tmp_path),
+                   "tasks.jsonl:1: instruction: ' ... ' has no words")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tasks.jsonl"]
+
+
+@pytest.mark.parametrize("args, option", [
+    (["plan", "Put the apple in the fridge", "--floor-plan", "6", "--robots", "1", "--out", ""], "--out"),
+    (["benchmark", "run", "--out", ""], "--out"),
+    (["benchmark", "report", "run", "--out", ""], "--out"),
+    (["benchmark", "import-smartllm", "repo", "--out", ""], "--out"),
+    (["bench", "--out", ""], "--out"),
+    (["bench", "--benchmark-out", " "], "--benchmark-out"),
+    (["execute", "plan.py", "--task", "kitchen-01", "--trace", ""], "--trace"),
+    (["dispatch", "plan.py", "lab.toml", "--robots", "1", "--trace", ""], "--trace"),
+])
+def test_an_empty_path_to_write_is_refused_not_taken_for_the_working_folder(tmp_path, args, option):
+    one_line_error(cli(*args, cwd=tmp_path), f"Invalid value for '{option}': an empty path: give a file or "
+                                             "folder name")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_task_named_twice_is_refused_not_run_and_counted_twice(tmp_path):
+    one_line_error(cli("benchmark", "run", "--method", "reference", "--task", "kitchen-01", "--task", "kitchen-02",
+                       "--task", "kitchen-01", "--out", "out", cwd=tmp_path),
+                   "--task kitchen-01 is given more than once")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_model_benched_twice_is_refused(tmp_path):
+    one_line_error(cli("bench", "--models", "smollm2,gemma3-270m,smollm2", "--out", "b.json", cwd=tmp_path),
+                   "--models names smollm2 more than once")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_run_reported_twice_is_refused(tmp_path):
+    (tmp_path / "run").mkdir()
+    one_line_error(cli("benchmark", "report", "run", "./run/", "--out", "report", cwd=tmp_path),
+                   "error: run: a run folder given more than once")
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]
+
+
+def test_a_reference_plans_folder_that_is_not_there_is_refused(tmp_path):
+    one_line_error(cli("benchmark", "check", "--plans", "nowhere", cwd=tmp_path),
+                   "--plans nowhere is not a folder")
 
 
 @pytest.mark.parametrize("args, parts", [

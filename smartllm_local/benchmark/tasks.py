@@ -97,6 +97,12 @@ def _scene_types(floor_plan: str) -> frozenset[str]:
     return frozenset(t.lower() for t in types)
 
 
+def has_words(instruction: str) -> bool:
+    """Whether an instruction has a letter or digit: one of only spaces or punctuation says nothing to plan (a
+    model given one would invent a task)."""
+    return any(ch.isalnum() for ch in instruction)
+
+
 def check_task(data: Any, catalogue: Catalogue, where: str,
                domain: Domain | None = None) -> tuple[Task | None, list[str]]:
     """Check one decoded line (of ``domain``'s tasks, default household); return the task and the problems found."""
@@ -108,6 +114,8 @@ def check_task(data: Any, catalogue: Catalogue, where: str,
         problems.append(f"{where}: {field}: {error.message}")
     if problems:
         return None, problems
+    if not has_words(data["instruction"]):
+        return None, [f"{where}: instruction: {data['instruction']!r} has no words: say what the robots should do"]
     try:
         scene = data["floor_plan"] if site else floor_plan_name(data["floor_plan"])
     except UnknownFloorPlanError as exc:

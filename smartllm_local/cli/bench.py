@@ -16,7 +16,7 @@ from ..errors import UserError
 from ..files import check_output_file, check_output_folder, json_text, write_atomic
 from ..planner.backends import model_location
 from ..planner.models import EMBEDDED
-from .options import ModelOptions, model_options
+from .options import ModelOptions, given_path, model_options
 
 
 @model_options("backend", "endpoint", "server_timeout", "n_ctx", "n_gpu_layers", "chat_template", "threads")
@@ -33,10 +33,11 @@ def bench_command(
     sharing: bool = typer.Option(True, "--sharing/--no-sharing", help=(
         "Also time `plan` of the first sample task with the first model alone, then two such processes at once "
         "(a user planning beside other work).")),
-    benchmark_out: Path | None = typer.Option(None, "--benchmark-out", help=(
+    benchmark_out: Path | None = typer.Option(None, "--benchmark-out", parser=given_path, metavar="DIR", help=(
         "Keep the whole benchmark's run folder here (a new folder, as `benchmark run --out` writes it), "
         "for `benchmark report`.")),
-    out: Path = typer.Option(Path("bench.json"), "--out", help="The JSON file to write."),
+    out: Path = typer.Option(Path("bench.json"), "--out", parser=given_path, metavar="FILE",
+                             help="The JSON file to write."),
     *,
     model_settings: dict[str, Any],
 ) -> None:
@@ -47,9 +48,13 @@ def bench_command(
     if models is None:
         chosen: list[str | None] = [None] if backend == "server" else list(EMBEDDED)
     else:
-        chosen = [m.strip() for m in models.split(",") if m.strip()]
-        if not chosen:
+        names = [m.strip() for m in models.split(",") if m.strip()]
+        if not names:
             raise UserError("--models needs at least one model")
+        twice = sorted({m for m in names if names.count(m) > 1})
+        if twice:
+            raise UserError(f"--models names {', '.join(twice)} more than once")
+        chosen = list(names)
     if sample < 2:
         raise UserError("--sample must be at least 2: reuse shows from the second task on")
     check_output_file(out, "--out")

@@ -31,6 +31,7 @@ from ..files import check_output_file, check_output_folder, write_atomic
 from ..planner.backends import model_location
 from ..planner.pipeline import Planner
 from ..provenance import run_manifest
+from ..world.controller import check_build
 from .options import (
     CATALOGUE,
     DOMAIN,
@@ -39,7 +40,9 @@ from .options import (
     TASKS,
     THOR_BUILD,
     ModelOptions,
+    given_path,
     model_options,
+    refuse_household_options,
 )
 from .progress import RunProgress
 
@@ -88,6 +91,11 @@ def check(
 
     dom = load_domain(domain)
     loaded = load_tasks(tasks or dom.task_files(), domain=dom)
+    if plans is not None and not plans.is_dir():
+        raise UserError(f"--plans {plans} is not a folder: give the folder of reference plans (<task id>.py)")
+    refuse_household_options(dom, None, thor_build)
+    if dom.is_ai2thor:
+        check_build(thor_build)
     results = check_reference_plans(loaded, plans, build=str(thor_build) if thor_build else None, domain=dom)
     typer.echo(category_table(results))
     failed = [r for r in results if not r.passed]
@@ -118,13 +126,17 @@ def check_split(dom: Domain, tasks: list[Task]) -> None:
 def report(
     runs: list[Path] = typer.Argument(..., help="Run folders (the --out of `benchmark run`; a --seeds folder is one "
                                                 "row with its spread)."),
-    out: Path | None = typer.Option(None, "--out", help="Where to write report.md, the CSVs and the figures "
-                                                           "(default: FIRST_RUN/report)."),
+    out: Path | None = typer.Option(None, "--out", parser=given_path, metavar="DIR", help=(
+        "Where to write report.md, the CSVs and the figures (default: FIRST_RUN/report).")),
 ) -> None:
     """The paper's Tables I-III, refusals, efficiency, time and tokens per stage (Markdown and CSV) and
     figures (PNG), from the runs' results.jsonl and run.json alone."""
     from ..report import write_report
 
+    folders = [run.resolve() for run in runs]
+    twice = sorted({str(run) for run, folder in zip(runs, folders) if folders.count(folder) > 1})
+    if twice:
+        raise UserError(f"{', '.join(twice)}: a run folder given more than once would be a row of the report twice")
     written = write_report(runs, out if out is not None else runs[0] / "report")
     typer.echo(written[0].read_text(encoding="utf-8"))
     typer.echo(f"wrote {', '.join(str(p) for p in written)}")
@@ -133,7 +145,8 @@ def report(
 @app.command("import-smartllm")
 def import_smartllm(
     source: Path = typer.Argument(..., help="SMART-LLM's repository (or its data/final_test folder)."),
-    out: Path = typer.Option(..., "--out", help="The task file (JSON lines) to write."),
+    out: Path = typer.Option(..., "--out", parser=given_path, metavar="FILE",
+                             help="The task file (JSON lines) to write."),
 ) -> None:
     """Import SMART-LLM's data/final_test/FloorPlan<N>.json files as a task file."""
     from ..benchmark.importer import import_smartllm as run_import
@@ -150,7 +163,7 @@ def import_smartllm(
 @model_options()
 def run(
     ctx: typer.Context,
-    out: Path = typer.Option(..., "--out", help=(
+    out: Path = typer.Option(..., "--out", parser=given_path, metavar="DIR", help=(
         "Folder for run.json, per-task artifacts, results.jsonl and summary.txt. A run stopped at any "
         "point (Ctrl-C, a crash, kill -9) and started again with the same arguments resumes here.")),
     restart: bool = typer.Option(False, "--restart", help="Discard the run --out holds and start over."),
@@ -184,11 +197,15 @@ def run(
     if problems:  # a run of every task goes on, and records the split as it is for the report
         print("warning: " + "\nwarning: ".join(problems) + "\nwarning: the report's test-half rows go by the split "
               "as it is (`benchmark check` lists the same)", file=sys.stderr)
+    refuse_household_options(dom, None, thor_build)
+    if dom.is_ai2thor:
+        check_build(thor_build)  # every task runs in it
     chosen_seeds = parse_seeds(seeds, options.seed)
     if len(chosen_seeds) > 1 and options.config.sampling.temperature == 0 and method != "decomp-random":
         raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
     arguments = {k: v for k, v in ctx.params.items()
                  if k not in ("out", "restart", "seeds", "prefix_cache", "workers", "server_timeout")}
+    arguments["n_ctx"] = options.n_ctx  # the context asked for, given or not, as run.json has always named it
     model_path = None if method == "reference" else model_location(options.backend, options.model)
     runs = []
     for s in chosen_seeds:  # every run folder is checked before the model loads
@@ -240,6 +257,9 @@ def _chosen_tasks(half: list[Task], found: Split | None, category: str | None, i
         for task_id in ids:
             if halves.get(task_id, split) != split:
                 raise UserError(f"task {task_id!r} is in the {halves[task_id]} half, not in --split {split}")
+        twice = sorted({t for t in ids if ids.count(t) > 1})
+        if twice:
+            raise UserError(f"--task {', '.join(twice)} is given more than once: each task is run once per seed")
         chosen = [find_task(chosen, t) for t in ids]
     if not chosen:
         raise UserError("no task matches the filters")

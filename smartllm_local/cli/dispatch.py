@@ -14,7 +14,7 @@ from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..files import check_output_file, write_json
 from ..plan_language import read_plan
 from ..robots import parse_robot_ids
-from .options import CATALOGUE_HELP, DOMAIN_HELP
+from .options import CATALOGUE_HELP, DOMAIN_HELP, given_path
 
 
 def dispatch(
@@ -22,7 +22,8 @@ def dispatch(
     functions: Path = typer.Argument(..., help="The dispatch file (TOML): the module:function carrying out "
                                                "each skill."),
     robots: str = typer.Option(..., help="The team as catalogue ids, e.g. 1,2,3; robots[i] is the i-th."),
-    trace: Path | None = typer.Option(None, help="Write every action to this JSON file."),
+    trace: Path | None = typer.Option(None, parser=given_path, metavar="FILE",
+                                      help="Write every action to this JSON file."),
     catalogue: Path | None = typer.Option(None, help=CATALOGUE_HELP),
     domain: str | None = typer.Option(None, help=DOMAIN_HELP),
 ) -> None:

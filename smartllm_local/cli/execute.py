@@ -18,7 +18,14 @@ from ..robots import parse_robot_ids
 from ..scoring import Scores, parse_goals, score_execution
 from ..world.scenes import floor_plan_name
 from .dispatch import run_record
-from .options import CATALOGUE_HELP, DOMAIN_HELP, THOR_BUILD_HELP, check_transitions, refuse_household_options
+from .options import (
+    CATALOGUE_HELP,
+    DOMAIN_HELP,
+    THOR_BUILD_HELP,
+    check_transitions,
+    given_path,
+    refuse_household_options,
+)
 
 
 def execute(
@@ -31,7 +38,8 @@ def execute(
     tasks: Path | None = typer.Option(None, help="A task file to take the floor plan, robots and goals from."),
     task: str | None = typer.Option(None, help="The task id in --tasks (default: the project's benchmark)."),
     as_json: bool = typer.Option(False, "--json", help="Print the metrics as one JSON object."),
-    trace: Path | None = typer.Option(None, help="Write every primitive action to this JSON file."),
+    trace: Path | None = typer.Option(None, parser=given_path, metavar="FILE",
+                                      help="Write every primitive action to this JSON file."),
     catalogue: Path | None = typer.Option(None, help=CATALOGUE_HELP),
     thor_build: Path | None = typer.Option(None, help=THOR_BUILD_HELP),
     domain: str | None = typer.Option(None, help=DOMAIN_HELP),
@@ -80,14 +88,28 @@ def _print_run(plan: Path, scene: str, team_ids: list[int], execution: Execution
     if as_json:
         typer.echo(json.dumps(scores.metrics()))
         return
-    fmt = lambda v: "n/a" if v is None else f"{v:.2f}"  # noqa: E731
     typer.echo(f"{plan} on {scene} with robots {team_ids}: {execution.succeeded}/{execution.attempted} actions "
                f"succeeded in {execution.ticks} ticks, {execution.transitions} transition(s)")
     for entry in execution.trace:
         if not entry.success:
             typer.echo(f"  tick {entry.tick}: {entry.skill}{tuple(entry.objects)} by {entry.robots} "
                        f"failed: {entry.error}")
-    for description, ok in scores.conditions:
-        typer.echo(f"  [{'x' if ok else ' '}] {description}")
-    typer.echo(f"SR {fmt(scores.SR)}  TCR {fmt(scores.TCR)}  GCR {fmt(scores.GCR)}  "
-               f"RU {fmt(scores.RU)}  Exe {fmt(scores.Exe)}")
+    for line in metrics_lines(scores, fix="give --trans and --max-trans (or --task ID)"):
+        typer.echo(line)
+
+
+def metrics_lines(scores: Scores, *, fix: str, transitions: bool = False) -> list[str]:
+    """Each goal condition met or not, the metrics, and why any is n/a (there were no goal conditions to judge
+    the run by, or no expected and maximum transitions), with ``fix``, what would give them."""
+    fmt = lambda v: "n/a" if v is None else f"{v:.2f}"  # noqa: E731
+    lines = [f"  [{'x' if ok else ' '}] {description}" for description, ok in scores.conditions]
+    lines.append(f"SR {fmt(scores.SR)}  TCR {fmt(scores.TCR)}  GCR {fmt(scores.GCR)}  RU {fmt(scores.RU)}  "
+                 f"Exe {fmt(scores.Exe)}" + (f"  transitions {scores.transitions}" if transitions else ""))
+    missing = []
+    if scores.GCR is None:
+        missing.append("goal conditions (TCR and GCR are judged by them, and SR needs TCR)")
+    if scores.RU is None:
+        missing.append("expected and maximum transitions (RU is judged by them, and SR needs RU)")
+    if missing:
+        lines.append(f"n/a: no {' and no '.join(missing)}; {fix}")
+    return lines

@@ -16,7 +16,15 @@ import typer
 
 from ..domain import Domain
 from ..errors import UserError
-from ..planner.backends import BACKENDS, Backend, LoopGuard, Sampling, check_server_options, load_backends
+from ..planner.backends import (
+    BACKENDS,
+    Backend,
+    LoopGuard,
+    Sampling,
+    check_server_options,
+    load_backends,
+    trained_context,
+)
 from ..planner.backends.prefix_cache import open_store
 from ..planner.models import DEFAULT_MODEL, EMBEDDED, WITHOUT_SUMMARY, default_model, summary_for
 from ..planner.pipeline import Planner, PlannerConfig
@@ -30,12 +38,13 @@ MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transforme
               f"{', '.join(EMBEDDED)} (default: {DEFAULT_MODEL}, or what SMARTLLM_MODEL names).")
 
 MAX_SEED = 2**32 - 1  # llama.cpp takes an unsigned 32-bit seed
+DEFAULT_N_CTX = 8192  # or less, where the model was trained on less (the backends fit it within that)
 
 
 class ModelOptions:
     """The model options of ``plan``, ``benchmark run`` and ``bench``, checked, turned into backends and planners."""
 
-    def __init__(self, *, model: str | None = None, backend: str = "llamacpp", n_ctx: int = 8192,
+    def __init__(self, *, model: str | None = None, backend: str = "llamacpp", n_ctx: int | None = None,
                  threads: int | None = None, n_gpu_layers: int = 0, seed: int = 0, temperature: float = 0.0,
                  no_comments: bool = False, summary: bool | None = None, no_coalition: bool = False,
                  no_grammar: bool = False, free_teams: bool = False, chat_template: str = "auto",
@@ -48,17 +57,26 @@ class ModelOptions:
             raise UserError(f"--temperature must be a number, 0 (greedy) or more, not {temperature}")
         if not 0 <= seed <= MAX_SEED:
             raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
-        if n_ctx < 512:
-            raise UserError("--n-ctx must be at least 512 tokens")
+        if n_ctx is not None and n_ctx < 512:
+            raise UserError(f"--n-ctx must be at least 512 tokens, not {n_ctx}")
+        if threads is not None and threads < 1:
+            raise UserError(f"--threads must be 1 or more, not {threads} (leave it out for all cores)")
+        if n_gpu_layers < -1:
+            raise UserError(f"--n-gpu-layers must be -1 (all), 0 (none, the default) or more, not {n_gpu_layers}")
         known = model if backend == "server" else model or default_model()
+        if n_ctx is not None:
+            _check_context(backend, model, n_ctx)
         chat_template = mode_for(known, chat_template)
         self.endpoints = [e.strip() for e in endpoint.split(",") if e.strip()] if endpoint else []
         check_server_options(backend, self.endpoints, workers)
         if server_timeout is not None and not (math.isfinite(server_timeout) and server_timeout > 0):
             raise UserError(f"--server-timeout must be a number of seconds above 0, not {server_timeout}")
         self.workers, self.server_timeout = workers, server_timeout
-        self.model, self.backend, self.n_ctx, self.threads = model, backend, n_ctx, threads
+        self.model, self.backend, self.threads = model, backend, threads
+        self.n_ctx, self.n_ctx_given = (n_ctx if n_ctx is not None else DEFAULT_N_CTX), n_ctx is not None
         self.n_gpu_layers = n_gpu_layers
+        if prefix_cache is not None and not prefix_cache.strip():
+            raise UserError("--prefix-cache needs a folder, or off (an empty one would fill the current folder)")
         self.prefix_cache = prefix_cache
         if backend == "llamacpp":  # a cache folder that can never be one fails before the model loads
             open_store(prefix_cache)
@@ -93,7 +111,7 @@ class ModelOptions:
         return [*(["--model", self.model] if self.model else []), "--backend", self.backend,
                 *(["--endpoint", ",".join(self.endpoints)] if self.endpoints else []),
                 *(["--server-timeout", str(self.server_timeout)] if self.server_timeout else []),
-                "--n-ctx", str(self.n_ctx), "--n-gpu-layers", str(self.n_gpu_layers),
+                *(["--n-ctx", str(self.n_ctx)] if self.n_ctx_given else []), "--n-gpu-layers", str(self.n_gpu_layers),
                 "--chat-template", self.config.chat_template,
                 *(["--threads", str(self.threads)] if self.threads else [])]
 
@@ -114,9 +132,13 @@ _ENDPOINT = typer.Option(None, "--endpoint", metavar="URL[,URL...]", help=(
     "http://127.0.0.1:8000 (python -m llama_cpp.server or vllm serve)."))
 _SERVER_TIMEOUT = typer.Option(None, "--server-timeout", help=(
     "--backend server: seconds a request may go unanswered before its task fails (default 300)."))
-_N_CTX = typer.Option(8192, "--n-ctx", help="Context size in tokens (at most the model's trained context).")
-_THREADS = typer.Option(None, help="CPU threads (default: all cores).")
-_GPU = typer.Option(0, "--n-gpu-layers", help="Layers to offload to a GPU (needs a CUDA or Metal build of llama.cpp).")
+_N_CTX = typer.Option(None, "--n-ctx", show_default=False, help=(
+    f"Context size in tokens, 512 or more (default: {DEFAULT_N_CTX}, or the model's trained context where that is "
+    "shorter). More than the model was trained on is refused. Through --backend server the server's own context "
+    "bounds it, and the trained context is checked only where --model names the served GGUF or tokenizer folder."))
+_THREADS = typer.Option(None, help="CPU threads, 1 or more (default: all cores).")
+_GPU = typer.Option(0, "--n-gpu-layers", help=(
+    "Layers to offload to a GPU, -1 for all (needs a CUDA or Metal build of llama.cpp)."))
 _SEED = typer.Option(0, help="Sampling seed.")
 _TEMPERATURE = typer.Option(0.0, help="0 is greedy decoding.")
 _NO_COMMENTS = typer.Option(False, "--no-comments", help="Ablation: examples without comments.")
@@ -159,7 +181,7 @@ _WORKERS = typer.Option(1, "--workers", help=(
 MODEL_PARAMETERS = [
     inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=option, annotation=kind)
     for name, kind, option in (
-        ("model", str | None, _MODEL), ("backend", str, _BACKEND), ("n_ctx", int, _N_CTX),
+        ("model", str | None, _MODEL), ("backend", str, _BACKEND), ("n_ctx", int | None, _N_CTX),
         ("threads", int | None, _THREADS), ("n_gpu_layers", int, _GPU), ("seed", int, _SEED),
         ("temperature", float, _TEMPERATURE), ("no_comments", bool, _NO_COMMENTS),
         ("summary", bool | None, _SUMMARY), ("no_coalition", bool, _NO_COALITION),
@@ -201,17 +223,37 @@ def model_options(*names: str, without: tuple[str, ...] = ()) -> Callable[[Calla
     return decorate
 
 
+def given_path(value: str | Path) -> Path:
+    """A file or folder to write, as an option gives it (or its default, a path): an empty one (an unset shell
+    variable, say) is refused rather than taken for the current folder, where a run would write among the
+    user's files."""
+    if not str(value).strip():
+        raise typer.BadParameter("an empty path: give a file or folder name")
+    return Path(value)
+
+
 CATALOGUE = typer.Option(None, help=CATALOGUE_HELP)
 THOR_BUILD = typer.Option(None, help=THOR_BUILD_HELP)
 TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
 DOMAIN = typer.Option(None, help=DOMAIN_HELP)
 
 
+def _check_context(backend: str, model: str | None, n_ctx: int) -> None:
+    """Refuse a context longer than the model was trained on (where that can be read before it loads): past it a
+    model's positions are ones it never learnt, and llama.cpp would only warn."""
+    trained = trained_context(backend, model)
+    if trained is not None and n_ctx > trained:
+        name = model or ("the served model" if backend == "server" else default_model())
+        raise UserError(f"--n-ctx {n_ctx} is more than the {trained:,} tokens {name} was trained on: give --n-ctx "
+                        f"{trained} or less (left out, it is {min(DEFAULT_N_CTX, trained)})")
+
+
 def refuse_household_options(dom: Domain, floor_plan: str | None, thor_build: Path | None) -> None:
     """A site domain's plans run on its site: AI2-THOR's floor plan and build options do not apply."""
-    if not dom.is_ai2thor and (floor_plan or thor_build):
-        raise UserError(f"--floor-plan and --thor-build are for the household domain; the {dom.name} domain's "
-                        f"plans run on its site {dom.site}")
+    given = [name for name, value in (("--floor-plan", floor_plan), ("--thor-build", thor_build)) if value]
+    if not dom.is_ai2thor and given:
+        raise UserError(f"{' and '.join(given)} {'is' if len(given) == 1 else 'are'} for the household domain; "
+                        f"the {dom.name} domain's plans run on its site {dom.site}")
 
 
 def check_transitions(trans: int | None, max_trans: int | None) -> None:

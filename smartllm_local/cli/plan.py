@@ -11,18 +11,32 @@ from typing import Any
 import typer
 
 from ..benchmark.run import execute_and_score
-from ..benchmark.tasks import find_task, load_tasks
+from ..benchmark.tasks import Task, find_task, has_words, load_tasks
 from ..domain import Domain, load_domain
 from ..errors import UserError
 from ..executor import Execution
 from ..executor.dispatch import Dispatch, dispatch_plan, load_dispatch
 from ..files import check_output_folder
-from ..planner.pipeline import PlanResult, write_artifacts
+from ..planner.backends import Backend
+from ..planner.models import default_model
+from ..planner.pipeline import Planner, PlanResult, write_artifacts
 from ..robots import Catalogue, Robot, parse_robot_ids
 from ..scoring import Scores
+from ..world.controller import check_build
 from ..world.scenes import floor_plan_name
 from .dispatch import dispatch_report, dispatch_succeeded, run_record
-from .options import CATALOGUE, DOMAIN, TASKS, THOR_BUILD, ModelOptions, model_options, refuse_household_options
+from .execute import metrics_lines
+from .options import (
+    CATALOGUE,
+    DOMAIN,
+    TASKS,
+    THOR_BUILD,
+    ModelOptions,
+    given_path,
+    model_options,
+    refuse_household_options,
+)
+from .progress import PlanProgress
 
 
 @model_options(without=("workers",))  # one task: nothing to spread over workers
@@ -32,12 +46,16 @@ def plan_command(
     robots: str | None = typer.Option(None, help="The team as catalogue ids, e.g. 1,2,3."),
     tasks: Path | None = TASKS,
     task: str | None = typer.Option(None, help="Plan this task of --tasks, with its floor plan and robots."),
-    out: Path | None = typer.Option(None, help="Write prompts, grammars, raw outputs and timings here."),
+    out: Path | None = typer.Option(None, parser=given_path, metavar="DIR", help=(
+        "Write prompts, grammars, raw outputs and timings here.")),
     execute: bool = typer.Option(False, "--execute", help="Run the plan in AI2-THOR and print the metrics."),
     dispatch: Path | None = typer.Option(None, "--dispatch", metavar="LAB.toml", help=(
         "Run the plan on the lab's robots: each skill call goes to the function this dispatch file names "
         "for it (see smartllm-local dispatch); exit 1 if an action failed.")),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help=(
+        "Show no progress. Otherwise each stage is shown on stderr as it runs (on a terminal, its tokens, their "
+        "rate and its time live; elsewhere a line per stage as it ends); stdout holds the plan either way.")),
     catalogue: Path | None = CATALOGUE,
     thor_build: Path | None = THOR_BUILD,
     domain: str | None = DOMAIN,
@@ -55,12 +73,10 @@ def plan_command(
     team = cat.team(team_ids)
     if execute and dispatch is not None:
         raise UserError("give --execute (in AI2-THOR) or --dispatch (on the lab's robots), not both")
+    if dom.is_ai2thor and (execute or thor_build is not None):
+        check_build(thor_build)
     functions = _dispatch_functions(dispatch, cat, team)
-    planner = options.planners(cat, dom)[0]
-    try:
-        result = planner.plan(instruction, scene, team_ids)
-    finally:
-        planner.backend.close()
+    planner, result = _plan(options, dom, instruction, scene, team_ids, quiet=quiet)
     for notice in result.notices:
         print(f"notice: {notice}", file=sys.stderr)
     planned = result.plan is not None and not result.error
@@ -82,13 +98,40 @@ def plan_command(
                              **run_record(dispatched)}
     if out is not None:
         write_artifacts(result, out, extra)
-    _print_result(result, extra, scores, dispatched, as_json)
+    _print_result(result, extra, scores, dispatched, as_json, chosen)
     if result.error or (dispatched is not None and not dispatch_succeeded(dispatched)):
         raise typer.Exit(1)
 
 
+def _plan(options: ModelOptions, dom: Domain, instruction: str, scene: str, team_ids: list[int], *,
+          quiet: bool) -> tuple[Planner, PlanResult]:
+    """Load the model and plan, each stage shown on stderr as it runs (unless ``quiet``)."""
+    with PlanProgress(quiet=quiet) as progress:
+        model = options.model or ("the served model" if options.backend == "server" else default_model())
+        with progress.loading(f"the model {model}"):
+            planner = options.planners(dom.catalogue, dom)[0]
+        try:
+            planner.progress, progress.kept = progress, examples_kept(planner.backend)
+            return planner, planner.plan(instruction, scene, team_ids)
+        finally:
+            planner.backend.close()
+
+
+def examples_kept(backend: Backend) -> str | None:
+    """Where the examples' states evaluated in a run are kept for later, for the progress display (None: the
+    backend does not say what it reused, as a server may not)."""
+    store = getattr(backend, "prefix_store", None)
+    if store is not None:
+        return f"they are now kept in the prefix store {store.folder}, and later runs on this model start from them"
+    if backend.name == "llamacpp":
+        return "with --prefix-cache off they are kept for this run only"
+    if backend.name == "transformers":
+        return "the transformers backend keeps them for this run only"
+    return None
+
+
 def _what_to_plan(dom: Domain, instruction: str | None, floor_plan: str | None, robots: str | None,
-                  tasks: Path | None, task: str | None) -> tuple[str, str, list[int], Any]:
+                  tasks: Path | None, task: str | None) -> tuple[str, str, list[int], Task | None]:
     """The instruction, scene and team (and the task, for its goals) from ``--task`` or from the options."""
     if task is not None:
         if instruction or floor_plan or robots:
@@ -101,8 +144,11 @@ def _what_to_plan(dom: Domain, instruction: str | None, floor_plan: str | None, 
         raise UserError('plan needs an instruction, --floor-plan and --robots (or --task ID), e.g. '
                         'smartllm-local plan "Put the apple in the fridge" --floor-plan 6 --robots 1,2'
                         if dom.is_ai2thor else "plan needs an instruction and --robots (or --task ID)")
+    if not has_words(instruction):
+        raise UserError(f"the instruction {instruction!r} has no words: say what the robots should do, "
+                        'e.g. "Put the apple in the fridge"')
     scene = floor_plan_name(floor_plan) if dom.is_ai2thor else dom.site
-    return instruction, scene, parse_robot_ids(robots), None
+    return instruction.strip(), scene, parse_robot_ids(robots), None
 
 
 def _dispatch_functions(dispatch: Path | None, cat: Catalogue, team: list[Robot]) -> Dispatch | None:
@@ -118,17 +164,16 @@ def _dispatch_functions(dispatch: Path | None, cat: Catalogue, team: list[Robot]
 
 
 def _print_result(result: PlanResult, extra: dict[str, Any], scores: Scores | None,
-                  dispatched: Execution | None, as_json: bool) -> None:
+                  dispatched: Execution | None, as_json: bool, chosen: Task | None) -> None:
     if as_json:
         typer.echo(json.dumps({"allocated": result.allocated, "refusal": result.refusal,
                                "error": result.error or None, **extra}))
         return
     typer.echo(result.allocated or f"# no valid plan: {result.error}", nl=False)
     if scores is not None:
-        fmt = lambda v: "n/a" if v is None else f"{v:.2f}"  # noqa: E731
-        for description, ok in scores.conditions:
-            typer.echo(f"  [{'x' if ok else ' '}] {description}")
-        typer.echo(f"SR {fmt(scores.SR)}  TCR {fmt(scores.TCR)}  GCR {fmt(scores.GCR)}  "
-                   f"RU {fmt(scores.RU)}  Exe {fmt(scores.Exe)}  transitions {scores.transitions}")
+        fix = f"task {chosen.id} gives none" if chosen is not None else \
+            "a free instruction has neither: plan --task ID to score against a task's"
+        for line in metrics_lines(scores, fix=fix, transitions=True):
+            typer.echo(line)
     if dispatched is not None:
         typer.echo("dispatched: " + "\n".join(dispatch_report(dispatched)))

@@ -33,6 +33,7 @@ from .constraints.plan import PlanConstraint
 from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
+from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
     ALLOCATION_GLUE,
@@ -118,9 +119,12 @@ class Planner:
     """Plans tasks with one backend; keeps nothing between tasks but the backend's cache."""
 
     def __init__(self, backend: Backend, catalogue: Catalogue, config: PlannerConfig = PlannerConfig(),
-                 examples: Sequence[Example] | None = None, site: Domain | None = None):
-        """``site``: plan for a site domain (its catalogue, its site, and its examples unless given)."""
+                 examples: Sequence[Example] | None = None, site: Domain | None = None,
+                 progress: StageProgress = SILENT):
+        """``site``: plan for a site domain (its catalogue, its site, and its examples unless given);
+        ``progress`` hears of each stage as it runs (see :mod:`.progress`)."""
         self.backend = backend
+        self.progress = progress
         self.catalogue = catalogue
         self.config = config
         self.site = site
@@ -159,7 +163,7 @@ class Planner:
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world) \
             if self.config.grammar else None
         run_stage(record, self.backend, prompt, constraint, output_budget=budget,
-                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
+                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage), progress=self.progress)
         self._finish_plan_stage(record, result, form="decomposed", scene=scene)
         result.stages.append(record)
         return record
@@ -187,7 +191,7 @@ class Planner:
             # allocation leave (the constraint ends the output once every sub-task has its line).
             budget = max(floor, self.backend.n_ctx - len(prompt.tokens) - reserve - 1)
         run_stage(record, self.backend, prompt, constraint, output_budget=budget,
-                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
+                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage), progress=self.progress)
         if constraint is None:
             lines = [line for line in record.output.splitlines() if line.strip()]
             bad = [line for line in lines if not _COALITION_LINE.match(line)]
@@ -216,7 +220,7 @@ class Planner:
                                                              self.catalogue.robots, ex, opts),
                                 examples_for("allocation", self.examples, opts), self.backend, budget, self.chat)
         run_stage(record, self.backend, prompt, constraint, output_budget=budget,
-                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage))
+                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage), progress=self.progress)
         self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))
         result.stages.append(record)
         return record

@@ -22,6 +22,7 @@ from .backends.base import Backend, Generated, Sampling
 from .decoding.matcher import Matcher
 from .decoding.protocol import Constraint
 from .decoding.writer import BudgetError, GuaranteeError, Line, Report, TokenWriter, Written, run_tokens
+from .progress import SILENT, StageProgress
 from .prompting.chat import APPLIED, ChatFormat, answer_code, prompt_tokens
 from .prompting.prompts import Example, Prompt
 
@@ -162,29 +163,49 @@ def run_stage(
     output_budget: int,
     sampling: Sampling,
     rng: np.random.Generator,
+    progress: StageProgress = SILENT,
 ) -> None:
-    """Generate a stage's output into ``record`` (constrained, or free with stop strings)."""
+    """Generate a stage's output into ``record`` (constrained, or free with stop strings), telling ``progress``
+    as it goes."""
     context = list(prompt.tokens)
     record.prompt, record.prompt_tokens = prompt.text, len(context)
     record.shared_tokens = prompt.prefixes[0] if prompt.prefixes else 0
     record.examples, record.dropped = [e.name for e in prompt.kept], [e.name for e in prompt.dropped]
     record.output_budget = output_budget
+    progress.stage_started(record.stage, len(context))
     started = time.perf_counter()
     record.reused_tokens = backend.prefill(context, () if prompt.continues else prompt.prefixes)
     record.prompt_seconds = time.perf_counter() - started
+    progress.prompt_evaluated(record.stage, tokens=len(context), shared=record.shared_tokens,
+                              reused=record.reused_tokens, seconds=record.prompt_seconds)
     if constraint is None:
-        stops = STOP_STRINGS[record.stage]
-        chat = record.chat_template == APPLIED  # a chat answer's prose has paragraphs: its code is cut afterwards
-        result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,
-                                  stop=[s for s in stops if s != "\n\n"] if chat else stops, rng=rng)
-        record.generated_tokens = len(result.tokens)
-        record.loops_ended = result.loops
-        record.note(result)
-        record.raw = result.text.rstrip() + "\n"
-        record.output = answer_code(record.raw, stops) if chat else record.raw
+        _generate_freely(record, backend, context, output_budget=output_budget, sampling=sampling, rng=rng)
         record.seconds = time.perf_counter() - started
-        return
-    writer = _StageWriter(record, backend, context, sampling, rng)
+    else:
+        _generate_constrained(record, backend, context, constraint, output_budget=output_budget,
+                              sampling=sampling, rng=rng, progress=progress, started=started)
+    progress.stage_ended(record)
+
+
+def _generate_freely(record: StageRecord, backend: Backend, context: list[int], *, output_budget: int,
+                     sampling: Sampling, rng: np.random.Generator) -> None:
+    """The output without a grammar: the model writes until a stop string, the end of sequence or the budget."""
+    stops = STOP_STRINGS[record.stage]
+    chat = record.chat_template == APPLIED  # a chat answer's prose has paragraphs: its code is cut afterwards
+    result = backend.generate(context, grammar=None, max_tokens=output_budget, sampling=sampling,
+                              stop=[s for s in stops if s != "\n\n"] if chat else stops, rng=rng)
+    record.generated_tokens = len(result.tokens)
+    record.loops_ended = result.loops
+    record.note(result)
+    record.raw = result.text.rstrip() + "\n"
+    record.output = answer_code(record.raw, stops) if chat else record.raw
+
+
+def _generate_constrained(record: StageRecord, backend: Backend, context: list[int], constraint: Constraint, *,
+                          output_budget: int, sampling: Sampling, rng: np.random.Generator,
+                          progress: StageProgress, started: float) -> None:
+    """The output line by line under the stage's constraint, in ``context`` (which it extends)."""
+    writer = _StageWriter(record, backend, context, sampling, rng, progress)
     report = Report()
     record.context = context
     try:
@@ -207,8 +228,9 @@ class _StageWriter(TokenWriter):
     """The backend as a stage's writer: each line generated under its grammar, in the stage's context."""
 
     def __init__(self, record: StageRecord, backend: Backend, context: list[int], sampling: Sampling,
-                 rng: np.random.Generator):
+                 rng: np.random.Generator, progress: StageProgress = SILENT):
         self.record, self.backend, self.context, self.sampling, self.rng = record, backend, context, sampling, rng
+        self.progress = progress
         self.raw = ""  # what was written, as it was written (the output is that, normalized)
 
     def write(self, line: Line, remaining: int) -> Written:
@@ -228,6 +250,7 @@ class _StageWriter(TokenWriter):
         record.forced_tokens += result.forced
         record.loops_ended += result.loops
         record.note(result)
+        self.progress.tokens_written(record.stage, record.generated_tokens, record.forced_tokens)
         return Written(result.text, len(result.tokens) + ended, ended=ended and result.text.count("\n") < line.lines)
 
     def force(self, text: str) -> int:
@@ -235,6 +258,7 @@ class _StageWriter(TokenWriter):
         self.context.extend(tokens)
         self.raw += text
         self.record.forced_tokens += len(tokens)
+        self.progress.tokens_written(self.record.stage, self.record.generated_tokens, self.record.forced_tokens)
         return len(tokens)
 
 

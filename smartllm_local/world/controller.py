@@ -273,6 +273,26 @@ def _descendants(pid: int) -> list[int]:
     return found
 
 
+def check_build(build: str | os.PathLike[str] | None) -> Path | None:
+    """The Unity build to run: ``build``, else ``$SMARTLLM_THOR_BUILD``, as an absolute path (so that Popen does
+    not look a bare name up on PATH); None for the stand-in. Commands call it before any work, so that a wrong
+    path is not found only when the first plan is to run.
+
+    Raises:
+        UserError: the build is not an executable file.
+    """
+    build = build or os.environ.get(BUILD_ENV) or None
+    if not build:
+        return None
+    path = Path(os.path.abspath(Path(build).expanduser()))
+    if not path.is_file() or not os.access(path, os.X_OK):
+        raise UserError(
+            f"AI2-THOR build {path} is not an executable file; pass the Unity executable "
+            f"(e.g. ~/.ai2thor/releases/thor-Linux64-<commit>/thor-Linux64-<commit>) or unset {BUILD_ENV}"
+        )
+    return path
+
+
 def open_controller(
     floor_plan: int | str,
     agent_count: int = 1,
@@ -304,15 +324,8 @@ def open_controller(
     scene = floor_plan_name(floor_plan)
     if not isinstance(agent_count, int) or not 1 <= agent_count <= 16:
         raise UserError(f"agent_count must be between 1 and 16, got {agent_count!r}")
-    build = build or os.environ.get(BUILD_ENV) or None
-    if build:
-        # Absolute, so that Popen does not look a bare name up on PATH.
-        path = Path(os.path.abspath(Path(build).expanduser()))
-        if not path.is_file() or not os.access(path, os.X_OK):
-            raise UserError(
-                f"AI2-THOR build {path} is not an executable file; pass the Unity executable "
-                f"(e.g. ~/.ai2thor/releases/thor-Linux64-<commit>/thor-Linux64-<commit>) or unset {BUILD_ENV}"
-            )
+    path = check_build(build)
+    if path is not None:
         executable = shlex.quote(str(path))
         timeout = server_timeout or UNITY_TIMEOUT
     else:

@@ -59,7 +59,11 @@ def test_validate_checks_names_against_the_site(tmp_path):
 def test_household_options_are_refused_for_a_site_domain(tmp_path):
     plan = PATROL.plans_dir() / "patrol-01.py"
     assert_one_line_error(cli("execute", plan, "--domain", "patrol", "--floor-plan", "6", "--task", "patrol-01",
-                              cwd=tmp_path), "--floor-plan and --thor-build are for the household domain")
+                              cwd=tmp_path), "--floor-plan is for the household domain")
+    for command in (["benchmark", "run", "--out", "out", "--method", "reference"], ["benchmark", "check"]):
+        assert_one_line_error(cli(*command, "--domain", "patrol", "--thor-build", "thor", cwd=tmp_path),
+                              "--thor-build is for the household domain; the patrol domain's plans run on its site")
+    assert not (tmp_path / "out").exists()
     assert_one_line_error(cli("execute", plan, "--domain", "patrol", "--catalogue", "x.json", "--task", "patrol-01",
                               cwd=tmp_path), "robots are in its domain.toml")
     assert_one_line_error(cli("execute", plan, "--domain", "nowhere", "--task", "patrol-01", cwd=tmp_path),

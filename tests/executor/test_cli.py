@@ -130,7 +130,17 @@ def test_execute_human_readable_output(files):
     assert lines[0] == ("plan.py on FloorPlan6 with robots [1, 2, 3]: 8/8 actions succeeded in 8 ticks, "
                         "0 transition(s)")
     assert "  [x] SinkBasin contains Cup" in lines and "  [ ] Potato is COOKED" in lines
-    assert lines[-1] == "SR n/a  TCR 0.00  GCR 0.75  RU n/a  Exe 1.00"
+    assert lines[-2:] == ["SR n/a  TCR 0.00  GCR 0.75  RU n/a  Exe 1.00",
+                          "n/a: no expected and maximum transitions (RU is judged by them, and SR needs RU); "
+                          "give --trans and --max-trans (or --task ID)"]
+
+
+def test_execute_with_the_transitions_says_nothing_is_unknown(files):
+    result = cli("execute", "plan.py", "--floor-plan", "6", "--robots", "1,2,3", "--goal", "goal.json",
+                 "--trans", "0", "--max-trans", "1", cwd=files)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[-1] == "SR 0.00  TCR 0.00  GCR 0.75  RU 1.00  Exe 1.00"
+    assert "n/a" not in result.stdout
 
 
 def test_execute_writes_the_trace(files):
@@ -162,7 +172,7 @@ def test_execute_lists_failed_actions(files):
     result = cli("execute", "weak.py", "--floor-plan", "6", "--robots", "7", "--goal", "apple.json", cwd=files)
     assert result.returncode == 0, result.stderr
     assert "  tick 1: PickupObject('Apple',) by [7] failed: Apple|-00.48|+00.97|+00.41 weighs 0.2 kg" in result.stdout
-    assert result.stdout.splitlines()[-1] == "SR n/a  TCR 0.00  GCR 0.00  RU n/a  Exe 0.50"
+    assert result.stdout.splitlines()[-2] == "SR n/a  TCR 0.00  GCR 0.00  RU n/a  Exe 0.50"
 
 
 @pytest.mark.parametrize("args, parts", [

@@ -11,6 +11,7 @@ every task in the heavy suite).
 from __future__ import annotations
 
 import json
+import re
 
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
@@ -28,6 +29,28 @@ def test_the_plan_command_writes_its_artifacts_and_executes(kitchen01):
     summary = json.loads((out / "result.json").read_text())
     assert set(summary["metrics"]) == {"SR", "TCR", "GCR", "RU", "Exe", "transitions"}
     assert summary["stages"]["decomposition"]["prompt_tokens"] > 1000
+
+
+def test_the_plan_command_shows_a_line_per_stage_on_stderr_and_only_the_plan_on_stdout(kitchen01):
+    """stderr is a pipe here: one plain line per stage as it ends, with its tokens, rate and time (besides the
+    notices of dropped examples, printed after the plan); the first, whose examples the empty prefix store did not
+    hold, says once that they were evaluated and are now kept."""
+    lines = [line for line in kitchen01.stderr.splitlines() if not line.startswith("notice: ")]
+    records = json.loads((kitchen01.out / "result.json").read_text())["stages"]
+    assert [line.split(":")[0] for line in lines] == list(records) == ["decomposition", "coalition", "allocation"]
+    for line, (stage, timings) in zip(lines, records.items()):
+        assert line.startswith(f"{stage}: prompt {timings['prompt_tokens']:,} tokens "
+                               f"({timings['reused_tokens']:,} reused) in "), line
+        written = timings["generated_tokens"] + timings["forced_tokens"]
+        assert f"; {written:,} tokens written ({timings['generated_tokens']:,} by the model) in " in line
+        assert re.search(r" in \d+\.\d s, \d+\.\d tokens/s; \d+\.\d s in all( \(|$)", line), line
+    evaluated = records["decomposition"]["shared_tokens"] - records["decomposition"]["reused_tokens"]
+    assert lines[0].endswith(f" s in all (its {evaluated:,} tokens of examples were evaluated, as they are the first "
+                             f"time: they are now kept in the prefix store {kitchen01.states}, and later runs on "
+                             "this model start from them)")
+    assert sum("were evaluated" in line for line in lines) == 1
+    allocated = (kitchen01.out / "allocated.py").read_text()
+    assert kitchen01.stdout.startswith(allocated) and "tokens/s" not in kitchen01.stdout
 
 
 def test_a_refusal_the_grammar_forces_is_told_from_one_the_model_chose(smollm2):

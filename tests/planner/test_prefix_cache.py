@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -137,30 +138,32 @@ def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone(
 
 
 def _planned(tmp_path, states=None):
-    """SmolLM2 plans kitchen-01 through the CLI with a store of its own: (allocated plan, stage records) of each
-    run, named."""
+    """SmolLM2 plans kitchen-01 through the CLI with a store of its own: (allocated plan, stage records, the
+    process) of each run, named, with the options given."""
     states = states or tmp_path / "states"
 
-    def plan(name: str) -> tuple[str, dict[str, dict]]:
-        proc = cli("plan", "--task", "kitchen-01", "--prefix-cache", states, "--out", tmp_path / name)
+    def plan(name: str, *options: str) -> tuple[str, dict[str, dict], subprocess.CompletedProcess]:
+        proc = cli("plan", "--task", "kitchen-01", "--prefix-cache", states, "--out", tmp_path / name, *options)
         assert proc.returncode == 0, proc.stderr
         stages = json.loads((tmp_path / name / "result.json").read_text())["stages"]
-        return (tmp_path / name / "allocated.py").read_text(), stages
+        return (tmp_path / name / "allocated.py").read_text(), stages, proc
 
     return states, plan
 
 
 def test_a_second_process_starts_from_the_stored_examples(kitchen01, tmp_path):
     """After the session's plan of kitchen-01 (a store of its own, empty before), a second ``plan`` evaluates none
-    of the examples, nor the scene's objects in its decomposition, and writes the same plan."""
+    of the examples, nor the scene's objects in its decomposition, and writes the same plan (``--quiet``: with
+    no progress on stderr, only its notices, and only the plan on stdout)."""
     _, plan = _planned(tmp_path, kitchen01.states)
     first = (kitchen01.out / "allocated.py").read_text()
     cold = json.loads((kitchen01.out / "result.json").read_text())["stages"]
     stored = entries(kitchen01.states)
     # The decomposition's examples and scene, and the examples coalition and allocation share.
     assert len(stored) == 3 and cold["decomposition"]["reused_tokens"] == cold["coalition"]["reused_tokens"] == 0
-    second, warm = plan("second")
+    second, warm, proc = plan("second", "--quiet")
     assert second == first
+    assert all(line.startswith("notice: ") for line in proc.stderr.splitlines()) and proc.stdout == second
     decomposition = warm["decomposition"]
     assert decomposition["prompt_tokens"] - decomposition["reused_tokens"] < 40  # the instruction in its chat turn
     assert warm["coalition"]["reused_tokens"] == warm["coalition"]["shared_tokens"] > 0, warm
@@ -172,11 +175,11 @@ def test_a_damaged_store_is_rebuilt(tmp_path):
     """With every entry cut short, a process evaluates the examples again, writes the same plan, and stores them
     anew (a damaged entry is never trusted: test_a_damaged_entry_is_deleted_and_never_trusted, by default)."""
     states, plan = _planned(tmp_path)
-    first, _ = plan("first")
+    first, _, _ = plan("first")
     stored = entries(states)
     for path in stored:
         path.write_bytes(path.read_bytes()[:1000])
-    third, rebuilt = plan("third")
+    third, rebuilt, _ = plan("third")
     assert third == first and rebuilt["coalition"]["reused_tokens"] == rebuilt["decomposition"]["reused_tokens"] == 0
     assert [p.stat().st_size > 1000 for p in entries(states)] == [True] * 3
 

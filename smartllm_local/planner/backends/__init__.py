@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ...errors import UserError
+from ...errors import SmartLLMError, UserError
 from ..models import checkpoint_folder, resolve_gguf
 from .base import Backend, Generated, Sampling
 from .repetition import LoopGuard
@@ -15,7 +15,7 @@ from .repetition import LoopGuard
 BACKENDS = ("llamacpp", "transformers", "server")
 
 __all__ = ["BACKENDS", "Backend", "Generated", "LoopGuard", "Sampling", "check_server_options", "load_backend",
-           "load_backends", "model_location"]
+           "load_backends", "model_location", "trained_context"]
 
 
 def load_backend(
@@ -94,3 +94,22 @@ def model_location(name: str, model: str | None) -> Path | None:
         return None
     folder = checkpoint_folder(model) if name in ("transformers", "server") else None
     return folder or resolve_gguf(model)
+
+
+def trained_context(name: str, model: str | None) -> int | None:
+    """The context ``--model`` was trained on, read without loading its weights (a GGUF file's metadata, a
+    checkpoint's config.json). None where it cannot be known here: a served model ``--model`` does not name, a
+    file that says nothing of it, or a model that cannot be found or read (loading it then says why)."""
+    try:
+        location = model_location(name, model)
+        if location is None:
+            return None
+        if location.is_dir():
+            from .hf_vocabulary import checkpoint_context
+
+            return checkpoint_context(location)
+        from .llamacpp import gguf_trained_context
+
+        return gguf_trained_context(location)
+    except SmartLLMError:
+        return None

@@ -45,7 +45,7 @@ class HFVocabulary:
             raise ModelError(f"{folder} holds no Hugging Face tokenizer that transformers can read "
                              f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}); pass the "
                              "served model's checkpoint folder, or a folder with its tokenizer files") from exc
-        return cls(tokenizer, str(folder), _trained_context(folder))
+        return cls(tokenizer, str(folder), checkpoint_context(folder))
 
     def tokenize(self, text: str, *, bos: bool = False, special: bool = False) -> list[int]:
         return list(self.tokenizer(text, add_special_tokens=bos, split_special_tokens=not special)["input_ids"])
@@ -71,7 +71,7 @@ class HFVocabulary:
         return with_bos[0] if len(with_bos) > len(without) and with_bos[1:] == without else None
 
 
-def _trained_context(folder: Path) -> int | None:
+def checkpoint_context(folder: Path) -> int | None:
     """The context a checkpoint was trained on (its config.json's ``max_position_embeddings``), if it says."""
     try:
         value = json.loads((folder / "config.json").read_text()).get("max_position_embeddings")

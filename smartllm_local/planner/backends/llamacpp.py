@@ -60,6 +60,16 @@ def _trained_context(metadata: dict[str, str]) -> int | None:
     return int(value) if value.isdigit() and int(value) > 0 else None
 
 
+def gguf_trained_context(model_path: str | Path) -> int | None:
+    """The context a GGUF model was trained on, read from its metadata by loading its vocabulary alone (no
+    weights, no context worth the name): what a context size is checked against before the model loads."""
+    _, llm = _open(model_path, n_ctx=512, threads=1, n_gpu_layers=0, seed=0, n_batch=CPU_BATCH, vocab_only=True)
+    try:
+        return _trained_context(llm.metadata)
+    finally:
+        llm.close()
+
+
 def _open(model_path: str | Path, *, n_ctx: int, threads: int, n_gpu_layers: int, seed: int, n_batch: int,
           vocab_only: bool) -> tuple[Any, Any]:
     """llama-cpp-python and a model loaded in it, or a clear error where either cannot be had."""

@@ -1,0 +1,66 @@
+"""A stage tells its progress as it runs: started, prompt evaluated, its tokens so far, ended (the events the CLI
+shows; tests/test_plan_progress.py shows them, tests/planner/test_end_to_end.py has the real planner's)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from smartllm_local.planner.backends.base import Sampling
+from smartllm_local.planner.decoding.grammar import Grammar, alt
+from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+
+from .fakes import FakeBackend, Script
+
+
+class Recorder:
+    """Every event, in order."""
+
+    def __init__(self):
+        self.events: list[tuple] = []
+
+    def stage_started(self, stage, prompt_tokens):
+        self.events.append(("started", stage, prompt_tokens))
+
+    def prompt_evaluated(self, stage, *, tokens, shared, reused, seconds):
+        self.events.append(("evaluated", stage, tokens, shared, reused))
+
+    def tokens_written(self, stage, generated, forced):
+        self.events.append(("written", stage, generated, forced))
+
+    def stage_ended(self, record):
+        self.events.append(("ended", record))
+
+
+class Reusing(FakeBackend):
+    """Says it held the first ``held`` tokens of every prompt."""
+
+    def __init__(self, held: int):
+        super().__init__()
+        self.held = held
+
+    def prefill(self, context, prefixes) -> int:
+        return self.held
+
+
+def test_a_constrained_stage_tells_each_line_it_writes_then_its_end():
+    recorder, record = Recorder(), StageRecord("decomposition")
+    script = Script("# SubTask 1: wash\n", Grammar({"root": alt("def wash():\n", "def scrub():\n")}),
+                    "    GoToObject('Sink')\n")
+    run_stage(record, Reusing(3), Fitted("prompt", [1] * 10, prefixes=(6,)), script, output_budget=200,
+              sampling=Sampling(), rng=np.random.default_rng(0), progress=recorder)
+    events = recorder.events
+    assert events[:2] == [("started", "decomposition", 10), ("evaluated", "decomposition", 10, 6, 3)]
+    assert {e[:2] for e in events[2:-1]} == {("written", "decomposition")}
+    written = [e[2:] for e in events[2:-1]]  # running totals (generated, forced), a line or a forced text at a time
+    assert len(written) >= 2 and written == sorted(written)
+    assert written[-1] == (record.generated_tokens, record.forced_tokens)
+    assert record.generated_tokens > 0 and record.forced_tokens > 0
+    assert events[-1] == ("ended", record) and record.output.startswith("# SubTask 1: wash\n")
+
+
+def test_a_free_stage_tells_its_start_and_its_end():
+    recorder, record = Recorder(), StageRecord("coalition")
+    run_stage(record, FakeBackend(), Fitted("prompt", [1] * 4), None, output_budget=50, sampling=Sampling(),
+              rng=np.random.default_rng(0), progress=recorder)
+    assert [e[0] for e in recorder.events] == ["started", "evaluated", "ended"]
+    assert recorder.events[-1][1].generated_tokens == 1
