@@ -18,6 +18,7 @@ from ..executor import Execution
 from ..executor.dispatch import Dispatch, dispatch_plan, load_dispatch
 from ..files import check_output_folder
 from ..planner.pipeline import PlanResult, write_artifacts
+from ..planner.prompting.goal_prompt import load_goal_examples
 from ..robots import Catalogue, Robot, parse_robot_ids
 from ..scoring import Scores
 from ..world.scenes import floor_plan_name
@@ -37,6 +38,9 @@ def plan_command(
     dispatch: Path | None = typer.Option(None, "--dispatch", metavar="LAB.toml", help=(
         "Run the plan on the lab's robots: each skill call goes to the function this dispatch file names "
         "for it (see smartllm-local dispatch); exit 1 if an action failed.")),
+    goals: bool = typer.Option(False, "--goals", help=(
+        "Also state the task's goals (the goal stage: what must hold when it is done, from the instruction and "
+        "the scene alone); print them after the plan and write goals.txt with --out.")),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     catalogue: Path | None = CATALOGUE,
     thor_build: Path | None = THOR_BUILD,
@@ -51,6 +55,8 @@ def plan_command(
     dom = load_domain(domain, catalogue=catalogue)
     cat = dom.catalogue
     refuse_household_options(dom, floor_plan, thor_build)
+    if goals:
+        load_goal_examples(dom.prompts_dir())  # a domain without them fails before the model loads
     instruction, scene, team_ids, chosen = _what_to_plan(dom, instruction, floor_plan, robots, tasks, task)
     team = cat.team(team_ids)
     if execute and dispatch is not None:
@@ -59,8 +65,11 @@ def plan_command(
     planner = options.planners(cat, dom)[0]
     try:
         result = planner.plan(instruction, scene, team_ids)
+        stated = planner.goals(instruction, scene) if goals else None
     finally:
         planner.backend.close()
+    if stated is not None:
+        result.stages.append(stated.record)  # written to --out as the other stages are
     for notice in result.notices:
         print(f"notice: {notice}", file=sys.stderr)
     planned = result.plan is not None and not result.error
@@ -80,9 +89,13 @@ def plan_command(
     if dispatched is not None:
         extra["dispatch"] = {"attempted": dispatched.attempted, "succeeded": dispatched.succeeded,
                              **run_record(dispatched)}
+    if stated is not None:
+        extra["goals"] = stated.summary()
     if out is not None:
         write_artifacts(result, out, extra)
     _print_result(result, extra, scores, dispatched, as_json)
+    if stated is not None and not as_json:
+        typer.echo(stated.report(), nl=False)
     if result.error or (dispatched is not None and not dispatch_succeeded(dispatched)):
         raise typer.Exit(1)
 

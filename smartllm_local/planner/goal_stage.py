@@ -10,7 +10,7 @@ does not run it.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..domain import load_domain
 from ..errors import PlanError
@@ -42,6 +42,18 @@ class StatedGoals:
     @property
     def error(self) -> str:
         return self.record.error
+
+    def summary(self) -> dict[str, Any]:
+        """What a run's JSON keeps: the stated conditions (as lines), the refusal and who refused, the error."""
+        stated = self.statement.text().splitlines() if self.statement and self.statement.refusal is None else []
+        return {"stated": stated, "refusal": self.refusal, "refused_by": self.record.refused_by or None,
+                "error": self.error or None}
+
+    def report(self) -> str:
+        """The goals as the plan command prints them, after the plan."""
+        if self.statement is None:
+            return f"# Goals: none stated ({self.error})\n"
+        return "# Goals:\n" + self.statement.text()
 
 
 def goal_examples(planner: Planner) -> list[GoalExample]:
