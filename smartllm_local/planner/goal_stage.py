@@ -75,7 +75,8 @@ def state_goals(planner: Planner, instruction: str, floor_plan: str | int) -> St
     constraint = GoalConstraint(vocabulary) if planner.config.grammar else None
     from .pipeline import PlanResult  # the pipeline's module imports this one
 
-    task = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=[])  # no team: the goal is the team's to reach
+    # No team: the goal is what the instruction asks, whoever reaches it.
+    task = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=[])
     run_stage(record, planner.backend, prompt, constraint, output_budget=GOAL_BUDGET,
               sampling=planner.config.sampling, rng=planner.stage_rng(task, STAGE))
     if constraint is not None and constraint.must_refuse:

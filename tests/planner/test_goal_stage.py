@@ -23,6 +23,7 @@ from smartllm_local.planner.goal_stage import GOAL_BUDGET
 from smartllm_local.planner.prompting.example_check import check_examples, check_goal_examples
 from smartllm_local.planner.prompting.scene_context import scene_objects, site_objects
 from smartllm_local.scoring import Goal, score
+from smartllm_local.world.object_types import RECEPTACLE_ONLY_ACCEPTS, TYPE_PROPERTIES
 from smartllm_local.world.scenes import load_scene
 
 from .writers import WRITERS, TokenAdversary, writer
@@ -31,19 +32,30 @@ HOUSEHOLD = load_domain("household")
 TASKS = load_tasks(HOUSEHOLD.task_files(), domain=HOUSEHOLD)
 
 
-def _check_statement(text: str, vocabulary) -> GoalStatement:
+#: What AI2-THOR's object-type table says a type must be for each state (a StoveBurner is switched by its knob).
+NEEDS = {"SLICED": "sliceable", "ON": "toggleable", "OFF": "toggleable", "OPENED": "openable", "CLOSED": "openable",
+         "HOT": "pickupable", "COLD": "pickupable", "PICKED": "pickupable", "COOKED": "cookable", "BROKEN": "breakable",
+         "CLEAN": "dirtyable", "DIRTY": "dirtyable", "FILLED": "canFillWithLiquid", "EMPTY": "receptacle"}
+
+
+def _check_statement(text: str, scene) -> GoalStatement:
     """Every condition names a type of the scene in a state the world gives it, or a receptacle that can hold
     it; none twice, none contradicting another."""
-    statement = parse_goal_statement(text, types=vocabulary.types)
+    statement = parse_goal_statement(text, types=scene.types)
     if statement.refusal is not None:
         return statement
     conditions = statement.conditions
     assert 1 <= len(conditions) <= MAX_GOALS and len(set(conditions)) == len(conditions), text
     for c in conditions:
-        if c.state is not None:
-            assert c.state in vocabulary.states[c.subject], (c, text)
+        if scene.site is not None:
+            kind = scene.site.places[c.subject].kind
+            assert c.item is None and c.state == {"region": "COVERED", "object": "PHOTOGRAPHED"}.get(kind, "RETURNED")
+        elif c.state is not None:
+            need = NEEDS[c.state]
+            assert need in TYPE_PROPERTIES[c.subject] or (need == "toggleable" and c.subject == "StoveBurner"), c
         else:
-            assert c.subject in vocabulary.holders[c.item], (c, text)
+            assert "receptacle" in TYPE_PROPERTIES[c.subject] and "pickupable" in TYPE_PROPERTIES[c.item], c
+            assert c.subject != c.item and c.item in RECEPTACLE_ONLY_ACCEPTS.get(c.subject, {c.item}), c
     said = {(c.subject, c.state) for c in conditions if c.state}
     for a, b in (("ON", "OFF"), ("OPENED", "CLOSED"), ("HOT", "COLD"), ("CLEAN", "DIRTY")):
         assert not any((s, a) in said and (s, b) in said for s, _ in said), text
@@ -63,7 +75,7 @@ def test_adversarial_writers_state_only_scene_objects_in_states_they_can_have(ki
                 text = run_tokens(constraint, TokenAdversary(kind, random.Random(seed), refusals=0.1), budget, Report())
             else:
                 text = run_constraint(constraint, writer(kind, random.Random(seed), refusals=0.1), len, budget)
-            _check_statement(text, vocabulary)
+            _check_statement(text, scene)
 
 
 def test_the_world_decides_which_states_and_receptacles_a_type_is_offered():
@@ -110,7 +122,8 @@ def test_stated_goals_are_scored_by_the_scorer():
 
 @pytest.mark.parametrize("text, problem", [
     ("Apple in the fridge\n", "is not a condition"), ("Apple sliced\nApple jumping\n", "'jumping' is not a state"),
-    ("Unicorn on\n", "not an object of this scene"), ("Apple sliced\n# INFEASIBLE: no\n", "only line"), ("\n", "no condition"),
+    ("Unicorn on\n", "not an object of this scene"), ("Apple sliced\n# INFEASIBLE: no\n", "only line"),
+    ("\n", "no condition"),
 ])
 def test_a_bad_statement_is_a_clear_error_naming_its_line(text, problem):
     with pytest.raises(PlanError, match=problem):
@@ -118,7 +131,8 @@ def test_a_bad_statement_is_a_clear_error_naming_its_line(text, problem):
 
 
 def test_precision_and_recall_count_each_condition_once():
-    truth = [c for g in (Goal("Fridge", contains=("AppleSliced",)), Goal("Apple", state="SLICED")) for c in g.conditions()]
+    goals = (Goal("Fridge", contains=("AppleSliced",)), Goal("Apple", state="SLICED"))
+    truth = [c for g in goals for c in g.conditions()]
     stated = parse_goal_statement("Apple in Fridge\nApple sliced\nLightSwitch off\n").conditions
     assert matches(stated, truth) == (2, 2)
     assert matches(stated[2:], truth) == (0, 0)
@@ -174,8 +188,11 @@ def test_plan_goals_writes_the_goal_stage_beside_the_others(goals_run):
     assert {p.name for p in (out / "goal").iterdir()} >= {"prompt.txt", "grammar.gbnf", "raw_output.txt"}
     assert "# Your task" in (out / "goal" / "prompt.txt").read_text()
     statement = parse_goal_statement(stated, types=scene_objects(1).types)
-    assert stdout.endswith("# Goals:\n" + statement.text()) or "# INFEASIBLE" in stdout
-    assert json.loads((out / "result.json").read_text())["goals"]["stated"] == statement.text().splitlines()
+    assert stated == statement.text() + ("" if statement.refusal else "\n")  # conditions end with a blank line
+    assert stdout.endswith("# Goals:\n" + statement.text())
+    recorded = json.loads((out / "result.json").read_text())["goals"]
+    assert recorded["refusal"] == statement.refusal
+    assert recorded["stated"] == ([] if statement.refusal else statement.text().splitlines())
 
 
 def test_the_goal_stage_states_the_same_goals_without_the_task_s_goals(goals_run, smollm2):

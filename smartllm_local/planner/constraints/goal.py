@@ -26,7 +26,8 @@ from .format import refusal_line
 
 MAX_GOALS = 8
 #: A site entry's kind, the effect a skill must have for the world to give it a state, and that state.
-SITE_GOALS = {"region": ("patrol", "COVERED"), "object": ("photograph", "PHOTOGRAPHED"), "location": ("move", "RETURNED")}
+SITE_GOALS = {"region": ("patrol", "COVERED"), "object": ("photograph", "PHOTOGRAPHED"),
+              "location": ("move", "RETURNED")}
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,8 @@ class GoalVocabulary:
 
     @property
     def types(self) -> tuple[str, ...]:
-        return tuple(sorted(t for t in set(self.states) | set(self.holders) if self.states.get(t) or self.holders.get(t)))
+        named = set(self.states) | set(self.holders)
+        return tuple(sorted(t for t in named if self.states.get(t) or self.holders.get(t)))
 
     def state_names(self) -> list[str]:
         """The states any type of the scene can be in, in the scorer's order."""

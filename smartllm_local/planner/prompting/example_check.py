@@ -27,13 +27,14 @@ from .scene_context import scene_objects, site_objects
 
 
 def check_examples(domain: Domain) -> tuple[int, list[str]]:
-    """How many examples the domain has, and every problem with them (each naming the example's file)."""
+    """How many examples the domain's three stages have, and every problem with them and with its goal examples
+    (each naming the example's file)."""
     folder = domain.prompts_dir()
     try:
         examples = load_examples(folder)
     except (SmartLLMError, KeyError, TypeError) as exc:
         return 0, [f"{folder}/examples.json: {exc}; each stage needs worked examples (see `domain new`)"]
-    goals, problems = check_goal_examples(domain)
+    problems = check_goal_examples(domain)[1]
     missing = [stage for stage in STAGES if not any(stage in e.stages for e in examples)]
     if missing:
         problems.append(f"{folder}/examples.json: no example for the {', '.join(missing)} stage(s)")
@@ -75,7 +76,7 @@ def check_examples(domain: Domain) -> tuple[int, list[str]]:
                                      max_trans=ex.max_trans)
             if scores.SR != 1.0:
                 problems.append(f"{where}: scores SR {scores.SR}; an example must reach SR 1")
-    return len(examples) + goals, problems
+    return len(examples), problems
 
 
 def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
