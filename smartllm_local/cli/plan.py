@@ -18,8 +18,10 @@ from ..executor import Execution
 from ..executor.dispatch import Dispatch, dispatch_plan, load_dispatch
 from ..files import check_output_folder
 from ..planner.backends import Backend
+from ..planner.goal_stage import StatedGoals
 from ..planner.models import default_model
 from ..planner.pipeline import Planner, PlanResult, write_artifacts
+from ..planner.prompting.goal_prompt import load_goal_examples
 from ..robots import Catalogue, Robot, parse_robot_ids
 from ..scoring import Scores
 from ..world.controller import check_build
@@ -52,6 +54,9 @@ def plan_command(
     dispatch: Path | None = typer.Option(None, "--dispatch", metavar="LAB.toml", help=(
         "Run the plan on the lab's robots: each skill call goes to the function this dispatch file names "
         "for it (see smartllm-local dispatch); exit 1 if an action failed.")),
+    goals: bool = typer.Option(False, "--goals", help=(
+        "Also state the task's goals (the goal stage: what must hold when it is done, from the instruction and "
+        "the scene alone); print them after the plan and write goals.txt with --out.")),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help=(
         "Show no progress. Otherwise each stage is shown on stderr as it runs (on a terminal, its tokens, their "
@@ -69,6 +74,8 @@ def plan_command(
     dom = load_domain(domain, catalogue=catalogue)
     cat = dom.catalogue
     refuse_household_options(dom, floor_plan, thor_build)
+    if goals:
+        load_goal_examples(dom.prompts_dir())  # a domain without them fails before the model loads
     instruction, scene, team_ids, chosen = _what_to_plan(dom, instruction, floor_plan, robots, tasks, task)
     team = cat.team(team_ids)
     if execute and dispatch is not None:
@@ -76,7 +83,9 @@ def plan_command(
     if dom.is_ai2thor and (execute or thor_build is not None):
         check_build(thor_build)
     functions = _dispatch_functions(dispatch, cat, team)
-    planner, result = _plan(options, dom, instruction, scene, team_ids, quiet=quiet)
+    planner, result, stated = _plan(options, dom, instruction, scene, team_ids, quiet=quiet, goals=goals)
+    if stated is not None:
+        result.stages.append(stated.record)  # written to --out as the other stages are
     for notice in result.notices:
         print(f"notice: {notice}", file=sys.stderr)
     planned = result.plan is not None and not result.error
@@ -96,23 +105,29 @@ def plan_command(
     if dispatched is not None:
         extra["dispatch"] = {"attempted": dispatched.attempted, "succeeded": dispatched.succeeded,
                              **run_record(dispatched)}
+    if stated is not None:
+        extra["goals"] = stated.summary()
     if out is not None:
         write_artifacts(result, out, extra)
     _print_result(result, extra, scores, dispatched, as_json, chosen)
+    if stated is not None and not as_json:
+        typer.echo(stated.report(), nl=False)
     if result.error or (dispatched is not None and not dispatch_succeeded(dispatched)):
         raise typer.Exit(1)
 
 
 def _plan(options: ModelOptions, dom: Domain, instruction: str, scene: str, team_ids: list[int], *,
-          quiet: bool) -> tuple[Planner, PlanResult]:
-    """Load the model and plan, each stage shown on stderr as it runs (unless ``quiet``)."""
+          quiet: bool, goals: bool) -> tuple[Planner, PlanResult, StatedGoals | None]:
+    """Load the model and plan, then state the goals if asked, each stage shown on stderr as it runs (unless
+    ``quiet``)."""
     with PlanProgress(quiet=quiet) as progress:
         model = options.model or ("the served model" if options.backend == "server" else default_model())
         with progress.loading(f"the model {model}"):
             planner = options.planners(dom.catalogue, dom)[0]
         try:
             planner.progress, progress.kept = progress, examples_kept(planner.backend)
-            return planner, planner.plan(instruction, scene, team_ids)
+            result = planner.plan(instruction, scene, team_ids)
+            return planner, result, planner.goals(instruction, scene) if goals else None
         finally:
             planner.backend.close()
 

@@ -33,6 +33,7 @@ from .constraints.plan import PlanConstraint
 from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
+from .goal_stage import StatedGoals, state_goals
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -304,6 +305,11 @@ class Planner:
             result.error = record.error
         record.plan = plan
 
+    def goals(self, instruction: str, floor_plan: str | int) -> StatedGoals:
+        """The goal stage, on demand: what must hold when the task is done, stated from the instruction and the
+        scene alone (no team, no task file; see :mod:`.goal_stage`). :meth:`plan` does not run it."""
+        return state_goals(self, instruction, floor_plan)
+
     # ------------------------------------------------------------------ task
 
     def plan(self, instruction: str, floor_plan: str | int, robot_ids: Sequence[int]) -> PlanResult:
@@ -338,7 +344,8 @@ class Planner:
 
 
 STAGE_FILES = ("prompt.txt", "grammar.gbnf", "raw_output.txt", "timings.json")
-STAGE_OUTPUTS = {"decomposition": "decomposed.py", "coalition": "coalition.txt", "allocation": "allocated.py"}
+STAGE_OUTPUTS = {"decomposition": "decomposed.py", "coalition": "coalition.txt", "allocation": "allocated.py",
+                 "goal": "goals.txt"}
 
 
 def write_artifacts(result: PlanResult, out: Path, extra: dict | None = None) -> None:

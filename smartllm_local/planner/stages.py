@@ -30,6 +30,7 @@ STOP_STRINGS = {
     "decomposition": ("\n# Example", "\n# Your task", "\n# Task Description", "\nobjects ="),
     "coalition": ("\n\n", "\n# Allocated plan", "\n# Example", "\n# Your plan", "\ndef "),
     "allocation": ("\n# Example", "\n# Your plan", "\n# Task Description"),
+    "goal": ("\n\n", "\n# Example", "\n# Your task", "\n# Task Description"),
 }
 
 

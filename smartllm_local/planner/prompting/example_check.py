@@ -15,22 +15,26 @@ from ...plan_language import parse_plan
 from ...scoring import parse_goals, score_execution
 from ..constraints.coalition import CoalitionConstraint
 from ..constraints.feasibility import function_needs
+from ..constraints.goal import GoalConstraint, goal_vocabulary
 from ..constraints.plan import PlanConstraint
 from ..constraints.restated import RestatedAllocation, restated_bodies
 from ..constraints.world_check import WorldCheck
+from ..decoding.protocol import REFUSAL_PREFIX
 from ..decoding.writer import accepts
+from .goal_prompt import GOAL_FOLDER, load_goal_examples
 from .prompts import STAGES, load_examples
 from .scene_context import scene_objects, site_objects
 
 
 def check_examples(domain: Domain) -> tuple[int, list[str]]:
-    """How many examples the domain has, and every problem with them (each naming the example's file)."""
+    """How many examples the domain's three stages have, and every problem with them and with its goal examples
+    (each naming the example's file)."""
     folder = domain.prompts_dir()
     try:
         examples = load_examples(folder)
     except (SmartLLMError, KeyError, TypeError) as exc:
         return 0, [f"{folder}/examples.json: {exc}; each stage needs worked examples (see `domain new`)"]
-    problems = []
+    problems = check_goal_examples(domain)[1]
     missing = [stage for stage in STAGES if not any(stage in e.stages for e in examples)]
     if missing:
         problems.append(f"{folder}/examples.json: no example for the {', '.join(missing)} stage(s)")
@@ -72,4 +76,31 @@ def check_examples(domain: Domain) -> tuple[int, list[str]]:
                                      max_trans=ex.max_trans)
             if scores.SR != 1.0:
                 problems.append(f"{where}: scores SR {scores.SR}; an example must reach SR 1")
+    return len(examples), problems
+
+
+def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
+    """The goal examples (a domain without a goal/ folder has none: the goal stage then says so), each in the
+    goal grammar of its own scene."""
+    folder = domain.prompts_dir() / GOAL_FOLDER
+    if not folder.is_dir():
+        return 0, []
+    try:
+        examples = load_goal_examples(domain.prompts_dir())
+    except SmartLLMError as exc:
+        return 0, [str(exc)]
+    problems = []
+    for ex in examples:
+        where = f"{folder}/{ex.name}.txt"
+        try:
+            scene = scene_objects(ex.floor_plan) if domain.is_ai2thor else site_objects(domain)
+        except SmartLLMError as exc:
+            problems.append(f"{where}: {exc}")
+            continue
+        # As the stage writes it: the refusal line alone, or the conditions and the blank line that ends them.
+        written = ex.statement.rstrip("\n") + ("\n" if ex.statement.startswith(REFUSAL_PREFIX) else "\n\n")
+        if not accepts(GoalConstraint(goal_vocabulary(scene)), written):
+            problems.append(f"{where}: not in the goal grammar of {scene.floor_plan} (one `<Object> <state>` or "
+                            "`<Object> in <Receptacle>` a line, naming the scene's objects in states the world can "
+                            "give them, each once; or one `# INFEASIBLE: <why>` line)")
     return len(examples), problems

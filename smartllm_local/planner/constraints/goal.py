@@ -1,0 +1,152 @@
+"""The goal stage's constraint: conditions over the scene's own objects, in states the world can give them.
+
+Each line is a condition (see :mod:`smartllm_local.goal_language`): ``<Type> <state>`` offers only the
+states the world can give that type in this scene (a LightSwitch on or off, never sliced), and ``<Item>
+in <Receptacle>`` only receptacles that can hold the item (a Toaster only bread slices, nothing in
+itself). A condition already stated, or one that contradicts it (``on`` after ``off``), is not offered
+again, so a statement never repeats or contradicts itself. A blank line ends the statement after at least
+one condition; the first line may instead be a refusal. At most :data:`MAX_GOALS` conditions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cache
+from itertools import count
+
+from ...goal_language import CONTAINMENT, OPPOSITES, STATE_WORDS, object_states, parse_goal_statement
+from ...scoring import Condition
+from ...world.object_types import RECEPTACLE_ONLY_ACCEPTS, SLICE_RESULTS, TYPE_PROPERTIES
+from ...world.scenes import load_scene
+from ..decoding.grammar import Node, Ref, alt, seq
+from ..decoding.protocol import Choose, Constraint, longest
+from ..prompting.scene_context import SceneObjects
+from .format import refusal_line
+
+MAX_GOALS = 8
+#: A site entry's kind, the effect a skill must have for the world to give it a state, and that state.
+SITE_GOALS = {"region": ("patrol", "COVERED"), "object": ("photograph", "PHOTOGRAPHED"),
+              "location": ("move", "RETURNED")}
+
+
+@dataclass(frozen=True)
+class GoalVocabulary:
+    """What a goal may say about a scene: each type's states, and the receptacles each type can be put in."""
+
+    states: Mapping[str, frozenset[str]]
+    holders: Mapping[str, frozenset[str]]
+
+    @property
+    def types(self) -> tuple[str, ...]:
+        named = set(self.states) | set(self.holders)
+        return tuple(sorted(t for t in named if self.states.get(t) or self.holders.get(t)))
+
+    def state_names(self) -> list[str]:
+        """The states any type of the scene can be in, in the scorer's order."""
+        present = set().union(*self.states.values()) if self.states else set()
+        return [s for s in STATE_WORDS if s in present]
+
+
+def goal_vocabulary(scene: SceneObjects) -> GoalVocabulary:
+    """The goal vocabulary of an AI2-THOR floor plan (its objects' flags, and the slices they can be cut
+    into), or of a site (a region covered, an object photographed, a location the team returns to, each
+    where a skill of the domain has that effect)."""
+    if scene.site is not None:
+        effects = set(scene.site.effects.values())
+        states = {p.name: frozenset({SITE_GOALS[p.kind][1]}) for p in scene.site.places.values()
+                  if SITE_GOALS[p.kind][0] in effects}
+        return GoalVocabulary(states, {})
+    return _floor_plan_vocabulary(scene.floor_plan)
+
+
+@cache  # a floor plan's objects never change; a benchmark asks for the same few again and again
+def _floor_plan_vocabulary(floor_plan: str) -> GoalVocabulary:
+    flags: dict[str, dict[str, bool]] = {}
+    for obj in load_scene(floor_plan):
+        seen = flags.setdefault(obj["objectType"], {})
+        for name, value in obj.items():
+            if isinstance(value, bool) and value:
+                seen[name] = True
+    for whole in [t for t in flags if t in SLICE_RESULTS]:
+        piece = SLICE_RESULTS[whole][0]
+        flags.setdefault(piece, {p: True for p in TYPE_PROPERTIES[piece]})
+    states = {t: object_states(f, t) for t, f in flags.items()}
+    receptacles = [t for t, f in flags.items() if f.get("receptacle")]
+
+    def can_hold(receptacle: str, item: str) -> bool:
+        only = RECEPTACLE_ONLY_ACCEPTS.get(receptacle)
+        return receptacle != item and (only is None or item in only)
+
+    holders = {t: frozenset(r for r in receptacles if can_hold(r, t)) for t, f in flags.items() if f.get("pickupable")}
+    return GoalVocabulary(states, holders)
+
+
+class GoalConstraint(Constraint):
+    """The goal stage: conditions, one a line, then a blank line (or one refusal line)."""
+
+    def __init__(self, vocabulary: GoalVocabulary, *, allow_refusal: bool = True, max_goals: int = MAX_GOALS):
+        super().__init__()
+        self.vocabulary, self.allow_refusal, self.max_goals = vocabulary, allow_refusal, max_goals
+        self.said: list[Condition] = []
+        self.ended = False
+        first, rules = self._conditions()
+        self.must_refuse = first is None  # the scene offers nothing a goal could say
+        self.longest_line = 0 if first is None else longest(first, rules)
+        self.refusal_len = longest(refusal_line(), {})
+
+    def minimum_budget(self) -> int:
+        if self.must_refuse:
+            return self.refusal_len
+        return self.longest_line + 1  # the longest condition, then the blank line that ends the statement
+
+    def next(self, remaining: int) -> Choose | None:
+        if self.ended or self.refusal is not None or len(self.said) == self.max_goals:
+            return None
+        options: dict[str, Node] = {}
+        if not self.said and (self.allow_refusal or self.must_refuse) and self.refusal_len <= remaining:
+            options["refusal"] = refusal_line()
+        condition, rules = self._conditions()
+        # A condition only where the blank line that ends the statement still fits after it.
+        if condition is not None and longest(condition, rules) + 1 <= remaining:
+            options["condition"] = condition
+        if self.said:
+            options["end"] = "\n"
+        return self._choose(rules, options)
+
+    def _advance(self, kind: str, piece: str) -> None:
+        if kind == "condition":
+            self.said.extend(parse_goal_statement(piece).conditions)
+        elif kind == "end":
+            self.ended = True
+
+    def _conditions(self) -> tuple[Node | None, dict[str, Node]]:
+        """A condition line of those still to be said (None: none), and the rules it refers to. Types that
+        may be followed by the same things share a rule."""
+        said_states: dict[str, set[str]] = {}
+        said_in: dict[str, set[str]] = {}
+        for c in self.said:
+            if c.state is not None:
+                said_states.setdefault(c.subject, set()).update({c.state, OPPOSITES.get(c.state, c.state)})
+            else:
+                said_in.setdefault(c.item or "", set()).add(c.subject)
+        groups: dict[tuple[frozenset[str], frozenset[str]], list[str]] = {}
+        for kind in self.vocabulary.types:
+            states = self.vocabulary.states.get(kind, frozenset()) - said_states.get(kind, set())
+            holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set())
+            if states or holders:
+                groups.setdefault((frozenset(states), frozenset(holders)), []).append(kind)
+        rules: dict[str, Node] = {}
+        holder_rules: dict[frozenset[str], str] = {}
+        lines = []
+        numbers = count(1)
+        for (states, holders), kinds in groups.items():
+            rule = f"types-{next(numbers)}"
+            rules[rule] = alt(*kinds)
+            after: list[Node] = [seq(" ", alt(*(STATE_WORDS[s] for s in STATE_WORDS if s in states)))] if states else []
+            if holders:
+                name = holder_rules.setdefault(holders, f"holders-{len(holder_rules) + 1}")
+                rules[name] = alt(*sorted(holders))
+                after.append(seq(CONTAINMENT, Ref(name)))
+            lines.append(seq(Ref(rule), alt(*after), "\n"))
+        return (alt(*lines) if lines else None), rules

@@ -1,0 +1,94 @@
+"""The goal stage: from the instruction and the scene alone, the model states what must hold when the task is done.
+
+It reads nothing else (no team, no task file, no ground truth), so the goals it states can be used to
+choose among plans, or handed to a classical planner, without the benchmark's goals leaking into
+planning. Its output is a :class:`~smartllm_local.goal_language.GoalStatement`, whose goals the scorer
+scores as it scores a task's. It runs on demand (``Planner.goals``, ``plan --goals``); ``plan`` itself
+does not run it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from ..domain import load_domain
+from ..errors import PlanError
+from ..goal_language import GoalStatement, parse_goal_statement
+from ..scoring import STATES
+from .constraints.goal import GoalConstraint, goal_vocabulary
+from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
+from .stages import StageRecord, fit_prompt, run_stage
+
+if TYPE_CHECKING:
+    from .pipeline import Planner
+
+STAGE = "goal"
+GOAL_BUDGET = 384  # tokens: MAX_GOALS of the longest conditions (some 40 characters) fit
+
+
+@dataclass
+class StatedGoals:
+    """The goal stage's run (written to --out as other stages are) and what it stated: the goals, the
+    refusal, or, without the grammar, an error where the output is not a statement."""
+
+    record: StageRecord
+    statement: GoalStatement | None
+
+    @property
+    def refusal(self) -> str | None:
+        return self.record.refusal
+
+    @property
+    def error(self) -> str:
+        return self.record.error
+
+    def summary(self) -> dict[str, Any]:
+        """What a run's JSON keeps: the stated conditions (as lines), the refusal and who refused, the error."""
+        stated = self.statement.text().splitlines() if self.statement and self.statement.refusal is None else []
+        return {"stated": stated, "refusal": self.refusal, "refused_by": self.record.refused_by or None,
+                "error": self.error or None}
+
+    def report(self) -> str:
+        """The goals as the plan command prints them, after the plan."""
+        if self.statement is None:
+            return f"# Goals: none stated ({self.error})\n"
+        return "# Goals:\n" + self.statement.text()
+
+
+def goal_examples(planner: Planner) -> list[GoalExample]:
+    """The goal examples of the planner's domain (its site's, or household's)."""
+    folder = planner.site.prompts_dir() if planner.site is not None else load_domain().prompts_dir()
+    return load_goal_examples(folder)
+
+
+def state_goals(planner: Planner, instruction: str, floor_plan: str | int) -> StatedGoals:
+    """Run the goal stage for one instruction in one scene."""
+    scene = planner.scene(floor_plan)
+    vocabulary = goal_vocabulary(scene)
+    # The states the prompt names are the domain's, the same for every scene (the examples stay a shared prefix).
+    states = vocabulary.state_names() if scene.site is not None else list(STATES)
+    examples = goal_examples(planner)
+    record = StageRecord(STAGE, chat_template=planner.chat_status)
+    prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex, states), examples, planner.backend,
+                        GOAL_BUDGET, planner.chat)
+    constraint = GoalConstraint(vocabulary) if planner.config.grammar else None
+    from .pipeline import PlanResult  # the pipeline's module imports this one
+
+    # No team: the goal is what the instruction asks, whoever reaches it.
+    task = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=[])
+    run_stage(record, planner.backend, prompt, constraint, output_budget=GOAL_BUDGET,
+              sampling=planner.config.sampling, rng=planner.stage_rng(task, STAGE))
+    if constraint is not None and constraint.must_refuse:
+        record.refused_by = "grammar"
+    elif record.refusal is not None:
+        record.refused_by = "model"
+    statement = None
+    try:
+        statement = parse_goal_statement(record.output, where="<goal output>", types=vocabulary.types)
+    except PlanError as exc:
+        record.error = f"goal output is not a goal statement: {exc}"
+    if statement is not None and statement.refusal is not None:
+        record.refusal = statement.refusal
+        record.refused_by = record.refused_by or "model"
+    return StatedGoals(record, statement)
