@@ -61,7 +61,7 @@ class StageRecord:
     capped: list[str] = field(default_factory=list)  # what the output budget kept the grammar from offering
     world_tries: int = 0  # calls the world check tried
     dead_ends: int = 0  # lines for which it found nothing that succeeds
-    loops_ended: int = 0  # loops in free text the loop guard ended (see backends.repetition)
+    loops_ended: int = 0  # loops the loop guard ended: in free text, and of whole lines (see backends.repetition)
     choices: int = 0  # tokens the model chose (not forced), where the backend measures them
     refused: int = 0  # of those, where the model's likeliest token was one the grammar refused
     logprob: float = 0.0  # their log-probabilities under the unconstrained model, summed
@@ -210,7 +210,8 @@ def _generate_constrained(record: StageRecord, backend: Backend, context: list[i
     report = Report()
     record.context = context
     try:
-        record.output = run_tokens(constraint, writer, output_budget, report, open_ends=sampling.aligned)
+        record.output = run_tokens(constraint, writer, output_budget, report, open_ends=sampling.aligned,
+                                   guard=sampling.loop_guard)
     except BudgetError as exc:
         raise UserError(f"{record.stage}: {exc}") from exc
     except GuaranteeError as exc:
@@ -222,6 +223,7 @@ def _generate_constrained(record: StageRecord, backend: Backend, context: list[i
         record.capped = list(constraint.capped)
         record.world_tries, record.dead_ends = constraint.world_counts()
         record.completed_lines, record.spilled = report.completed_lines, report.spilled
+        record.loops_ended += report.cycles_ended
     record.refusal = constraint.refusal
 
 
@@ -233,6 +235,7 @@ class _StageWriter(TokenWriter):
         self.record, self.backend, self.context, self.sampling, self.rng = record, backend, context, sampling, rng
         self.progress = progress
         self.raw = ""  # what was written, as it was written (the output is that, normalized)
+        self._last = 0  # tokens of the last line written
 
     def write(self, line: Line, remaining: int) -> Written:
         record = self.record
@@ -246,6 +249,7 @@ class _StageWriter(TokenWriter):
                                        "allow it", record.stage)
         self.context.extend(result.tokens)
         self.raw += result.text
+        self._last = len(result.tokens)
         ended = result.stop == "eos"
         record.generated_tokens += len(result.tokens) - result.forced + ended
         record.forced_tokens += result.forced
@@ -253,6 +257,12 @@ class _StageWriter(TokenWriter):
         record.note(result)
         self.progress.tokens_written(record.stage, record.generated_tokens, record.forced_tokens)
         return Written(result.text, len(result.tokens) + ended, ended=ended and result.text.count("\n") < line.lines)
+
+    def take_back(self, written: Written) -> None:
+        """The line just written began a loop of lines: out of the context (the backend evaluates the context
+        it is next given), and out of ``raw``, which stays the text the model was given."""
+        del self.context[len(self.context) - self._last:]
+        self.raw = self.raw[: len(self.raw) - len(written.text)]
 
     def force(self, text: str) -> int:
         tokens = self.backend.tokenize_continuation(text)  # one batch, whatever the tokenizer family

@@ -17,11 +17,15 @@ from smartllm_local.benchmark.importer import import_smartllm
 from smartllm_local.benchmark.tasks import check_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import SmartLLMError
+from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.backends.repetition import LoopGuard
 from smartllm_local.planner.constraints.coalition import CoalitionConstraint
 from smartllm_local.planner.constraints.feasibility import function_needs
-from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.constraints.format import MAX_SUBTASKS
+from smartllm_local.planner.constraints.plan import PlanConstraint, robots_named
 from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
+from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.protocol import Constraint, Forced
 from smartllm_local.planner.decoding.writer import (
     BudgetError,
@@ -33,8 +37,9 @@ from smartllm_local.planner.decoding.writer import (
 )
 from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.skills import DEFAULT_SKILL_SET, SkillSet
+from smartllm_local.world.controller import open_controller
 
-from .writers import WRITERS, TokenAdversary, writer
+from .writers import WRITERS, Booker, Cycler, TokenAdversary, writer
 
 FIXTURE = Path(__file__).parent.parent / "fixtures" / "smartllm_final_test"
 CATALOGUE = load_domain().catalogue
@@ -250,3 +255,131 @@ def test_an_overrun_would_be_a_clear_error_that_the_benchmark_runner_catches():
     with pytest.raises(GuaranteeError, match="50 tokens of a budget of 10") as caught:
         run_constraint(Overrunning(), writer("random", random.Random(0)), len, 10)
     assert isinstance(caught.value, SmartLLMError)
+
+
+# ------------------------------------------------------------- Exe by construction, loops of lines cut
+
+
+def _subtasks(rng: random.Random, wanted: int):
+    """A random writer that writes at least ``wanted`` sub-tasks' summaries (where the budget lets it)."""
+    random_line = writer("random", rng, refusals=0.0)
+    written = [0]
+
+    def write(choose, remaining):
+        if "summary" in choose.options and written[0] < wanted:
+            written[0] += 1
+            text = choose.options["summary"].sample(rng)
+            return text, len(text)
+        return random_line(choose, remaining)
+    return write
+
+
+def _world_checked(task, rng: random.Random, allocation_writer: TokenWriter, budget: int = 1400):
+    """The three stages as the planner runs them (world check, restated allocation): a random writer decomposes
+    (three sub-tasks) and forms the coalition, ``allocation_writer`` allocates. The allocated plan's text and its
+    dead ends; None where the coalition refuses."""
+    scene = scene_objects(task.floor_plan)
+    team = CATALOGUE.team(task.robots)
+    decomposer = PlanConstraint(scene, CATALOGUE.skills, world=WorldCheck(task.floor_plan, CATALOGUE.skills,
+                                                                          MAX_SUBTASKS))
+    text = run_constraint(decomposer, _subtasks(rng, 3), len, budget)
+    plan = parse_plan(text, form="decomposed", skills=CATALOGUE.skills, scene_types=scene.types)
+    names = [f.name for f in plan.functions]
+    needs = function_needs(plan, scene, PICKUPS)
+    coalition = CoalitionConstraint(names, team, needs=[needs[n] for n in names])
+    run_constraint(coalition, writer("random", rng, refusals=0.0), len, coalition.minimum_budget() + 300)
+    if coalition.refusal is not None:
+        return None
+    allocator = RestatedAllocation(scene, CATALOGUE.skills, team=team, function_names=names,
+                                   bodies=restated_bodies(text, names),
+                                   world=WorldCheck(task.floor_plan, CATALOGUE.skills, len(team)))
+    allocated = run_tokens(allocator, allocation_writer, allocator.maximum_output())
+    return allocated, decomposer.world_counts()[1] + allocator.world_counts()[1]
+
+
+def thread_blocks(allocated: str) -> list[list[frozenset[int]]]:
+    """The team indices of each thread, block by block (the threads a plan writes together and starts together)."""
+    blocks: list[list[frozenset[int]]] = [[]]
+    for line in allocated.splitlines():
+        if line.startswith("t") and "= threading.Thread(" in line:
+            blocks[-1].append(frozenset(robots_named(line)))
+        elif blocks[-1]:
+            blocks.append([])
+    return [b for b in blocks if b]
+
+
+@pytest.mark.parametrize("every, seeds", [(4, 1), pytest.param(1, 2, marks=pytest.mark.heavy)])
+def test_no_allocation_runs_a_robot_in_two_threads_at_once(every, seeds):
+    """A writer that adds every thread it may to a block and books into it a robot the block already has, over
+    every fourth feasible benchmark task (the heavy suite: all, twice), planned as the planner plans (three
+    sub-tasks, world check, restated allocation): no block gives one robot to two of its threads, so when the
+    plan runs every thread of a block begins working at the tick the block starts (none waits for another's
+    robot), and every action of every plan whose check met no dead end succeeds (Exe 1.00). Before, where only a
+    busy robot could do a thread's sub-task, the grammar booked it anyway (6 of these 9 plans)."""
+    plans = clean = blocks_shared = 0  # blocks_shared: plans with a block of two threads or more
+    rng = random.Random("booking")
+    booker = Booker(rng)
+    tasks = [t for t in load_tasks() if t.feasible][::every] * seeds
+    controller = open_controller(tasks[0].floor_plan, agent_count=len(tasks[0].robots))  # one, reset per task
+    try:
+        for task in tasks:
+            planned = _world_checked(task, rng, booker)
+            if planned is None:
+                continue
+            allocated, dead_ends = planned
+            plans += 1
+            blocks = thread_blocks(allocated)
+            for block in blocks:
+                assert all(not a & b for i, a in enumerate(block) for b in block[i + 1:]), (task.id, allocated)
+            blocks_shared += any(len(block) > 1 for block in blocks)
+            plan = parse_plan(allocated, form="allocated", skills=CATALOGUE.skills, team_size=len(task.robots))
+            execution = run_plan(plan, task.floor_plan, CATALOGUE.team(task.robots), skills=CATALOGUE.skills,
+                                 controller=controller)
+            began = dict(execution.starts)
+            for block in _thread_names(allocated):
+                assert len({began[name] for name in block}) == 1, (task.id, block, execution.starts)
+            if dead_ends == 0:
+                clean += 1
+                failed = [(e.subtask, e.skill, e.objects, e.error) for e in execution.trace if not e.success]
+                assert not failed, (task.id, allocated, failed)
+    finally:
+        controller.stop()
+    assert plans >= 8 * seeds * 4 // every and clean >= 0.8 * plans and blocks_shared >= plans // 3, \
+        (plans, clean, blocks_shared)
+    assert booker.booked == 0  # the grammar never offered a list naming a robot of the open block
+
+
+def _thread_names(allocated: str) -> list[list[str]]:
+    names: list[list[str]] = [[]]
+    for line in allocated.splitlines():
+        if line.startswith("t") and "= threading.Thread(target=" in line:
+            names[-1].append(line.split("target=", 1)[1].split(",")[0])
+        elif names[-1]:
+            names.append([])
+    return [n for n in names if n]
+
+
+def test_a_writer_that_loops_its_lines_has_every_loop_cut():
+    """A writer that writes again the line 4 (or 2, 3, 5, 6, 8) lines back wherever the grammar admits it, over
+    every third benchmark task's decomposition (world check): with the loop guard no output ever begins a third
+    copy of a block of lines, and the driver took lines back to keep it so; without it, the same writer loops
+    (go to and push the fork, six times over, as Qwen2.5-Coder-1.5B did with the cabinet)."""
+    guard = LoopGuard()
+    cut = looped = 0
+    for guarded in (True, False):
+        rng = random.Random("cycles")
+        for task in load_tasks()[::3]:
+            scene = scene_objects(task.floor_plan)
+            cycler = Cycler(rng)
+            constraint = PlanConstraint(scene, CATALOGUE.skills,
+                                        world=WorldCheck(task.floor_plan, CATALOGUE.skills, MAX_SUBTASKS))
+            text = run_tokens(constraint, cycler, 1024, guard=guard if guarded else None)
+            parse_plan(text, form="decomposed", skills=CATALOGUE.skills, scene_types=scene.types)
+            lines = text.split("\n")
+            loops = [end for end in range(1, len(lines) + 1) if guard.cycles(lines[:end])]
+            if guarded:
+                assert not loops, (task.id, text)
+                cut += cycler.taken_back
+            else:
+                looped += bool(loops)
+    assert cut >= 8 and looped >= 8, (cut, looped)

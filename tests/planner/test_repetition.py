@@ -9,13 +9,20 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from smartllm_local.planner.backends.base import Sampling
+from smartllm_local.domain import load_domain
+from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.backends.repetition import LoopGuard, current_line, draw
 from smartllm_local.planner.constraints.coalition import CoalitionConstraint
-from smartllm_local.planner.constraints.format import COMMENT_CHARS, text_run
+from smartllm_local.planner.constraints.format import COMMENT_CHARS, MAX_SUBTASKS, text_run
+from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.grammar import Grammar, alt, opt, seq
 from smartllm_local.planner.decoding.matcher import Matcher
 from smartllm_local.planner.decoding.protocol import Choose
+from smartllm_local.planner.prompting.scene_context import scene_objects
+from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+
+from .fakes import FakeBackend
 
 DOMAINS = Path(__file__).resolve().parents[2] / "domains"
 GUARD = LoopGuard()
@@ -67,6 +74,82 @@ def test_no_line_any_domain_writes_by_hand_is_ever_a_loop():
         for line in path.read_text(encoding="utf-8").splitlines():
             for end in range(len(line) + 1):
                 assert not GUARD.loops(line[:end]), f"{path.name}: {line[:end]!r}"
+
+
+CABINET = ["    # go to the cabinet", "    GoToObject('Cabinet')", "    OpenObject('Cabinet')",
+           "    GoToObject('Cabinet')", "    CloseObject('Cabinet')"]
+
+
+def test_a_line_that_begins_a_third_copy_of_a_block_of_lines_is_a_loop():
+    """Qwen2.5-Coder-1.5B's cycle (go to, open, go to, close the cabinet): two copies stand, the first line
+    of a third is a loop; three identical lines in a row are a block of one."""
+    head = ["def subtask1_cabinet():"]
+    assert not GUARD.cycles(head + CABINET * 2)
+    assert GUARD.cycles(head + CABINET * 2 + CABINET[:1])
+    assert GUARD.cycles(["x", "    # again", "    # again", "    # again"])
+    assert not GUARD.cycles(["    # again", "    # again"])
+    longest = [f"    Step{i}()" for i in range(GUARD.block)]
+    assert GUARD.cycles(longest * 2 + longest[:1])
+    assert not GUARD.cycles(["    Step()"] + longest * 2 + ["    Other()"])
+    too_long = [f"    Step{i}()" for i in range(GUARD.block + 1)]
+    assert not GUARD.cycles(too_long * 2 + too_long[:1])
+    assert not LoopGuard(times=4).cycles(head + CABINET * 2 + CABINET[:1])
+
+
+@given(st.lists(st.sampled_from(["a", "b", "c", ""]), max_size=8), st.lists(st.text(min_size=1), min_size=1,
+                                                                           max_size=12))
+def test_a_block_repeated_twice_and_begun_again_is_found_after_any_lines(before, block):
+    assert GUARD.cycles(before + block * 2 + block[:1])
+
+
+def test_no_plan_any_domain_writes_by_hand_ever_loops_its_lines():
+    """Every line of every example and reference plan, with the lines before it: no hand-written plan repeats
+    a block of lines twice and begins it again (nor even repeats one twice, today)."""
+    for path in _hand_written():
+        lines = path.read_text(encoding="utf-8").splitlines()
+        for end in range(1, len(lines) + 1):
+            assert not GUARD.cycles(lines[:end]), f"{path.name}: line {end}"
+
+
+class _LoopingModel(FakeBackend):
+    """Qwen2.5-Coder-1.5B's loop, as a model: it writes again the line four lines back wherever the grammar admits
+    it, else the first line of its plan for the cabinet that the grammar admits; its tokens are characters, so
+    its context can be read back."""
+
+    PLAN = ["# SubTask 1: the cabinet (skills: GoToObject, OpenObject, CloseObject)\n", "# Alone.\n",
+            "def subtask1_cabinet():\n", *(line + "\n" for line in CABINET[1:]), "\n", "subtask1_cabinet()\n"]
+
+    def tokenize_continuation(self, text: str) -> list[int]:
+        return [ord(c) for c in text]
+
+    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None, lines=1) -> Generated:
+        written = "".join(chr(t) for t in context if t).split("\n")[:-1]
+        again = [written[-4] + "\n"] if len(written) >= 4 else []
+        forced = Matcher(grammar).forced()  # the carry the line begins with, and maybe more
+        text = next(forced[:cut] + line for line in again + self.PLAN for cut in range(len(forced) + 1)
+                    if grammar.matches(forced[:cut] + line))
+        return Generated([ord(c) for c in text], text, "line")
+
+
+@pytest.mark.parametrize("guarded", [True, False])
+def test_a_stage_takes_back_the_line_that_begins_a_third_copy_and_writes_the_way_out(guarded):
+    """A decomposition (world check) by a model that loops its lines: guarded, the line that would begin a third
+    copy is taken out of the model's context (and of the raw output) and the function ends there, counted
+    among the loops ended; unguarded, the loop runs on to the function's limit of steps."""
+    scene = scene_objects(6)
+    constraint = PlanConstraint(scene, load_domain().catalogue.skills,
+                                world=WorldCheck(6, load_domain().catalogue.skills, MAX_SUBTASKS))
+    record = StageRecord("decomposition")
+    run_stage(record, _LoopingModel(), Fitted("prompt", [0] * 8), constraint, output_budget=1024,
+              sampling=Sampling(loop_guard=LoopGuard() if guarded else None), rng=np.random.default_rng(0))
+    lines = record.output.split("\n")
+    loops = [end for end in range(1, len(lines) + 1) if GUARD.cycles(lines[:end])]
+    assert "".join(chr(t) for t in record.context[8:]) == record.raw  # the context is what raw says
+    if guarded:
+        assert not loops and record.loops_ended >= 1, record.output
+        assert not [end for end in range(1, 200) if GUARD.cycles(record.raw.split("\n")[:end])]
+    else:
+        assert loops and record.loops_ended == 0, record.output
 
 
 def test_no_loop_guard_turns_it_off_and_labels_the_run():

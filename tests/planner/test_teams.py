@@ -1,5 +1,6 @@
 """Teams of the right size: a coalition or a robot list names no robot the work can do without, the
-threads of one block are given robots none of the others has while free ones remain, and a function
+threads of one block are given robots none of the others has (a function none of whose lists is free waits
+for the block to end), and a function
 numbers its robot slots in the order they first act."""
 
 from __future__ import annotations
@@ -80,18 +81,36 @@ def test_threads_of_one_block_get_robots_of_their_own_while_some_are_free():
     assert accepts(_allocator(1, 2, 3), _allocated(["robots[0]", "robots[1]", "robots[2]"]))
     assert not accepts(_allocator(1, 2, 3), _allocated(["robots[0]", "robots[0]", "robots[2]"]))
     assert not accepts(_allocator(1, 2, 3), _allocated(["robots[0]", "robots[1]", "robots[1]"]))
-    # Two robots for three threads: the third shares, with either.
-    assert accepts(_allocator(1, 2), _allocated(["robots[0]", "robots[1]", "robots[0]"]))
-    assert accepts(_allocator(1, 2), _allocated(["robots[1]", "robots[0]", "robots[1]"]))
+    # Two robots for three threads: the third cannot join their block (both its robots are in it), so it runs
+    # once the block has ended, in a block of its own or called directly.
+    assert not accepts(_allocator(1, 2), _allocated(["robots[0]", "robots[1]", "robots[0]"]))
+    assert not accepts(_allocator(1, 2), _allocated(["robots[1]", "robots[0]", "robots[1]"]))
+    full = _allocated(["robots[0]", "robots[1]", "robots[0]"])
+    bodies = full[:full.index("t1 = ")]
+    block = "t1 = threading.Thread(target=subtask1_apple, args=([robots[0]],))\n" \
+            "t2 = threading.Thread(target=subtask2_tomato, args=([robots[1]],))\n" \
+            "t1.start()\nt2.start()\nt1.join()\nt2.join()\n"
+    assert accepts(_allocator(1, 2), bodies + block + "subtask3_lettuce([robots[0]])\n")
+    assert accepts(_allocator(1, 2), bodies + block + "t1 = threading.Thread(target=subtask3_lettuce, "
+                   "args=([robots[1]],))\nt1.start()\nt1.join()\n")
 
 
 def test_a_robot_list_adds_no_robot_the_function_does_without():
     assert not accepts(_allocator(1, 2, 3), _allocated(["robots[0], robots[1]", "robots[2]", "robots[1]"]))
     # Robot 8 lifts 0.4 kg, robot 7 0.08 kg, robot 1 100 kg: with robot 1 busy, the lettuce is a team lift
     # for 8 and 7, while robot 1 alone would not need either.
-    whole = ["robot_list[0]", "robot_list[0]", "robot_list"]
-    assert accepts(_allocator(1, 8, 7), _allocated(["robots[0]", "robots[1]", "robots[1], robots[2]"], whole))
-    assert not accepts(_allocator(1, 8, 7), _allocated(["robots[1]", "robots[2]", "robots[0], robots[1]"], whole))
+    whole = _allocated(["robots[0]"] * 3, ["robot_list[0]", "robot_list[0]", "robot_list"])
+    bodies = whole[:whole.index("t1 = ")]
+
+    def apple_then_block(tomato: str, lettuce: str) -> str:
+        return (bodies + "subtask1_apple([robots[0]])\n"
+                f"t1 = threading.Thread(target=subtask2_tomato, args=([{tomato}],))\n"
+                f"t2 = threading.Thread(target=subtask3_lettuce, args=([{lettuce}],))\n"
+                "t1.start()\nt2.start()\nt1.join()\nt2.join()\n")
+
+    assert accepts(_allocator(1, 8, 7), apple_then_block("robots[0]", "robots[1], robots[2]"))
+    assert not accepts(_allocator(1, 8, 7), apple_then_block("robots[1]", "robots[0], robots[2]"))
+    assert accepts(_allocator(1, 8, 7), apple_then_block("robots[1]", "robots[0]"))
 
 
 @pytest.mark.parametrize("first", ["robot_list[1]", "robot_list[2]"])

@@ -9,6 +9,7 @@ stays within its budget here stays within it for every real tokenizer.
 from __future__ import annotations
 
 import random
+import re
 
 from smartllm_local.planner.decoding.grammar import Grammar
 from smartllm_local.planner.decoding.line_ends import BLANKS, TRAILING_SPACES
@@ -17,6 +18,7 @@ from smartllm_local.planner.decoding.protocol import Choose
 from smartllm_local.planner.decoding.writer import Line, TokenWriter, Written
 
 WRITERS = ("longest", "shortest", "random")
+_ROBOT = re.compile(r"robots\[(\d+)\]")
 
 
 def writer(kind: str, rng: random.Random, refusals: float = 0.05):
@@ -91,3 +93,70 @@ def _rest(grammar: Grammar, ahead: str, rng: random.Random, extreme: str) -> str
     if not Matcher(grammar).advance(ahead):
         return "\n"  # the spaces written ahead were a blank line's
     return grammar.after(ahead).sample(rng, extreme)
+
+
+class Cycler(TokenWriter):
+    """A writer that loops as a small model does: where the grammar admits the line ``k`` lines back (for the
+    first ``k`` of ``sizes`` that it admits), it writes that line again, so a block of lines once written is
+    written over and over; elsewhere a random line (never a refusal). It keeps the text it was given and
+    wrote, as a model's context, and gives back what the driver takes back."""
+
+    def __init__(self, rng: random.Random, sizes: tuple[int, ...] = (4, 2, 3, 5, 6, 8)):
+        self.rng, self.sizes = rng, sizes
+        self.text = ""
+        self.taken_back = 0
+
+    def write(self, line: Line, remaining: int) -> Written:
+        lines = (self.text + line.carry).split("\n")[:-1]
+        again = [lines[-k] + "\n" for k in self.sizes if k <= len(lines)]
+        own = next((t for t in again if line.choose.grammar.matches(t)), None)
+        if own is None:
+            names = [n for n in sorted(line.choose.options) if n != "refusal"] or ["refusal"]
+            own = line.choose.options[self.rng.choice(names)].sample(self.rng)
+        text = line.carry + own
+        self.text += text
+        return Written(text, len(text))
+
+    def force(self, text: str) -> int:
+        self.text += text
+        return len(text)
+
+    def take_back(self, written: Written) -> None:
+        assert self.text.endswith(written.text)
+        self.text = self.text[: len(self.text) - len(written.text)]
+        self.taken_back += 1
+
+
+class Booker(TokenWriter):
+    """An allocation writer that books busy robots: while it may add a thread to the block being written, it
+    does, and gives it a robot list that names a robot some thread of the block already has, if the grammar
+    offers one (of ``samples`` lines drawn); elsewhere a random line. Plain lines, one token a character."""
+
+    def __init__(self, rng: random.Random, samples: int = 60):
+        self.rng, self.samples = rng, samples
+        self.text = ""
+        self.booked = 0  # threads it gave a robot some thread of their block has
+
+    def write(self, line: Line, remaining: int) -> Written:
+        options = line.choose.options
+        if "thread" in options:
+            drawn = [options["thread"].sample(self.rng) for _ in range(self.samples)]
+            busy = self._block_robots(self.text + line.carry)
+            shared = [t for t in drawn if busy & set(_ROBOT.findall(t))]
+            self.booked += bool(shared)
+            own = (shared or drawn)[0]
+        else:
+            names = [n for n in sorted(options) if n != "refusal"] or ["refusal"]
+            own = options[self.rng.choice(names)].sample(self.rng)
+        self.text += line.carry + own
+        return Written(line.carry + own, len(line.carry + own))
+
+    def force(self, text: str) -> int:
+        self.text += text
+        return len(text)
+
+    @staticmethod
+    def _block_robots(text: str) -> set[str]:
+        """The robots of the threads written since the last block was started."""
+        block = text[text.rfind(".join()\n") + 1:]
+        return {r for t in re.findall(r"^t\d+ = threading\.Thread\(.*$", block, re.M) for r in _ROBOT.findall(t)}

@@ -21,7 +21,8 @@ from .repetition import LoopGuard
 @dataclass(frozen=True)
 class Sampling:
     """Decoding settings; temperature 0 is greedy, the seed makes sampling reproducible, and
-    ``loop_guard`` (None: off) keeps a line from ending in text said three times over. ``aligned``: forced
+    ``loop_guard`` (None: off) keeps a line from ending in text said three times over (and, where a stage is
+    written line by line, a block of lines from being begun a third time). ``aligned``: forced
     text ends with the model's own token, line ends are open and the end of sequence is always the model's
     choice (off, for measuring its effect: forced text is written whole, a line ends at its newline, and
     the model may end only where the grammar may)."""

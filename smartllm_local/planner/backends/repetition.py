@@ -15,11 +15,18 @@ Unlike a repetition penalty (llama.cpp's ``repeat_penalty``, its DRY sampler), i
 the current line alone and acts only on a third copy in a row, so the code a plan repeats
 from line to line (``GoToObject('Bread')`` in every function) and the robots a coalition
 names twice in a line are never touched.
+
+Whole lines loop too: Qwen2.5-Coder-1.5B wrote go to, open, go to, close the cabinet three
+times over in two sub-tasks, each line different from the one before it. So the same rule holds
+for a block of lines (:meth:`LoopGuard.cycles`): a line may not begin a third copy in a row
+of a block of up to ``block`` lines. That rule is applied where a stage's output is written
+line by line, whatever the backend (:mod:`..decoding.writer`), which takes such a line back and
+writes the constraint's shortest way out of the block instead.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,11 +36,13 @@ import numpy as np
 class LoopGuard:
     """A line may not end with a stretch of ``unit`` characters or fewer repeated ``times`` times in a
     row, or as many more times as it takes the repeats to span ``span`` characters (so "ll", "..."
-    and "1.1.1" stay allowed, "1.1.1.1.1." does not)."""
+    and "1.1.1" stay allowed, "1.1.1.1.1." does not); nor may a line begin the ``times``-th copy in a
+    row of a block of ``block`` lines or fewer."""
 
     times: int = 3
     span: int = 9
     unit: int = 32
+    block: int = 12  # lines: two copies of a block this long fill a function of 12 steps with their comments
 
     def loops(self, line: str) -> bool:
         """Whether ``line`` ends in a loop."""
@@ -41,6 +50,18 @@ class LoopGuard:
             repeats = max(self.times, -(-self.span // size))
             tail = line[-size * repeats:]
             if len(tail) == size * repeats and tail == tail[:size] * repeats:
+                return True
+        return False
+
+    def cycles(self, lines: Sequence[str]) -> bool:
+        """Whether the last of ``lines`` begins the ``times``-th copy in a row of a block of up to ``block``
+        lines (three identical lines in a row are a block of one)."""
+        for size in range(1, self.block + 1):
+            n = (self.times - 1) * size + 1
+            if n > len(lines):
+                return False
+            tail = lines[-n:]
+            if all(tail[i] == tail[i + size] for i in range(n - size)):
                 return True
         return False
 

@@ -52,20 +52,21 @@ def ordered_subset(items: Sequence[str], separator: str) -> Node:
     return alt(*(seq(items[k], *(opt(seq(separator, item)) for item in items[k + 1:])) for k in range(len(items))))
 
 
-def robot_list(team_size: int, need: int, separator: str, *, ordered: bool = False) -> Node:
-    """A list of at least ``need`` distinct robots of the team, written robots[i].
+def robot_list(team_size: int, need: int, separator: str, *, ordered: bool = False,
+               among: Sequence[int] | None = None) -> Node:
+    """A list of at least ``need`` distinct robots of the team (of those ``among`` it, if given), written robots[i].
 
     A set (``ordered=False``) is listed in increasing order; an ordered list
     (where position matters, as robot_list[i] does) may come in any order.
     Teams too big to enumerate (over 6 robots, 5 when ordered) get lists of
     any robots of the right length.
     """
-    names = [f"robots[{i}]" for i in range(team_size)]
-    if team_size <= (5 if ordered else 6):
+    names = [f"robots[{i}]" for i in (range(team_size) if among is None else among)]
+    if len(names) <= (5 if ordered else 6):
         pick = permutations if ordered else combinations
-        return alt(*(separator.join(c) for n in range(max(1, need), team_size + 1) for c in pick(names, n)))
+        return alt(*(separator.join(c) for n in range(max(1, need), len(names) + 1) for c in pick(names, n)))
     robot = alt(*names)
-    return seq(robot, rep(seq(separator, robot), max(0, need - 1), team_size - 1))
+    return seq(robot, rep(seq(separator, robot), max(0, need - 1), len(names) - 1))
 
 
 def text_run(charset: frozenset[str], length: int) -> Node:

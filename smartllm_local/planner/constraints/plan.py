@@ -163,7 +163,7 @@ class PlanConstraint(Constraint):
         self.robot_arg_len = max((len(a) + 2 for a in self.robot_args), default=0)  # with its ", "
         self.sleep_len = len(INDENT) + len("time.sleep(9)\n")
         self.world = world
-        self._lists: dict[tuple[str, int, frozenset[int]], list[tuple[int, ...]]] = {}
+        self._lists: dict[tuple[str, int], list[tuple[int, ...]] | None] = {}
         self.candidates = Candidates(scene, self.skills, robot_arg_len=self.robot_arg_len, allocated=self.allocated,
                                      world=world, max_steps=self.max_steps)
         self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
@@ -369,17 +369,23 @@ class PlanConstraint(Constraint):
         rules: dict[str, Node] = {}
         if not names:
             return rules
+        teams = {n: self._robot_lists(self.functions[index[n]]) for n in names} if self.allocated else {}
         if self.allocated:
-            for name in names:
-                rules[f"team-{index[name]}"] = seq("[", self._robot_lists(self.functions[index[name]]), "]")
-            rules["direct"] = alt(*(seq(n, "(", Ref(f"team-{index[n]}"), ")\n") for n in names))
+            for name, lists in teams.items():
+                if lists is not None:
+                    rules[f"team-{index[name]}"] = seq("[", lists, "]")
+            # (No block is open where a function is called directly: there every function has its lists.)
+            direct = [seq(n, "(", Ref(f"team-{index[n]}"), ")\n") for n in names if teams[n] is not None]
+            if direct:
+                rules["direct"] = alt(*direct)
         else:
             rules["direct"] = alt(*(f"{n}()\n" for n in names))
         n = len(self.threads) + 1
         budget = self.budget
         cost = budget.calls_cost(unlaunched)
-        targets = [t for t in names
-                   if budget.thread_len(t, n) + budget.starts_joins(n) + cost - budget.call_len(t) <= remaining]
+        # A function whose every robot list names a robot of the open block waits for the block to end.
+        targets = [t for t in names if teams.get(t, True) is not None
+                   and budget.thread_len(t, n) + budget.starts_joins(n) + cost - budget.call_len(t) <= remaining]
         if targets:
             if self.allocated:
                 rules["target"] = alt(*(seq(f"{t}, args=(", Ref(f"team-{index[t]}"), ",)") for t in targets))
@@ -387,29 +393,34 @@ class PlanConstraint(Constraint):
                 rules["target"] = alt(*targets)
         return rules
 
-    def _robot_lists(self, fn: WrittenFunction) -> Node:
+    def _robot_lists(self, fn: WrittenFunction) -> Node | None:
         """The robot lists a function may be run with: long enough for its robot_list[i], and, when
-        the team is known, such that every step has an actor with the skill and the strength."""
+        the team is known, such that every step has an actor with the skill and the strength.
+
+        In an open block of threads, only robots no thread of the block has: the threads of a block run
+        at once, and a robot booked into two of them would make the executor run one after the other
+        while the world check counted on the order they were launched in. None when no such list
+        exists: the function waits for the block to end (a later block, or a direct call)."""
         need = self._need(fn)
         if self.team is not None:
             lists = self._checked_lists(fn, need)
             if lists:
-                return alt(*(", ".join(f"robots[{i}]" for i in order) for order in lists))
-        return robot_list(self.team_size, need, ", ", ordered=True)
+                free = [o for o in lists if not self.busy.intersection(o)]
+                return alt(*(", ".join(f"robots[{i}]" for i in order) for order in free)) if free else None
+        free_robots = [i for i in range(self.team_size) if i not in self.busy]
+        if len(free_robots) < need:
+            return None
+        return robot_list(self.team_size, need, ", ", ordered=True, among=free_robots)
 
     def _checked_lists(self, fn: WrittenFunction, need: int) -> list[tuple[int, ...]] | None:
         """Capable robot lists (and of those, the ones the world allows), kept for this point of the plan.
 
-        Of those, a list adds no robot the function can do without, and a thread is given robots that
-        no thread of its block has where such lists exist: a robot cannot work on two sub-tasks at once,
-        so booking it twice only makes one wait while another robot stands idle."""
-        key = (fn.name, len(self.launched) + len(self.threads), frozenset(self.busy))
+        Of those, a list adds no robot the function can do without (a robot it does not need stays free
+        for another thread of its block)."""
+        key = (fn.name, len(self.launched) + len(self.threads))
         if key not in self._lists:
             lists = feasible_lists(self.team, self._steps(fn), need)
-            if lists:
-                lists = minimal_lists(self._working_lists(fn, lists), need)
-                lists = [o for o in lists if not self.busy.intersection(o)] or lists
-            self._lists[key] = lists
+            self._lists[key] = minimal_lists(self._working_lists(fn, lists), need) if lists else lists
         return self._lists[key]
 
     def _working_lists(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
@@ -430,11 +441,16 @@ class PlanConstraint(Constraint):
         options: dict[str, Node] = {}
         if "target" in rules:
             options["thread"] = seq(f"t{len(self.threads) + 1} = threading.Thread(target=", Ref("target"), ")\n")
-        elif self._unlaunched():
+        elif self._unlaunched() and not self._waits(rules):
             self._cap("a thread")
         if "direct" in rules:
             options["direct"] = Ref("direct")
         return options
+
+    def _waits(self, rules: dict[str, Node]) -> bool:
+        """Whether no function that may come next can join the open block (its robots are all in it): a
+        block ends there, not by the budget."""
+        return self.allocated and bool(self.threads) and not any(k.startswith("team-") for k in rules)
 
     def _orch(self, remaining: int) -> Choose | None:
         options = self._orch_options(remaining)

@@ -9,6 +9,11 @@ blank lines or the start of the next line, which is then checked against what th
 and goes on from there. A writer that ends the sequence before the output is complete has it completed by
 the constraint's shortest way, and the count of lines so completed is reported.
 
+A line that would begin a third copy in a row of a block of lines (a ``guard``'s rule: see
+:class:`~..backends.repetition.LoopGuard`) is taken back from the writer, and the constraint's shortest way out
+of the block is written instead: its shortest lines (a blank line where one ends something, none that begins
+the copy) up to the next blank line, which in a plan ends the function; the model goes on from there.
+
 Every cost is in tokens, and the constraint counts characters, an upper bound: text carried and not yet
 written is counted at its length until it is. What a line's opened end adds beyond the characters the
 constraint counts (spaces before a newline, blank lines read as none) is paid from a slack held back from the
@@ -19,8 +24,9 @@ pays a token a character keeps within the budget too.
 from __future__ import annotations
 
 import random
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from ...errors import SmartLLMError
 from .grammar import Grammar, alt, seq
@@ -36,6 +42,13 @@ SLACK = 64
 LineWriter = Callable[[Choose, int], tuple[str, int]]
 #: Puts text into the context; returns the tokens it cost.
 Forcer = Callable[[str], int]
+
+
+class CycleGuard(Protocol):
+    """A rule for loops of whole lines (:class:`~..backends.repetition.LoopGuard` is one)."""
+
+    def cycles(self, lines: Sequence[str]) -> bool:
+        """Whether the last of ``lines`` (an output's lines so far) begins a loop."""
 
 
 class BudgetError(Exception):
@@ -82,6 +95,7 @@ class Report:
     completed_lines: int = 0
     spilled: int = 0
     ignored_blank_lines: int = 0
+    cycles_ended: int = 0  # lines taken back because they began a third copy of a block of lines
     notes: list[str] = field(default_factory=list)
 
 
@@ -93,6 +107,10 @@ class TokenWriter:
 
     def force(self, text: str) -> int:  # pragma: no cover - protocol
         raise NotImplementedError
+
+    def take_back(self, written: Written) -> None:
+        """Remove what ``written`` put into the context (it began a loop of lines); nothing to do for a writer
+        that keeps no context."""
 
 
 class _ByLines(TokenWriter):
@@ -110,30 +128,35 @@ class _ByLines(TokenWriter):
         return self._force(text)
 
 
-def run_constraint(constraint: Constraint, write: LineWriter, force: Forcer, budget: int) -> str:
+def run_constraint(constraint: Constraint, write: LineWriter, force: Forcer, budget: int, *,
+                   guard: CycleGuard | None = None) -> str:
     """Produce a stage's output within ``budget`` tokens, a line at a time (each a complete line)."""
-    return run_tokens(constraint, _ByLines(write, force), budget)
+    return run_tokens(constraint, _ByLines(write, force), budget, guard=guard)
 
 
 def run_tokens(constraint: Constraint, writer: TokenWriter, budget: int, report: Report | None = None, *,
-               open_ends: bool = True) -> str:
+               open_ends: bool = True, guard: CycleGuard | None = None) -> str:
     """Produce a stage's output within ``budget`` tokens, with a writer that writes as a model does (each line's
-    end opened, unless ``open_ends`` is off: to measure what opening them changes)."""
+    end opened, unless ``open_ends`` is off: to measure what opening them changes), loops of lines ended where
+    ``guard`` finds them."""
     if constraint.minimum_budget() > budget:
         raise BudgetError(
             f"{budget} output tokens cannot hold the shortest complete output "
             f"({constraint.minimum_budget()} characters); raise the output budget or --n-ctx"
         )
-    return _Driver(constraint, writer, budget, report or Report(), open_ends).run()
+    return _Driver(constraint, writer, budget, report or Report(), open_ends, guard).run()
 
 
 class _Driver:
-    def __init__(self, constraint: Constraint, writer: TokenWriter, budget: int, report: Report, opens: bool):
+    def __init__(self, constraint: Constraint, writer: TokenWriter, budget: int, report: Report, opens: bool,
+                 guard: CycleGuard | None = None):
         self.constraint, self.writer, self.budget, self.report, self.opens = constraint, writer, budget, report, opens
+        self.guard = guard
         self.used = 0
         self.carry = ""  # fed to the constraint, not yet written
         self.pending = ""  # written (in the context), not yet fed: blank lines, then the start of a line
         self.ended = False  # the model ended the sequence: the planner completes the output
+        self.cutting = False  # a loop of lines was found: the planner writes the way out of its block
         self.slack = max(0, min(SLACK, budget - constraint.minimum_budget())) if opens else 0
 
     def held(self) -> int:
@@ -147,8 +170,11 @@ class _Driver:
                 self._complete(step)
             elif isinstance(step, Forced):
                 self._forced(step.text)
+            elif self.cutting:
+                self._way_out(step)
             elif not self._pending_fed(step):
                 self._write(step)
+            self.cutting = self.cutting and not self.constraint.text.endswith("\n\n")
             self._check()
         if self.carry:
             self._spend(self.writer.force(self.carry))
@@ -226,16 +252,45 @@ class _Driver:
         if not text.startswith(self.carry):
             raise GuaranteeError(f"the writer wrote {text!r} for a line that begins with {self.carry!r}")
         body = ahead + text[len(self.carry):]
-        self.carry = ""
         if "\n" not in body:  # a line writer's empty answer: the model ended where the grammar may end
+            self.carry = ""
             self.constraint.feed(body)
             return
         raw, _, spill = body.partition("\n")
-        self.constraint.feed(_as_offered(step, raw))
+        line = _as_offered(step, raw)
+        if not written.ended and self._loops(line):
+            self.writer.take_back(written)  # the line is not the model's to keep: the block's way out is written
+            self.used -= written.cost
+            self.pending = ahead
+            self.report.cycles_ended += 1
+            self.cutting = True
+            self._way_out(step)
+            return
+        self.carry = ""
+        self.constraint.feed(line)
         if spill:
             self.report.spilled += 1
             blanks, rest = split_spill(spill)
             self.pending = "\n" * blanks + rest
+
+    def _loops(self, line: str) -> bool:
+        """Whether ``line``, written next, would begin a loop of lines (see :class:`CycleGuard`)."""
+        return self.guard is not None and self.guard.cycles(self.constraint.text.split("\n")[:-1] + [line[:-1]])
+
+    def _way_out(self, step: Choose) -> None:
+        """Write the constraint's shortest line for ``step`` that begins no loop (after what is already written
+        of it: a carry to write, or text ahead in the context; spaces ahead stay before a blank line's newline)."""
+        ahead, self.pending = self.pending, ""
+        blank = not ahead.strip(" ") and bool(step.kind_of("\n"))
+        ways = [(False, "\n")] if blank else []
+        for kind, grammar in step.options.items():
+            if Matcher(grammar).advance(ahead):
+                ways.append((kind in _ASIDES, ahead + grammar.after(ahead).sample(_PLAIN, "shortest")))  # type: ignore[arg-type]
+        lines = [line for _, line in sorted(ways, key=lambda way: (way[0], len(way[1])))]
+        line = next((t for t in lines if not self._loops(t)), lines[0])
+        self._spend(self.writer.force(self.carry + ("\n" if blank and line == "\n" else line[len(ahead):])))
+        self.carry = ""
+        self.constraint.feed(line)
 
     def _complete(self, step: Forced | Choose) -> None:
         """The model ended the sequence: the output goes on by its shortest way (see :func:`shortest_line`)."""
