@@ -69,7 +69,7 @@ def prefill_cost(load: Load, config: PlannerConfig, catalogue: Catalogue, task: 
             backend = load(store)
             try:
                 fitted = Planner(backend, catalogue, config).decomposition_prompt(
-                    task.instruction, scene_objects(task.floor_plan))
+                    task.instruction, scene_objects(task.floor_plan), catalogue.team(task.robots))
                 tokens, prefixes = list(fitted.tokens), fitted.prefixes
                 engine = getattr(backend, "engine_seconds", None)
                 if way == "first":  # first, so that the device's first use (its kernels loaded) is not prefill's

@@ -147,25 +147,30 @@ class Planner:
 
     # ---------------------------------------------------------------- stages
 
-    def decomposition_prompt(self, instruction: str, scene: SceneObjects) -> Fitted:
+    def decomposition_prompt(self, instruction: str, scene: SceneObjects, team: Sequence[Robot]) -> Fitted:
         """The decomposition's prompt as the model gets it: its tokens and where its shared prefixes end."""
         opts = self.config.prompts
         examples = examples_for("decomposition", self.examples, opts)
-        return fit_prompt(lambda ex: decomposition_prompt(instruction, scene, self.catalogue.skills, ex, opts),
+        return fit_prompt(lambda ex: decomposition_prompt(instruction, scene, self.catalogue, team, ex, opts),
                           examples, self.backend, self.config.budgets["decomposition"], self.chat)
 
     def decompose(self, result: PlanResult, scene: SceneObjects) -> StageRecord:
+        """The decomposed plan, written for the task's team: its prompt and its grammar offer the team's
+        skills, and only the calls the team can make (a step for several robots together included)."""
         opts = self.config.prompts
         record = StageRecord("decomposition", chat_template=self.chat_status)
         budget = self.config.budgets["decomposition"]
         skills = self.catalogue.skills
-        prompt = self.decomposition_prompt(result.instruction, scene)
+        team = self.catalogue.team(result.robots)
+        prompt = self.decomposition_prompt(result.instruction, scene, team)
         world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site) if self.config.world_check else None
-        constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world) \
-            if self.config.grammar else None
+        constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
+                                    for_team=team) if self.config.grammar else None
         run_stage(record, self.backend, prompt, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.stage_rng(result, record.stage), progress=self.progress)
         self._finish_plan_stage(record, result, form="decomposed", scene=scene)
+        if record.refusal is not None and constraint is not None and constraint.must_refuse:
+            record.refused_by = "grammar"  # the team can make no call in this scene
         result.stages.append(record)
         return record
 

@@ -158,8 +158,14 @@ def test_max_trans_is_one_less_than_the_reference_plans_sub_tasks(feasible, cata
         assert task.max_trans == launched - 1, f"{task.id}: {launched} sub-tasks, max_trans {task.max_trans}"
 
 
+def few_skills(task) -> bool:
+    """Whether the task is one of few_skills.jsonl's: teams that lack skills, in every category, as the paper's do."""
+    return task.source.rsplit(":", 1)[0].endswith("few_skills.jsonl")
+
+
 def test_simple_tasks_teams_have_every_skill(feasible, catalogue):
-    for task in (t for t in feasible if t.category == "simple"):
+    """SMART-LLM's simple tasks: several objects, robots with every skill (the few-skill tasks aside)."""
+    for task in (t for t in feasible if t.category == "simple" and not few_skills(t)):
         for robot in catalogue.team(task.robots):
             assert SMARTLLM_SKILLS <= robot.skills, f"{task.id}: {robot.name} lacks {SMARTLLM_SKILLS - robot.skills}"
         assert task.max_trans >= 1, f"{task.id} should involve several objects"
@@ -223,3 +229,17 @@ def _inseparable(task, plan, fn, catalogue) -> bool:
         return True
     slicing = any(c.skill == "SliceObject" for c in calls)
     return slicing and not any({"PickupObject", "SliceObject"} <= r.skills for r in members)
+
+
+def test_few_skill_teams_lack_what_the_papers_teams_lack(feasible, catalogue):
+    """In every category a task whose team lacks skills, as the paper's teams do: no OpenObject or CloseObject,
+    no SliceObject, no DropHandObject, or only weak lifters (what the plan lifts is more than any robot that picks
+    up lifts alone)."""
+    tasks = [t for t in feasible if few_skills(t)]
+    assert {t.category for t in tasks} == set(MINIMUM)
+    lacking = {t.id: SMARTLLM_SKILLS - frozenset().union(*(r.skills for r in catalogue.team(t.robots))) for t in tasks}
+    for skills in ({"OpenObject", "CloseObject"}, {"SliceObject"}, {"DropHandObject"}):
+        assert any(skills <= lacks for lacks in lacking.values()), skills
+    weak = {t.id for t in tasks if heaviest_pick(t, plan_of(t, catalogue))
+            > max(r.mass_capacity for r in catalogue.team(t.robots) if "PickupObject" in r.skills)}
+    assert weak and all(lacking[t.id] or t.id in weak for t in tasks)

@@ -95,12 +95,13 @@ def test_random_robots_are_seeded():
         parse_plan(text, form="allocated", skills=CATALOGUE.skills, team_size=len(team))
 
 
-def test_the_reference_method_is_the_ceiling_and_needs_no_model(runs):
+def test_the_reference_method_is_the_ceiling_and_needs_no_model(runs, all_tasks, feasible, infeasible):
     out, proc = runs["reference"]
-    assert "all feasible      40      0   1.00   1.00   1.00   1.00   1.00   1.00        0" in proc.stdout
-    assert "correctly refused 7/7 (0 by model, 0 by grammar, 7 by rule)" in proc.stdout
+    assert f"all feasible {len(feasible):7d}      0   1.00   1.00   1.00   1.00   1.00   1.00        0" in proc.stdout
+    n = len(infeasible)
+    assert f"correctly refused {n}/{n} (0 by model, 0 by grammar, {n} by rule)" in proc.stdout
     lines = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
-    assert len(lines) == 47 and all(line["Speed"] == 1.0 for line in lines if line["feasible"])
+    assert len(lines) == len(all_tasks) and all(line["Speed"] == 1.0 for line in lines if line["feasible"])
     assert json.loads((out / "run.json").read_text())["identity"]["model"] == {}
 
 

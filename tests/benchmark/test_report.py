@@ -190,8 +190,10 @@ def test_progress_is_plain_lines_in_a_log(runs):
     assert f"SR so far {sr:.2f} over" in steps[-1]
 
 
-def test_progress_is_a_bar_on_a_terminal(tmp_path):
+def test_progress_is_a_bar_on_a_terminal(tmp_path, all_tasks):
     """On a terminal (a pseudo-terminal here) stderr shows a rich progress bar, not lines."""
+    simple = [t for t in all_tasks if t.category == "simple"]
+    steps, feasible = 2 * len(simple), sum(t.feasible for t in simple)  # an allocation and an execution each
     import pty
 
     command = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--method", "reference",
@@ -212,6 +214,7 @@ def test_progress_is_a_bar_on_a_terminal(tmp_path):
     os.close(leader)
     text = seen.decode(errors="replace")
     assert proc.returncode == 0
-    assert "━" in text and "eta" in text and "18/18" in text and "SR 1.00 over 8 feasible" in text
-    assert "[18/18]" not in text  # no plain lines on a terminal
-    assert b"correctly refused 1/1" in out
+    assert "━" in text and "eta" in text and f"{steps}/{steps}" in text and f"SR 1.00 over {feasible} feasible" in text
+    assert f"[{steps}/{steps}]" not in text  # no plain lines on a terminal
+    infeasible = len(simple) - feasible
+    assert f"correctly refused {infeasible}/{infeasible}".encode() in out

@@ -134,7 +134,7 @@ HOUSEHOLD_FILE = (load_domain().folder / "domain.toml").read_text(encoding="utf-
 def test_household_is_a_domain_folder_with_smartllms_skills_and_robots():
     household = load_domain("household")
     assert household.folder.name == "household" and household.world == "ai2thor"
-    assert [p.name for p in household.task_files()] == ["tasks.jsonl", "infeasible.jsonl"]
+    assert [p.name for p in household.task_files()] == ["tasks.jsonl", "few_skills.jsonl", "infeasible.jsonl"]
     skills = household.catalogue.skills
     assert len(skills) == 14 and skills["SwitchOn"].action == "ToggleObjectOn" and skills["GoToObject"].action == ""
     assert skills["PutObject"].arguments == ("pickupable", "receptacle") and skills["ThrowObject"].required == 1

@@ -139,3 +139,23 @@ def test_the_starter_domain_plans_too():
                                 world=WorldCheck(scene.floor_plan, starter.catalogue.skills, 8, site=starter))
     out = sample_output(constraint, random.Random(1), 900)
     parse_plan(out, form="decomposed", skills=starter.catalogue.skills, scene_types=scene.types)
+
+
+def test_a_decomposition_for_ground_robots_never_goes_where_only_aerial_ones_do():
+    """Rovers 4 and 5 cannot reach the warehouse roof: their decomposition never names it, by any writer, and
+    may refuse saying so, where the drones' names it."""
+    rovers = PATROL.catalogue.team([4, 5])
+    world = lambda: WorldCheck(SCENE.floor_plan, SKILLS, 8, site=PATROL)  # noqa: E731
+    rng = random.Random(0)
+    for _ in range(12):
+        text = sample_output(PlanConstraint(SCENE, SKILLS, world=world(), for_team=rovers, allow_refusal=False),
+                             rng, 1200)
+        assert "WarehouseRoof" not in text, text
+    refusal = "# INFEASIBLE: no robot of the team gets to WarehouseRoof (aerial robots only)\n"
+    assert accepts(PlanConstraint(SCENE, SKILLS, world=world(), for_team=rovers), refusal)
+    assert not accepts(PlanConstraint(SCENE, SKILLS, world=world(), for_team=PATROL.catalogue.team([1])), refusal)
+    roof = ("# SubTask 1: sweep the roof (skills: GoToLocation, Patrol)\n# One sub-task.\n\n"
+            "def subtask1_patrol_roof():\n    GoToLocation('WarehouseRoof')\n    Patrol('WarehouseRoof')\n\n"
+            "subtask1_patrol_roof()\n")
+    assert not accepts(PlanConstraint(SCENE, SKILLS, world=world(), for_team=rovers), roof)
+    assert accepts(PlanConstraint(SCENE, SKILLS, world=world(), for_team=PATROL.catalogue.team([1, 2])), roof)

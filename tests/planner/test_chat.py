@@ -152,7 +152,7 @@ def first_prompt(backend, config: PlannerConfig, task, monkeypatch) -> tuple[Pla
 def test_with_none_the_model_gets_the_raw_prompt(smollm2, kitchen09, monkeypatch):
     planner, prompt, tokens, context = first_prompt(smollm2, PlannerConfig(chat_template="none"), kitchen09,
                                                     monkeypatch)
-    assert planner.chat_status == OFF and prompt.startswith("from skills import")
+    assert planner.chat_status == OFF and prompt.startswith("import threading\nimport time\n")
     assert tokens == smollm2.tokenize(prompt, bos=True) == context[: len(tokens)]
 
 
@@ -161,7 +161,7 @@ def test_a_base_model_falls_back_to_the_raw_prompt_and_says_so(kitchen09, monkey
     try:
         assert gemma.chat_template is None
         planner, prompt, tokens, context = first_prompt(gemma, PlannerConfig(), kitchen09, monkeypatch)
-        assert planner.chat_status == BASE_MODEL and prompt.startswith("from skills import")
+        assert planner.chat_status == BASE_MODEL and prompt.startswith("import threading\nimport time\n")
         assert tokens == gemma.tokenize(prompt, bos=True) == context[: len(tokens)]
     finally:
         gemma.close()

@@ -8,7 +8,7 @@ import pytest
 
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.constraints.coalition import LINE, CoalitionConstraint, needs_clause
-from smartllm_local.planner.constraints.feasibility import Need
+from smartllm_local.planner.constraints.feasibility import Need, function_needs
 from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.decoding.protocol import Forced
 from smartllm_local.planner.decoding.writer import BudgetError, accepts, run_constraint, sample_output
@@ -168,9 +168,12 @@ def test_every_prompt_example_is_in_its_stage_grammar():
     for ex in load_examples():
         scene = scene_objects(ex.floor_plan)
         assert accepts(PlanConstraint(scene, DEFAULT_SKILL_SET), ex.decomposition), ex.name
-        names = [f.name for f in parse_plan(ex.decomposition, form="decomposed").functions]
-        if ex.coalition:
-            assert accepts(CoalitionConstraint(names, len(ex.robots)), ex.coalition), ex.name
+        plan = parse_plan(ex.decomposition, form="decomposed")
+        names = [f.name for f in plan.functions]
+        if ex.coalition:  # in the grammar the planner writes it with: the needs known (a refusal's reason too)
+            needs = function_needs(plan, scene)
+            assert accepts(CoalitionConstraint(names, _robots(*ex.robots), needs=[needs[n] for n in names]),
+                           ex.coalition), ex.name
         if ex.allocation:
             assert accepts(allocator(names, len(ex.robots), ex.floor_plan), ex.allocation), ex.name
 
@@ -283,7 +286,10 @@ def test_a_sub_task_no_team_can_do_admits_only_a_refusal():
     constraint = CoalitionConstraint(["f", "g"], team, needs=[switch, switch])
     assert constraint.minimum_budget() < 200
     assert accepts(CoalitionConstraint(["f", "g"], team, needs=[switch, switch]),
-                   "# INFEASIBLE: no one can switch on\n")
+                   "# INFEASIBLE: SubTask 1 (f): no robot of the team has SwitchOn; "
+                   "SubTask 2 (g): no robot of the team has SwitchOn\n")
+    assert not accepts(CoalitionConstraint(["f", "g"], team, needs=[switch, switch]),
+                       "# INFEASIBLE: no one can switch on\n"), "the reason is the catalogue's, not the model's"
     assert not accepts(CoalitionConstraint(["f", "g"], team, needs=[switch, switch]),
                        _line("f", "robots[0]", switch) + _line("g", "robots[1]", switch, k=2))
 

@@ -18,6 +18,7 @@ from smartllm_local.planner.prompting.prompts import (
     strip_comments,
     strip_summary,
 )
+from smartllm_local.planner.prompting.scene_context import scene_objects
 
 from .fakes import FakeBackend
 
@@ -37,7 +38,10 @@ def plan_with(backend, catalogue, **options):
 def test_the_three_prompts_have_their_parts(catalogue):
     result = plan_with(FakeBackend(), catalogue)
     decomposition, coalition, allocation = (r.prompt for r in result.stages)
-    assert decomposition.startswith("from skills import GoToObject, OpenObject, CloseObject")
+    assert decomposition.startswith("import threading\nimport time\n")
+    own_task = decomposition.split("# Your task")[1]
+    assert f"\nfrom skills import {', '.join(catalogue.skills)}\n# Task Description: {INSTRUCTION}\n" in own_task, \
+        "robot 29 has every skill"
     examples = load_examples()
     in_stage = {stage: len(examples_for(stage, examples, PromptOptions())) for stage in STAGES}
     assert len(re.findall(r"^# Example \d$", decomposition, re.M)) == in_stage["decomposition"] == 5
@@ -57,7 +61,8 @@ def test_the_three_prompts_have_their_parts(catalogue):
     examples_part = coalition.split("# Your plan")[0]
     assert len(re.findall(r"^# Allocated plan:\ndef subtask1_", examples_part, re.M)) == in_stage["allocation"], \
         "each feasible example's coalition is followed by its allocated plan"
-    assert "# INFEASIBLE: both sub-tasks need SwitchOn" in examples_part
+    assert "# INFEASIBLE: SubTask 1 (subtask1_coffee_machine_on): no robot of the team has SwitchOn;" \
+        in examples_part
     assert strip_comments(result.stages[0].output) in coalition and "    # " not in own
     assert allocation == coalition + result.stages[1].output + "# Allocated plan:\n", \
         "the allocation goes on in the coalition's context"
@@ -137,9 +142,13 @@ def test_output_budgets_follow_the_task(catalogue):
 
 
 def test_a_refusal_stops_the_pipeline_and_becomes_the_plan(catalogue, tmp_path):
-    result = plan_with(FakeBackend(refuse=True), catalogue)
+    """Robots 24 and 25 switch, and carry, and do nothing else: a decomposition for them may refuse, and its
+    reason names skills neither has."""
+    result = Planner(FakeBackend(refuse=True), catalogue).plan(INSTRUCTION, 6, [24, 25])
     assert result.refusal and [r.stage for r in result.stages] == ["decomposition"]
     assert result.refused_by == "model"
+    lacking = result.refusal.removeprefix("no robot of the team has ").split(", ")
+    assert lacking and not set(lacking) & (catalogue.robots[24].skills | catalogue.robots[25].skills)
     assert result.allocated.startswith("# INFEASIBLE: ") and result.plan.is_refusal
     write_artifacts(result, tmp_path)
     assert (tmp_path / "allocated.py").read_text().startswith("# INFEASIBLE")
@@ -202,3 +211,18 @@ def test_artifacts_of_stages_not_run_again_are_removed(tmp_path):
     failed = PlanResult("x", "FloorPlan6", [1], stages=[_record("decomposition", "")], error="decomposition: bad")
     write_artifacts(failed, tmp_path)
     assert not (tmp_path / "allocated.py").exists() and (tmp_path / "decomposed.py").read_text() == ""
+
+
+def test_each_decomposition_imports_the_skills_of_its_own_team(catalogue):
+    """The examples and the task each import the skills their robots have, not all skills, after the scene's
+    objects (so the examples and each floor plan's objects stay prefixes that tasks share)."""
+    prompt = Planner(FakeBackend(), catalogue).decomposition_prompt(INSTRUCTION, scene_objects(6),
+                                                                    catalogue.team([24, 25])).text
+    imports = re.findall(r"^objects = .*\nfrom skills import (.*)\n# Task Description: ", prompt, re.M)
+    examples = examples_for("decomposition", load_examples(), PromptOptions())
+    teams = [[catalogue.robots[i] for i in ex.robots] for ex in examples] + [catalogue.team([24, 25])]
+    assert len(imports) == len(teams)
+    for names, team in zip(imports, teams):
+        assert names.split(", ") == [s for s in catalogue.skills if any(s in r.skills for r in team)]
+    assert imports[-1] == "GoToObject, SwitchOn, SwitchOff, PickupObject, PutObject"
+    assert "OpenObject" not in prompt.split("# Your task")[1]

@@ -206,7 +206,7 @@ def test_a_prompt_tokenized_in_its_parts_is_tokenized_as_a_whole(vocab):
     for task in load_tasks()[::5]:
         scene, team = scene_objects(task.floor_plan), catalogue.team(task.robots)
         prompts = {
-            "decomposition": decomposition_prompt(task.instruction, scene, catalogue.skills,
+            "decomposition": decomposition_prompt(task.instruction, scene, catalogue, team,
                                                   examples_for("decomposition", examples, options), options),
             "coalition": coalition_prompt(decomposition, team, scene, catalogue.skills, catalogue.robots,
                                           examples_for("coalition", examples, options), options),
@@ -222,8 +222,8 @@ def test_a_prompt_tokenized_in_its_parts_is_tokenized_as_a_whole(vocab):
             shared = prefixes[0]
             assert vocab.detokenize(tokens[:shared]).endswith("# Your") and 0 < shared < len(tokens)
             shared_tokens.setdefault(stage, set()).add(tuple(tokens[:shared]))
-            if stage == "decomposition":  # then the scene's objects, ending before the instruction
-                assert vocab.detokenize(tokens[shared:prefixes[1]]) == f" task\nobjects = {scene.python_list()}\n# Task"
+            if stage == "decomposition":  # then the scene's objects, ending before the team's skills
+                assert vocab.detokenize(tokens[shared:prefixes[1]]) == f" task\nobjects = {scene.python_list()}\nfrom"
                 site_tokens.setdefault(task.floor_plan, set()).add(tuple(tokens[:prefixes[1]]))
             else:
                 assert len(prefixes) == 1

@@ -8,7 +8,7 @@ The plan constraint (:mod:`.plan`) keeps the budget on these lines' longest text
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -22,6 +22,8 @@ if TYPE_CHECKING:
     from .plan import WrittenFunction
 
 Candidate = tuple[Skill, tuple[str, ...]]
+#: Whether a plan may make a call at all (a skill's name and its objects); see feasibility.WholeTeam.
+Allows = Callable[[str, Sequence[str]], bool]
 KNIVES = frozenset({"Knife", "ButterKnife"})
 # Actions that set a state, and the action that undoes each.
 STATE_ACTIONS = {"OpenObject": "CloseObject", "CloseObject": "OpenObject",
@@ -47,8 +49,10 @@ class Candidates:
     """The action and GoToObject calls of a scene's skills, filtered by what a function has done."""
 
     def __init__(self, scene: SceneObjects, skills: Sequence[Skill], *, robot_arg_len: int, allocated: bool,
-                 world: WorldCheck | None, max_steps: int):
+                 world: WorldCheck | None, max_steps: int, allows: Allows | None = None):
+        """``allows``: the calls a plan may make at all (the team's); none given, every call of ``skills``."""
         self.scene = scene
+        self.allows = allows
         self.skills = list(skills)
         self.gotos = [s for s in self.skills if s.action == ""]
         self.robot_arg_len = robot_arg_len
@@ -98,6 +102,8 @@ class Candidates:
             if skill.action == "":
                 continue
             types = [list(self.scene.types_for(a)) for a in skill.arguments]
+            if self.allows is not None:  # what a call asks of its robots depends on its first object
+                types[0] = [t for t in types[0] if self.allows(skill.name, (t,))]
             if fn is not None:
                 if skill.action in RELEASE:
                     types[0] = [t for t in types[0] if t in fn.held]
@@ -133,7 +139,8 @@ class Candidates:
         return alt(*(seq(f"{INDENT}{name}(", *robot, alt(*args), ")\n") for name, args in groups.items()))
 
     def goto_calls(self) -> list[Candidate]:
-        return [(s, (t,)) for s in self.gotos for t in self.scene.types_for(s.arguments[0])]
+        return [(s, (t,)) for s in self.gotos for t in self.scene.types_for(s.arguments[0])
+                if self.allows is None or self.allows(s.name, (t,))]
 
     def goto_node(self, fn: WrittenFunction, room: int, members: list[int]) -> Node | None:
         """The GoToObject lines that leave room for an action after them within ``room`` characters;

@@ -18,8 +18,8 @@ from collections.abc import Sequence
 from ...robots import Robot
 from ..decoding.grammar import Node, Ref, alt, chars, opt, rep, seq
 from ..decoding.line_ends import COMMENT_NEXT
-from ..decoding.protocol import Choose, Constraint, Forced, longest
-from .feasibility import Need, feasible_teams, minimal_teams
+from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, longest
+from .feasibility import Need, feasible_teams, minimal_teams, shortfall
 from .format import REASON_CHARS, refusal_line, robot_list, text_run
 
 # A word of free text: letters and punctuation, never the ";" that ends a part of the line.
@@ -48,8 +48,9 @@ class CoalitionConstraint(Constraint):
     as ``robots[i]`` with i inside the team: free text admits no digits or
     brackets, except in a mass (``2.5 kg``). With the sub-tasks' needs known,
     the constraint writes each needs clause itself (the catalogue's facts), a
-    line admits only teams that can do the sub-task, and a refusal is the only
-    answer when some sub-task has none; ``free=True`` leaves the needs, the
+    line admits only teams that can do the sub-task, and when some sub-task has
+    none the only answer is a refusal that says which and what it lacks (the
+    catalogue's reason, not the model's); ``free=True`` leaves the needs, the
     team and refusing to the model.
 
     Free text is words (a run of letters and punctuation, a robot or a mass)
@@ -71,11 +72,16 @@ class CoalitionConstraint(Constraint):
         self.lines = 0
         self.head_written = False
         teams: list[list[tuple[int, ...]] | None] = [None] * len(self.names)
-        if needs is not None and not free and not isinstance(team, int):
-            teams = [minimal_teams(feasible_teams(team, need)) for need in needs]
-        # The model decides on refusing, and states the needs, unless every sub-task's teams are known.
+        known = needs is not None and not free and not isinstance(team, int)
+        if known:
+            teams = [minimal_teams(feasible_teams(team, need)) for need in needs]  # type: ignore[arg-type, union-attr]
+        # The model states the needs unless every sub-task's teams are known.
         self.free = any(t is None for t in teams)
-        self.must_refuse = allow_refusal and any(t == [] for t in teams)
+        # With the needs known, whether some sub-task has no team is known too, and why (the refusal says
+        # so, not the model); otherwise the model decides on refusing.
+        self.why = refusal_reason(self.names, team, needs) if known else ""  # type: ignore[arg-type]
+        self.model_refuses = allow_refusal and not known
+        self.must_refuse = allow_refusal and bool(self.why)
         clauses = ["needs "] * len(self.names) if self.free else [needs_clause(n) for n in needs or ()]
         self.heads = [self._prefix(k) + clauses[k] for k in range(len(self.names))]
         # A robot or a mass may be followed by punctuation or a possessive: "2.1 kg," "robots[1]'s".
@@ -85,7 +91,7 @@ class CoalitionConstraint(Constraint):
             "robot": alt(*(f"robots[{i}]" for i in range(self.team_size))),
             "need-word": alt(text_run(WORD_CHARS, self.WORD), mass),
             "word": alt(text_run(WORD_CHARS, self.WORD), seq(Ref("robot"), suffix), mass),
-            "refusal": refusal_line(),
+            "refusal": f"{REFUSAL_PREFIX}{self.why}\n" if self.why else refusal_line(),
         }
         for k, allowed in enumerate(teams):
             if allowed:
@@ -123,7 +129,7 @@ class CoalitionConstraint(Constraint):
         # The reserves keep this at least min_words; the max keeps the grammar valid regardless.
         words = max(self.min_words, (remaining - reserve - (self.fixed[k] - spent)) // self.word_len)
         options: dict[str, Node] = {}
-        if self.allow_refusal and self.free and self.refusal_len <= remaining:
+        if self.model_refuses and self.refusal_len <= remaining:
             options["refusal"] = Ref("refusal")
         # The model's needs, when it writes them, take at most a quarter of the words.
         need_words = min(self.MAX_NEED_WORDS, max(1, words // 4)) if self.free else 0
@@ -141,6 +147,14 @@ class CoalitionConstraint(Constraint):
         elif kind == "line":
             self.lines += 1
             self.head_written = False
+
+
+def refusal_reason(names: Sequence[str], team: Sequence[Robot], needs: Sequence[Need]) -> str:
+    """Why no robot or team can do the plan, from the catalogue: each sub-task that even the whole team
+    cannot do, and what it lacks (see :func:`.feasibility.shortfall`); "" when every sub-task has a team."""
+    parts = [f"SubTask {k} ({name}): {' and '.join(reasons)}"
+             for k, (name, need) in enumerate(zip(names, needs), start=1) if (reasons := shortfall(team, need))]
+    return "; ".join(parts)
 
 
 def _words(word: Node, most: int) -> Node:

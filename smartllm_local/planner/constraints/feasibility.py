@@ -8,8 +8,11 @@ only the teams that have every skill its function uses and can lift the
 heaviest thing it picks up (and of those, the minimal ones: no member it could do
 without), and admits only a refusal when some sub-task has no such team. The
 allocation grammar admits only robot lists that give every step a robot (or team)
-able to do it, again with no robot to spare. This is the catalogue's knowledge, not
-the model's: the model still chooses among the teams that can do the work.
+able to do it, again with no robot to spare. The decomposition grammar, before them,
+admits only the calls the whole team can make (:class:`WholeTeam`), so every sub-task it
+writes has a team; a refusal states what the team lacks (:func:`shortfall`). This is the
+catalogue's knowledge, not the model's: the model still chooses among the teams that can
+do the work.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from itertools import combinations, permutations
 from ...domain import Place, pooled
 from ...plan_language import Plan
 from ...plan_language.ir import Call, SkillCall
-from ...robots import Robot
+from ...robots import Robot, team_skills
 from ..prompting.scene_context import SceneObjects
 
 MASS_TOLERANCE = 1e-6  # scene masses are float32
@@ -114,6 +117,67 @@ def can_do(robots: Sequence[Robot], need: Need) -> bool:
     skills = frozenset().union(*(r.skills for r in robots))
     return need.skills <= skills and sum(r.mass_capacity for r in robots) + MASS_TOLERANCE >= need.mass \
         and all(d.met_by(robots) for d in need.demands)
+
+
+def shortfall(team: Sequence[Robot], need: Need, lifted: str = "what it picks up") -> list[str]:
+    """Why the whole team cannot do ``need`` (nothing when it can), each reason a fact of the catalogue: the
+    skills no robot has, a mass beyond what all lift together (``lifted`` names what is lifted), a place no
+    robot with the skill gets to, or a pooled capacity short of what the place asks. A team that cannot do a
+    need has no coalition that can (skills, capacities and reach only grow with more robots)."""
+    have = team_skills(team)
+    reasons = []
+    missing = sorted(need.skills - have)
+    if missing:
+        reasons.append(f"no robot of the team has {', '.join(missing)}")
+    lift = sum(r.mass_capacity for r in team)
+    if need.mass > lift + MASS_TOLERANCE:
+        reasons.append(f"{lifted} weighs {need.mass:g} kg, more than the team lifts together ({lift:g} kg)")
+    for d in sorted(need.demands, key=lambda d: (d.place.name, d.skill)):
+        if d.skill not in have or d.met_by(team):
+            continue
+        able = [r for r in team if d.skill in r.skills and d.place.reachable_by(r)]
+        if not any(d.place.reachable_by(r) for r in team):
+            reasons.append(f"no robot of the team gets to {d.place.name} "
+                           f"({' or '.join(sorted(d.place.reach or ()))} robots only)")
+        elif not able:
+            reasons.append(f"no robot of the team with {d.skill} gets to {d.place.name}")
+        elif d.capacity == "camera_range":
+            reasons.append(f"no robot of the team with {d.skill} that gets to {d.place.name} has a camera")
+        else:
+            reasons.append(f"the robots of the team with {d.skill} that get to {d.place.name} pool "
+                           f"{pooled(able, d.skill, d.capacity):g} {d.capacity}, less than its {d.amount:g}")
+    return list(dict.fromkeys(reasons))  # a place no robot gets to, once
+
+
+class WholeTeam:
+    """The calls a plan for ``team`` may make: those all its robots together can make. A call the whole team
+    cannot make no coalition of it can; one it can, some coalition can (the whole team at most), so a
+    decomposition made of such calls leaves the coalition a team for every sub-task (lifting together
+    included)."""
+
+    def __init__(self, team: Sequence[Robot], scene: SceneObjects, pickup_skills: Iterable[str]):
+        self.team = list(team)
+        self.scene = scene
+        self.pickups = frozenset(pickup_skills)
+        self.skills = team_skills(self.team)
+        self._memo: dict[tuple[str, str], bool] = {}
+
+    def need(self, skill: str, objects: Sequence[str]) -> Need:
+        """What one call asks: its skill, the mass of what it picks up, and on a site where it goes."""
+        mass = self.scene.masses.get(objects[0], 0.0) if skill in self.pickups and objects else 0.0
+        demand = call_demand(self.scene, skill, objects)
+        return Need(frozenset({skill}), mass, frozenset({demand} if demand else ()))
+
+    def can(self, skill: str, objects: Sequence[str]) -> bool:
+        """Whether the whole team can make the call (what it asks depends on its skill and first object)."""
+        key = (skill, objects[0] if objects else "")
+        if key not in self._memo:
+            self._memo[key] = can_do(self.team, self.need(skill, objects))
+        return self._memo[key]
+
+    def why_not(self, skill: str, objects: Sequence[str]) -> list[str]:
+        """Why the whole team cannot make the call (see :func:`shortfall`)."""
+        return shortfall(self.team, self.need(skill, objects), lifted=f"the {objects[0]}" if objects else "")
 
 
 def feasible_teams(team: Sequence[Robot], need: Need) -> list[tuple[int, ...]] | None:

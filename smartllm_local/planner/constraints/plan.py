@@ -36,14 +36,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from ...robots import Robot
-from ...skills import SkillSet
+from ...skills import Skill, SkillSet
 from ..decoding.grammar import Node, Ref, alt, chars, rep, seq
 from ..decoding.line_ends import COMMENT_NEXT, INDENTED_NEXT
-from ..decoding.protocol import Choose, Constraint, Forced, longest
+from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, longest
 from ..prompting.scene_context import SceneObjects
 from .budget import Budget
 from .candidates import RELEASE, STATE_ACTIONS, Candidates
-from .feasibility import Step, call_demand, feasible_lists, minimal_lists, shortest_list
+from .feasibility import Step, WholeTeam, call_demand, feasible_lists, minimal_lists, shortest_list
 from .format import (
     COMMENT_LEN,
     INDENT,
@@ -75,6 +75,11 @@ _ROBOT = re.compile(r"robots\[(\d+)\]")
 #: one, ending the function where it may end).
 FOLLOWS: dict[str, Node] = {"summary": COMMENT_NEXT, "header": INDENTED_NEXT, "goto": INDENTED_NEXT,
                             "action": INDENTED_NEXT, "comment": INDENTED_NEXT, "sleep": INDENTED_NEXT}
+
+
+def _acts(skills: Sequence[Skill]) -> bool:
+    """Whether the skills make a plan: a move, and an action to take where it leads."""
+    return any(s.action == "" for s in skills) and any(s.action != "" for s in skills)
 
 
 def robots_named(piece: str) -> list[int]:
@@ -137,7 +142,11 @@ class PlanConstraint(Constraint):
         allow_refusal: bool = True,
         team: Sequence[Robot] | None = None,
         world: WorldCheck | None = None,
+        for_team: Sequence[Robot] | None = None,
     ):
+        """``team`` (or ``team_size``) makes it an allocation; ``for_team`` is the team a decomposition is
+        written for: it offers only the calls that team can make (see :class:`.feasibility.WholeTeam`), and
+        a refusal only for a reason the catalogue gives (:meth:`_reasons`)."""
         super().__init__()
         if team is not None:
             team_size = len(team)
@@ -151,26 +160,37 @@ class PlanConstraint(Constraint):
         self.max_steps = max(2, max_steps)
         self.allow_refusal = allow_refusal
         self.scene = scene
-        self.skills = [s for s in skills.values() if all(scene.types_for(a) for a in s.arguments[: s.required])]
+        self.world = world
+        self.phase = "start"
+        usable = [s for s in skills.values() if all(scene.types_for(a) for a in s.arguments[: s.required])]
+        if not _acts(usable):
+            raise ValueError("the skills cannot act on any object of this scene")
+        pickups = [s.name for s in skills.values() if s.action == "PickupObject"]
+        self.whole = WholeTeam(for_team, scene, pickups) if for_team is not None else None
+        self.skills = [s for s in usable if self._may_use(s)]
         self.skill_names = [s.name for s in self.skills]
         self.skill_actions = {s.name: s.action for s in self.skills}
         self.by_name = {s.name: s for s in skills.values()}
-        goto = [s for s in self.skills if s.action == ""]
-        if not goto or len(goto) == len(self.skills):
-            raise ValueError("the skills cannot act on any object of this scene")
-        self.rules: dict[str, Node] = {"refusal": refusal_line(), "skills": ordered_subset(self.skill_names, ", ")}
+        reasons = self._reasons(usable)
+        # With a team, a refusal states one of the reasons the catalogue gives (none: it cannot refuse).
+        self.refusal_line = seq(REFUSAL_PREFIX, alt(*reasons), "\n") if reasons else None
+        self.refusal_len = longest(self.refusal_line, {}) if self.refusal_line is not None else 0
+        # A team that can make no call here can only refuse (and says why).
+        self.must_refuse = not _acts(self.skills)
+        if self.must_refuse:
+            return
+        self.rules: dict[str, Node] = {"skills": ordered_subset(self.skill_names, ", ")}
         self.robot_args = ["robot_list", *(f"robot_list[{i}]" for i in range(self.team_size))] if self.allocated else []
         self.robot_arg_len = max((len(a) + 2 for a in self.robot_args), default=0)  # with its ", "
         self.sleep_len = len(INDENT) + len("time.sleep(9)\n")
-        self.world = world
         self._lists: dict[tuple[str, int], list[tuple[int, ...]] | None] = {}
         self.candidates = Candidates(scene, self.skills, robot_arg_len=self.robot_arg_len, allocated=self.allocated,
-                                     world=world, max_steps=self.max_steps)
+                                     world=world, max_steps=self.max_steps,
+                                     allows=self.whole.can if self.whole is not None else None)
         self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
         self.budget = Budget(allocated=self.allocated, team_size=self.team_size, fixed_names=self.fixed_names,
                              fresh_action=self.fresh_action, body_cost=self._body_cost)
         self.skills_len = longest(Ref("skills"), self.rules)
-        self.phase = "start"
         self.summary_lines = 0
         self.owed = len(self.fixed_names) or None  # defs promised (by the summary, or the decomposition)
         self.functions: list[WrittenFunction] = []
@@ -178,6 +198,28 @@ class PlanConstraint(Constraint):
         self.threads: list[str] = []  # targets of the block being written
         self.busy: set[int] = set()  # robots given to the threads of that block
         self.pending = ""  # boilerplate to write next (the rest of a block's starts and joins)
+
+    def _may_use(self, skill: Skill) -> bool:
+        """Whether a plan for the team may call the skill: a robot of it has the skill, and the whole team
+        can make some call of it here (lift some object, get to some place)."""
+        whole = self.whole
+        return whole is None or skill.name in whole.skills and any(
+            whole.can(skill.name, (t,)) for t in self.scene.types_for(skill.arguments[0]))
+
+    def _reasons(self, usable: Sequence[Skill]) -> list[Node]:
+        """What a decomposition for the team may give as the reason of a refusal: facts of the catalogue only
+        (the skills of this scene no robot of the team has, an object heavier than the team lifts, a place
+        it cannot get to), so a refusal never says what is not so. With a team that can make every call,
+        none: there is no reason to refuse."""
+        whole = self.whole
+        if whole is None:
+            return []
+        missing = sorted(s.name for s in usable if s.name not in whole.skills)
+        options: list[Node] = [seq("no robot of the team has ", ordered_subset(missing, ", "))] if missing else []
+        options += dict.fromkeys(reason for s in usable if s.name in whole.skills
+                                 for t in self.scene.types_for(s.arguments[0]) if not whole.can(s.name, (t,))
+                                 for reason in whole.why_not(s.name, (t,)))
+        return options
 
     # ---------------------------------------------------------------- costs
 
@@ -194,6 +236,8 @@ class PlanConstraint(Constraint):
         return 1 + self._owed_cost() + self.budget.calls_cost(self._unlaunched())
 
     def minimum_budget(self) -> int:
+        if self.must_refuse:
+            return self.refusal_len
         if self.fixed_names:
             return sum(self.budget.def_cost(k) for k in range(1, len(self.fixed_names) + 1))
         if self.summary:
@@ -210,6 +254,8 @@ class PlanConstraint(Constraint):
     # ------------------------------------------------------------- choices
 
     def next(self, remaining: int) -> Forced | Choose | None:
+        if self.must_refuse:
+            return self._choose({}, {"refusal": self.refusal_line}) if self.phase == "start" else None  # type: ignore[dict-item]
         if self.pending:
             return Forced(self.pending)
         if self.phase == "order-blank":
@@ -226,6 +272,9 @@ class PlanConstraint(Constraint):
         return super()._choose(rules, options, FOLLOWS)
 
     def _refusal(self, remaining: int) -> Node | None:
+        """A refusal line that fits: for a team, one of the catalogue's reasons; without one, the model's."""
+        if self.whole is not None:
+            return self.refusal_line if self.refusal_line is not None and self.refusal_len <= remaining else None
         cap = min(refusal_text_len(), remaining - len("# INFEASIBLE: \n"))
         return refusal_line(cap) if cap >= 1 else None
 

@@ -50,9 +50,12 @@ def check_examples(domain: Domain) -> tuple[int, list[str]]:
             problems.append(f"{where}: {exc}")
             continue
         world = WorldCheck(scene.floor_plan, skills, 8, site=scene.site)
-        if not accepts(PlanConstraint(scene, skills, world=world), ex.decomposition):
-            problems.append(f"{where}: not in the decomposition grammar (a step that fails on the site, a comment "
-                            "too long, a bare move that ends nothing?)")
+        # A decomposition example is written for its team; a coalition example's decomposition is only what
+        # its coalition weighs (the infeasible one's calls a skill the team lacks).
+        for_team = team if "decomposition" in ex.stages else None
+        if not accepts(PlanConstraint(scene, skills, world=world, for_team=for_team), ex.decomposition):
+            problems.append(f"{where}: not in the decomposition grammar for its team (a skill no robot of the team "
+                            "has, a step that fails on the site, a comment too long, a bare move that ends nothing?)")
         names = [f.name for f in plan.functions]
         if ex.coalition is not None:
             needs = function_needs(plan, scene, pickups)

@@ -1,8 +1,8 @@
 """The stages' prompts, assembled from the worked examples in a domain's prompts/ folder.
 
-Prompts are Python source, as in SMART-LLM: the skills as an import line,
-worked examples (each a task description followed by its plan), then the new
-task. The examples come first, always in file order, and the task's own
+Prompts are Python source, as in SMART-LLM: the skills as an import line (in a
+decomposition, each task's own team's), worked examples (each a task description
+followed by its plan), then the new task. The examples come first, always in file order, and the task's own
 details last: a :class:`Prompt` is the part shared by every task of a stage
 (whose key/value state a backend evaluates once), for a decomposition the
 scene's objects (shared by the tasks on one floor plan), and the task's own part.
@@ -29,7 +29,7 @@ from typing import Any
 
 from ...domain import load_domain
 from ...errors import UserError
-from ...robots import Robot
+from ...robots import Catalogue, Robot
 from ...skills import SkillSet
 from ..constraints.coalition import LINE as COALITION_LINE
 from .scene_context import SceneObjects, scene_objects
@@ -153,8 +153,11 @@ def shape(code: str, options: PromptOptions) -> str:
     return code.rstrip("\n") + "\n"
 
 
+THREADING_HEADER = "import threading\nimport time\n"
+
+
 def skills_header(skills: SkillSet) -> str:
-    return f"from skills import {', '.join(skills)}\nimport threading\nimport time\n"
+    return f"from skills import {', '.join(skills)}\n{THREADING_HEADER}"
 
 
 def called_skills(code: str) -> frozenset[str]:
@@ -190,7 +193,10 @@ def _example_scene(example: Example, scene: SceneObjects) -> SceneObjects:
 DECOMPOSITION_INTRO = """\
 # Each task below is broken into sub-tasks: a summary of them, one function per
 # sub-task, then the order they run in. Sub-tasks that do not depend on each other
-# run in parallel threads; the others run one after another.
+# run in parallel threads; the others run one after another. A plan calls only the
+# skills its task imports: those its robots have. A task that needs another skill,
+# or more strength than its robots have together, is answered with one line that
+# says what is missing: # INFEASIBLE: <why>.
 """
 
 COALITION_INTRO = """\
@@ -210,15 +216,26 @@ ALLOCATION_INTRO = """\
 """
 
 
-def decomposition_prompt(instruction: str, scene: SceneObjects, skills: SkillSet,
+def team_import(skills: SkillSet, team: Sequence[Robot]) -> str:
+    """The skills a team has, as the import line of its task (in the vocabulary's order)."""
+    return f"from skills import {', '.join(s for s in skills if any(s in r.skills for r in team))}\n"
+
+
+def decomposition_prompt(instruction: str, scene: SceneObjects, catalogue: Catalogue, team: Sequence[Robot],
                          examples: Sequence[Example], options: PromptOptions) -> Prompt:
-    parts = [skills_header(skills), "\n", DECOMPOSITION_INTRO]
+    """The decomposition's prompt. Each task imports the skills of its own team (an example's, and the task's
+    after its scene's objects, so the examples stay a prefix every task shares and the objects one every task
+    on the floor plan shares): a plan can call only those."""
+    skills = catalogue.skills
+    parts = [THREADING_HEADER, "\n", DECOMPOSITION_INTRO]
     for k, ex in enumerate(examples, start=1):
         objects = _example_scene(ex, scene).python_list(ex.object_types())
-        parts.append(f"\n# Example {k}\nobjects = {objects}\n# Task Description: {ex.instruction}\n")
+        imports = team_import(skills, [catalogue.robots[i] for i in ex.robots])
+        parts.append(f"\n# Example {k}\nobjects = {objects}\n{imports}# Task Description: {ex.instruction}\n")
         parts.append(shape(ex.decomposition, options))
-    site = f" task\nobjects = {scene.python_list()}\n# Task"
-    return Prompt(("".join(parts) + "\n# Your", site, f" Description: {instruction}\n"))
+    site = f" task\nobjects = {scene.python_list()}\nfrom"
+    own = team_import(skills, team)[len("from"):]
+    return Prompt(("".join(parts) + "\n# Your", site, f"{own}# Task Description: {instruction}\n"))
 
 
 def plan_object_types(code: str, scene: SceneObjects) -> list[str]:
