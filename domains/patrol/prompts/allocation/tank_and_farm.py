@@ -10,9 +10,5 @@ def subtask2_patrol_solar_farm(robot_list):
     # sweep it all
     Patrol(robot_list, 'SolarFarm')
 
-t1 = threading.Thread(target=subtask1_photograph_tank, args=([robots[0]],))
-t2 = threading.Thread(target=subtask2_patrol_solar_farm, args=([robots[0], robots[1]],))
-t1.start()
-t2.start()
-t1.join()
-t2.join()
+subtask1_photograph_tank([robots[0]])
+subtask2_patrol_solar_farm([robots[0], robots[1]])
