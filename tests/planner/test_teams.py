@@ -95,6 +95,20 @@ def test_threads_of_one_block_get_robots_of_their_own_while_some_are_free():
                    "args=([robots[1]],))\nt1.start()\nt1.join()\n")
 
 
+def test_free_teams_never_book_a_robot_into_two_threads_of_a_block_either():
+    """--free-teams: the team's skills are the model's business, a robot in two threads at once is not."""
+    free = RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=2, function_names=NAMES,
+                              bodies=restated_bodies(DECOMPOSITION, NAMES),
+                              world=WorldCheck(KITCHEN, CATALOGUE.skills, 2))
+    assert not accepts(free, _allocated(["robots[0]", "robots[1]", "robots[0]"]))
+    full = _allocated(["robots[0]", "robots[1]", "robots[1]"])
+    plan = full.replace("t3 = threading.Thread(target=subtask3_lettuce, args=([robots[1]],))\n", "")
+    plan = plan.replace("t3.start()\n", "").replace("t3.join()\n", "") + "subtask3_lettuce([robots[1]])\n"
+    assert accepts(RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=2, function_names=NAMES,
+                                      bodies=restated_bodies(DECOMPOSITION, NAMES),
+                                      world=WorldCheck(KITCHEN, CATALOGUE.skills, 2)), plan)
+
+
 def test_a_robot_list_adds_no_robot_the_function_does_without():
     assert not accepts(_allocator(1, 2, 3), _allocated(["robots[0], robots[1]", "robots[2]", "robots[1]"]))
     # Robot 8 lifts 0.4 kg, robot 7 0.08 kg, robot 1 100 kg: with robot 1 busy, the lettuce is a team lift

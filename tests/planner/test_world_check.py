@@ -158,3 +158,41 @@ def test_the_team_dry_run_decides_robot_lists_as_the_executor_does():
             assert world.runs(calls, order) == (execution.attempted == execution.succeeded), order
     finally:
         controller.stop()
+
+
+LIGHT_DECOMPOSITION = ("def subtask1_fridge_then_light():\n    GoToObject('Fridge')\n    OpenObject('Fridge')\n"
+                       "    GoToObject('LightSwitch')\n    SwitchOff('LightSwitch')\n\n"
+                       "def subtask2_light_on():\n    GoToObject('LightSwitch')\n    SwitchOn('LightSwitch')\n\n")
+LIGHT_NAMES = ["subtask1_fridge_then_light", "subtask2_light_on"]
+
+
+@pytest.mark.parametrize("wait", [False, True])
+def test_threads_started_together_are_checked_as_they_run_interleaved(wait):
+    """FloorPlan6's light is on. One sub-task opens the fridge, then switches the light off; another switches it
+    on. One after the other both succeed; started together, the second switches the light on at its second
+    tick, while it is still on (the first switches it off at its fourth). So the second may not join the
+    first's block: it runs after it. Checked one after the other, as threads were, it was offered. Waiting
+    three seconds first (a sleep is a tick a second), it switches the light on after it is off, and may join."""
+    team = CATALOGUE.team([1, 2])
+    decomposition = LIGHT_DECOMPOSITION.replace("    SwitchOn(", "    time.sleep(3)\n    SwitchOn(") if wait \
+        else LIGHT_DECOMPOSITION
+
+    def allocator() -> RestatedAllocation:
+        return RestatedAllocation(scene_objects(6), CATALOGUE.skills, team=team, function_names=LIGHT_NAMES,
+                                  bodies=restated_bodies(decomposition, LIGHT_NAMES),
+                                  world=WorldCheck(6, CATALOGUE.skills, len(team)))
+
+    bodies = decomposition.replace("():", "(robot_list):").replace("Object('", "Object(robot_list[0], '") \
+        .replace("Off('", "Off(robot_list[0], '").replace("On('", "On(robot_list[0], '")
+    together = bodies + ("t1 = threading.Thread(target=subtask1_fridge_then_light, args=([robots[0]],))\n"
+                         "t2 = threading.Thread(target=subtask2_light_on, args=([robots[1]],))\n"
+                         "t1.start()\nt2.start()\nt1.join()\nt2.join()\n")
+    after = bodies + "subtask1_fridge_then_light([robots[0]])\nsubtask2_light_on([robots[1]])\n"
+    assert accepts(allocator(), together) == wait
+    assert accepts(allocator(), after)
+
+    def failed(text: str) -> list[str]:
+        plan = parse_plan(text, form="allocated", skills=CATALOGUE.skills, team_size=len(team))
+        return [e.skill for e in run_plan(plan, 6, team, skills=CATALOGUE.skills).trace if not e.success]
+
+    assert failed(together) == ([] if wait else ["SwitchOn"]) and failed(after) == []

@@ -183,7 +183,7 @@ class PlanConstraint(Constraint):
         self.robot_args = ["robot_list", *(f"robot_list[{i}]" for i in range(self.team_size))] if self.allocated else []
         self.robot_arg_len = max((len(a) + 2 for a in self.robot_args), default=0)  # with its ", "
         self.sleep_len = len(INDENT) + len("time.sleep(9)\n")
-        self._lists: dict[tuple[str, int], list[tuple[int, ...]] | None] = {}
+        self._lists: dict[tuple[str, int, int], list[tuple[int, ...]] | None] = {}
         self.candidates = Candidates(scene, self.skills, robot_arg_len=self.robot_arg_len, allocated=self.allocated,
                                      world=world, max_steps=self.max_steps,
                                      allows=self.whole.can if self.whole is not None else None)
@@ -453,7 +453,7 @@ class PlanConstraint(Constraint):
         need = self._need(fn)
         if self.team is not None:
             lists = self._checked_lists(fn, need)
-            if lists:
+            if lists or (lists is not None and self.threads):  # none that works in the block: it waits
                 free = [o for o in lists if not self.busy.intersection(o)]
                 return alt(*(", ".join(f"robots[{i}]" for i in order) for order in free)) if free else None
         free_robots = [i for i in range(self.team_size) if i not in self.busy]
@@ -466,7 +466,7 @@ class PlanConstraint(Constraint):
 
         Of those, a list adds no robot the function can do without (a robot it does not need stays free
         for another thread of its block)."""
-        key = (fn.name, len(self.launched) + len(self.threads))
+        key = (fn.name, len(self.launched), len(self.threads))  # in a block or not: with a team world, not the same
         if key not in self._lists:
             lists = feasible_lists(self.team, self._steps(fn), need)
             self._lists[key] = minimal_lists(self._working_lists(fn, lists), need) if lists else lists

@@ -12,11 +12,13 @@ and leaves every later step of the body a robot under which it succeeds (a searc
 over the rest of the body, so that a robot chosen early cannot strand a later
 step); and a robot list only if every step of the function succeeds with the team's own robots from the state the
 functions launched before it leave, as the executor decides it (skills, mass,
-reach, team lifting).
+reach, team lifting); a thread joining an open block, run together with the block's
+threads as the executor interleaves them.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import replace
@@ -30,10 +32,11 @@ from .candidates import acts_on
 from .feasibility import Step, call_demand, feasible_lists
 from .format import INDENT
 from .plan import STEP_LINE, PlanConstraint, WrittenFunction, robots_named
-from .world_check import WorldCheck
+from .world_check import Call, Thread, WorldCheck
 
 #: Robot arguments a search for the rest of a body may try before it gives up (and offers the step).
 COMPLETION_TRIES = 400
+_SLEEP = re.compile(r"^\s+time\.sleep\(([\d.]+)\)\n$")
 
 
 def restated_bodies(decomposition: str, names: Sequence[str]) -> list[list[str]]:
@@ -69,6 +72,9 @@ class RestatedAllocation(PlanConstraint):
         self.body_world = WorldCheck(world.floor_plan, world.skills, robots=self.team, site=world.site) \
             if self.team_world is not None else None
         self._bodies_run: set[str] = set()
+        # The open block of threads: the team's dry run where it began, and its threads so far.
+        self._block_start: object = None
+        self._block: list[Thread] = []
 
     def _body_cost(self, index: int) -> int:
         return sum(self._line_cost(line) for line in self.bodies[index])
@@ -229,15 +235,50 @@ class RestatedAllocation(PlanConstraint):
 
     def _working_lists(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
         """With a world check, the lists under which every step of the function succeeds from the state
-        the functions launched before it leave; if none does, all of them (a dead end, counted)."""
+        the functions launched before it leave; if none does, all of them (a dead end, counted). In an open
+        block of threads, the lists under which it and every thread of the block succeed, run together as the
+        executor runs them (a step of each a tick); if none, none: it waits for the block to end."""
         if self.team_world is None:
             return lists
+        if self.threads:
+            return [order for order in lists if self._runs_in_block(fn, order)]
         working = [order for order in lists if self.team_world.runs(fn.calls, order)]
         self.team_world.dead_ends += not working
         return working or lists
 
+    def _runs_in_block(self, fn: WrittenFunction, order: tuple[int, ...]) -> bool:
+        run = self.team_world.run  # type: ignore[union-attr]
+        saved = run.snapshot()
+        try:
+            run.restore(self._block_start)  # type: ignore[arg-type]
+            return self.team_world.runs_together([*self._block, (self._timeline(fn), order)])  # type: ignore[union-attr]
+        finally:
+            run.restore(saved)
+
+    def _timeline(self, fn: WrittenFunction) -> list[Call | None]:
+        """The function's steps as the executor runs them: its calls, and a second of nothing for each second
+        it sleeps."""
+        calls = iter(fn.calls)
+        steps: list[Call | None] = []
+        for line in self.bodies[self.fixed_names.index(fn.name)]:
+            sleep = _SLEEP.match(line)
+            if sleep:
+                steps += [None] * math.ceil(float(sleep.group(1)))
+            elif self._skill_call(line):
+                steps.append(next(calls))
+        return steps
+
     def _launch(self, name: str, piece: str) -> None:
-        """Run a launched function's steps in the team's dry run, with the robot list the line gives."""
-        if self.team_world is not None:
-            fn = next(f for f in self.functions if f.name == name)
+        """Run a launched function's steps in the team's dry run, with the robot list the line gives: called
+        directly, after what ran before it; as a thread, together with the threads of its block."""
+        if self.team_world is None:
+            return
+        fn = next(f for f in self.functions if f.name == name)
+        if "threading.Thread" not in piece:
             self.team_world.perform(fn.calls, robots_named(piece))
+            return
+        if not self.threads:  # it opens a block
+            self._block_start, self._block = self.team_world.run.snapshot(), []
+        self._block.append((self._timeline(fn), robots_named(piece)))
+        self.team_world.run.restore(self._block_start)
+        self.team_world.perform_together(self._block)

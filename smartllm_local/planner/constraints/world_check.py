@@ -8,8 +8,8 @@ and no mass limit, one per sub-task (a sub-task's robot holds what it picked up
 and nothing another sub-task's robot holds); an allocation for one notional robot
 per ``robot_list`` slot (whether a robot has the skill and the strength is the
 team feasibility's question). Sub-tasks are checked in the order they are
-written; what runs concurrently may still interleave differently (see docs/planner.md, "The world
-check"). A site domain's plan is tried on its site simulator the same way
+written; an allocation's threads started together, as the executor interleaves them (see
+docs/planner.md, "The world check"). A site domain's plan is tried on its site simulator the same way
 (:class:`~smartllm_local.executor.site.SiteDryRun`).
 """
 
@@ -25,6 +25,8 @@ from ...skills import SkillSet
 
 #: One step of a function: its robot_list slot (None: the whole list), skill and objects.
 Call = tuple[int | None, str, tuple[str, ...]]
+#: A thread as the executor runs it: a step a tick (None: a second of sleep), and its robot_list (team indices).
+Thread = tuple[Sequence[Call | None], Sequence[int]]
 
 
 class WorldCheck:
@@ -73,6 +75,27 @@ class WorldCheck:
         """Apply a function's calls with ``robots`` as its robot_list (all of them, as the executor goes
         on after a failure); whether they all succeeded."""
         return all([self._call(call, robots) for call in calls])
+
+    def runs_together(self, threads: Sequence[Thread]) -> bool:
+        """Whether threads started together all succeed in every call, run as the executor runs them."""
+        saved = self.run.snapshot()
+        try:
+            return self.perform_together(threads, stop=True)
+        finally:
+            self.run.restore(saved)
+
+    def perform_together(self, threads: Sequence[Thread], *, stop: bool = False) -> bool:
+        """Apply threads started together as the executor runs them: at each tick the next step of each thread
+        that has one, in launch order (the same steps applied one after the other would not give the state they
+        meet); whether every call succeeded (with ``stop``, up to the first that fails)."""
+        ok = True
+        for tick in range(max((len(steps) for steps, _ in threads), default=0)):
+            for steps, robots in threads:
+                if tick < len(steps) and steps[tick] is not None:
+                    ok = self._call(steps[tick], robots) and ok  # type: ignore[arg-type]
+                    if stop and not ok:
+                        return False
+        return ok
 
     def _call(self, call: Call, robots: Sequence[int]) -> bool:
         slot, skill, objects = call
