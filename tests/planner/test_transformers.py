@@ -58,15 +58,16 @@ def test_an_end_of_sequence_far_down_the_models_ranking_is_not_its_choice(hf_smo
 
 
 def test_a_decomposition_is_a_valid_plan_and_its_prompt_state_is_kept(hf_smollm2):
-    """A decomposition through the transformers backend; decomposing again evaluates only the instruction (in
-    its chat turn), and writes what it wrote from an empty cache. Every stage is in the heavy suite."""
+    """A decomposition through the transformers backend; decomposing again evaluates only what follows the
+    scene (the team's skills and the instruction, in its chat turn), and writes what it wrote from an empty
+    cache. Every stage is in the heavy suite."""
     planner = Planner(hf_smollm2, load_domain().catalogue, PlannerConfig(budgets={"decomposition": 400}))
     result = PlanResult("Turn off the light.", "FloorPlan6", [1])
     first = planner.decompose(result, scene_objects(6))
     assert not first.error and (first.refusal is not None or result.stages[0].plan is not None), first.error
     again = planner.decompose(PlanResult("Turn off the light.", "FloorPlan6", [1]), scene_objects(6))
     assert again.reused_tokens > again.shared_tokens == first.shared_tokens > 0
-    assert again.prompt_tokens - again.reused_tokens < 40
+    assert again.prompt_tokens - again.reused_tokens < 80
     assert first.reused_tokens == 0 and again.output == first.output
 
 
@@ -79,11 +80,12 @@ def test_a_task_planned_through_all_stages(hf_smollm2):
     assert result.plan is not None
     stages = [r.stage for r in result.stages]
     assert result.refusal is not None or stages == ["decomposition", "coalition", "allocation"]
-    # the examples' and the scene's states are kept in memory: decomposing again evaluates only the
-    # instruction (in its chat turn), and writes what it wrote from an empty cache
+    # the examples' and the scene's states are kept in memory: decomposing again evaluates only what follows
+    # the scene (the team's skills and the instruction, in its chat turn), and writes what it wrote from an
+    # empty cache
     again = planner.decompose(PlanResult("Turn off the light.", "FloorPlan6", [1]), scene_objects(6))
     assert again.reused_tokens > again.shared_tokens == result.stages[0].shared_tokens > 0
-    assert again.prompt_tokens - again.reused_tokens < 40
+    assert again.prompt_tokens - again.reused_tokens < 80
     assert result.stages[0].reused_tokens == 0 and again.output == result.stages[0].output
 
 
