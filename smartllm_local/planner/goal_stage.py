@@ -9,21 +9,29 @@ does not run it.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..domain import load_domain
+from ..domain import Domain, load_domain
 from ..errors import PlanError
+from ..executor import reach, site
 from ..goal_language import GoalStatement, parse_goal_statement
-from ..scoring import STATES
+from ..robots import Robot
+from ..scoring import STATES, Condition
+from ..skills import SkillSet
+from ..world.scenes import load_scene
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
+from .prompting.scene_context import SceneObjects
 from .stages import StageRecord, fit_prompt, run_stage
 
 if TYPE_CHECKING:
-    from .pipeline import Planner
+    from .pipeline import Planner, PlanResult
 
 STAGE = "goal"
+#: Who refused a task whose stated goals its team cannot meet.
+GOAL_CHECK = "goal check"
 GOAL_BUDGET = 384  # tokens: MAX_GOALS of the longest conditions (some 40 characters) fit
 
 
@@ -92,3 +100,33 @@ def state_goals(planner: Planner, instruction: str, floor_plan: str | int) -> St
         record.refusal = statement.refusal
         record.refused_by = record.refused_by or "model"
     return StatedGoals(record, statement)
+
+
+def restated_goals(record: StageRecord, scene: SceneObjects) -> StatedGoals:
+    """The statement a goal stage's ``record`` holds (none where it wrote none)."""
+    try:
+        return StatedGoals(record, parse_goal_statement(record.output, types=goal_vocabulary(scene).types))
+    except PlanError:
+        return StatedGoals(record, None)
+
+
+def stated_conditions(result: PlanResult, scene: SceneObjects, record: StageRecord | None = None) -> list[Condition]:
+    """The conditions the goal stage stated for a task (its ``record``, or the one in ``result``); none where it
+    did not run, refused or wrote no statement."""
+    record = record or next((r for r in result.stages if r.stage == STAGE), None)
+    if record is None or record.error or not record.output.strip():
+        return []
+    try:
+        statement = parse_goal_statement(record.output, types=goal_vocabulary(scene).types)
+    except PlanError:
+        return []
+    return statement.conditions if statement.refusal is None else []
+
+
+def unattainable_for(domain: Domain | None, statement: GoalStatement | None, conditions: Sequence[Condition],
+                     team: Sequence[Robot], skills: SkillSet, scene: SceneObjects) -> list[str]:
+    """The stated conditions no plan of ``team`` can meet, each with why: on a site domain's site, or in the
+    AI2-THOR scene from its initial state."""
+    if domain is not None:
+        return site.unattainable(domain, statement.goals, team) if statement is not None else []
+    return reach.unattainable(conditions, team, skills, load_scene(scene.floor_plan))
