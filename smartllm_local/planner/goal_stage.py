@@ -70,8 +70,9 @@ def goal_examples(planner: Planner) -> list[GoalExample]:
     return load_goal_examples(folder)
 
 
-def state_goals(planner: Planner, instruction: str, floor_plan: str | int) -> StatedGoals:
-    """Run the goal stage for one instruction in one scene."""
+def state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, refusals: bool = True) -> StatedGoals:
+    """Run the goal stage for one instruction in one scene; without ``refusals`` the model must state goals
+    (the grammar offers no refusal unless the scene gives it nothing to state)."""
     scene = planner.scene(floor_plan)
     vocabulary = goal_vocabulary(scene)
     # The states the prompt names are the domain's, the same for every scene (the examples stay a shared prefix).
@@ -80,7 +81,7 @@ def state_goals(planner: Planner, instruction: str, floor_plan: str | int) -> St
     record = StageRecord(STAGE, chat_template=planner.chat_status)
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex, states), examples, planner.backend,
                         GOAL_BUDGET, planner.chat)
-    constraint = GoalConstraint(vocabulary) if planner.config.grammar else None
+    constraint = GoalConstraint(vocabulary, allow_refusal=refusals) if planner.config.grammar else None
     from .pipeline import PlanResult  # the pipeline's module imports this one
 
     # No team: the goal is what the instruction asks, whoever reaches it.

@@ -373,12 +373,10 @@ class Planner:
     def check_goals(self, result: PlanResult, scene: SceneObjects) -> StageRecord:
         """The goal stage for a task, and the check of what it stated against the team: a stated condition no
         plan of this team can meet (a state no robot's skill gives, a closed fridge nobody can open, a load too
-        heavy for every lifter together) refuses the task, with that reason. The model's own refusal here is
-        not taken (its output keeps it): a task is refused for what the world shows, and the plan stages run."""
-        stated = state_goals(self, result.instruction, scene.floor_plan)
+        heavy for every lifter together) refuses the task, with that reason. The model may not refuse here (it
+        refused feasible tasks for untrue reasons, measured): a task is refused for what the world shows."""
+        stated = state_goals(self, result.instruction, scene.floor_plan, refusals=False)
         record = stated.record
-        if record.refusal is not None and record.refused_by != "grammar":
-            record.refusal, record.refused_by = None, ""
         conditions = stated_conditions(result, scene, record)
         team = self.catalogue.team(result.robots)
         problems = unattainable_for(self.site, stated.statement, conditions, team, self.catalogue.skills,
