@@ -1,26 +1,395 @@
-"""Several sequences written at once on one backend: its lanes.
+"""Lanes: several sequences of one model decoded together, their tokens evaluated in shared batches.
 
-A backend that decodes several sequences in one batch provides ``lanes(n)``; any other is driven one
-sequence after another.
+A stage's candidates (one prompt, each its own sampling) and the stages of tasks planned at once are sequences
+that need not wait for one another. Evaluating a token of each of n sequences in one call costs little more than
+one token alone where the device has room to spare (a GPU: the weights are read once for all n), so n sequences
+written together take about the time of one.
+
+:func:`open_lanes` gives n views of any backend: a backend with a method ``lanes(n)`` provides them, any other
+runs the n sequences one after another through itself. The llama.cpp backend's lanes (:class:`LaneEngine`):
+
+- a second llama.cpp context on the model's weights holds the n sequences, each in key/value cells of its own
+  (n_ctx each: a sequence's cells lie as they would in the backend's own cache, so that where the model's logits do
+  not change with batching, SmolLM2's, a greedy lane writes exactly what the backend writes alone); or, with
+  ``unified``, all in one cache of n_ctx cells, where a prefix they share is held once but their cells interleave,
+  and the order in which llama.cpp sums over them moves logits in their last bits (measured: on kitchen-01's
+  decomposition SmolLM2 wrote `Put` where it writes `put` alone);
+- each view (:class:`LaneView`) is a whole backend, its ``generate`` the backend's own decoding loop
+  (:class:`.LlamaDecoding`: the same token choice, loop guard, end of sequence and grammar cross-check), driven
+  from a thread of its own; only evaluating tokens differs: it is a request to the engine;
+- the engine's thread evaluates, in ONE ``llama_decode``, what every lane that is inside a call (generate,
+  prefill) has asked for, as soon as each of them has asked. A lane between calls (the stage code between
+  lines, a world check) holds no one up, and one that returns or raises is no longer waited for: continuous
+  batching, as llama-server's slots. A lane's single token and another's forced tokens or prompt go in the same
+  batch, single tokens first;
+- a context that shares a prefix with what another lane's sequence holds gets those cells copied
+  (``llama_memory_seq_cp``: a copy of the other's cells, or in a unified cache the same cells), and one that
+  shares more with a prompt
+  another lane is evaluating now waits for it: a prompt n lanes are given at once is evaluated once;
+- a prompt whose shared prefix (a stage's examples, a scene) has a state kept by the backend
+  (:class:`.PrefixReuse`, in memory or its store) starts from that state, loaded into the lane's sequence
+  (``llama_state_seq_set_data``), where no lane's sequence holds as much. Lanes keep no state of their own: a
+  prefix the backend has not kept is evaluated in the lanes' context (once) and forgotten with it.
 """
 
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator
+import ctypes
+import struct
+import threading
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
 
-from .base import Backend
+import numpy as np
+
+from ...errors import ModelError
+from ..decoding.grammar import Grammar
+from .base import Backend, Generated, Sampling, continuation_tokens
+from .llamacpp_decoding import LlamaDecoding
+
+_ONE_STREAM = struct.pack("<I", 1)  # the stream count of a state from a cache of one stream of cells
 
 
 @contextlib.contextmanager
 def open_lanes(backend: Backend, n: int) -> Iterator[tuple[list[Backend], bool]]:
-    """n views of ``backend`` for n sequences written at once; the bool says whether the views may be (and should
-    be) driven concurrently, one thread each. A backend with a method ``lanes(n)`` (a context manager yielding the
-    views) provides them; any other backend gets ([backend] * n, False) and the caller runs the n sequences one
-    after another."""
+    """n views of ``backend`` for n sequences written at once; the bool says whether the views may be (and should be)
+    driven concurrently, one thread each. A backend with a method ``lanes(n)`` (a context manager yielding the views)
+    provides them; any other backend gets ([backend] * n, False) and the caller runs the n sequences one after another.
+    """
+    if n < 1:
+        raise ValueError(f"lanes: n must be 1 or more, not {n}")
     lanes = getattr(backend, "lanes", None)
-    if n <= 1 or lanes is None:
+    if n == 1 or lanes is None:
         yield [backend] * n, False
         return
     with lanes(n) as views:
-        yield list(views), True
+        yield views, True
+
+
+def _common(a: Sequence[int], b: Sequence[int]) -> int:
+    """How many leading tokens two lists share (list comparisons: C speed on prompts of thousands of tokens)."""
+    size = min(len(a), len(b))
+    if a[:size] == b[:size]:
+        return size
+    same, differs = 0, size
+    while differs - same > 1:
+        middle = (same + differs) // 2
+        if a[:middle] == b[:middle]:
+            same = middle
+        else:
+            differs = middle
+    return same
+
+
+@dataclass(eq=False)
+class _Lane:
+    """One sequence: what its cells hold, and the request its thread waits on (written by the engine's thread while
+    that thread waits)."""
+
+    seq: int
+    tokens: list[int] = field(default_factory=list)  # what its sequence holds
+    logits: np.ndarray | None = None  # of its last token, where evaluated last
+    evaluated: int = 0
+    target: list[int] | None = None  # a context the sequence is to hold (else the request extends it)
+    state: tuple[list[int], bytes] | None = None  # a prefix of the target and its state, kept by the backend
+    todo: list[int] | None = None  # of the request, the tokens still to evaluate (None: not started)
+    done: bool = True
+    error: str = ""
+
+
+class LaneEngine:
+    """n sequences of a :class:`.LlamaCppBackend`'s model in a context of their own, evaluated in shared batches by a
+    thread of the engine's (see the module's docstring)."""
+
+    def __init__(self, parent: Any, n: int, n_ctx: int, unified: bool = False):
+        if n < 1:
+            raise ValueError(f"lanes: n must be 1 or more, not {n}")
+        self._lib = lib = parent._lib
+        self.n_vocab = parent.n_vocab
+        self.unified = unified
+        self._streams = 1 if unified else n
+        self.ctx = parent._new_context("lanes", n_ctx=n_ctx * self._streams, n_seq_max=n, kv_unified=unified)
+        self.n_batch = int(lib.llama_n_batch(self.ctx))
+        self._batch = lib.llama_batch_init(self.n_batch, 0, 1)
+        self._memory = lib.llama_get_memory(self.ctx)
+        self.evaluated_tokens = 0  # all lanes together
+        self.decodes = 0  # llama_decode calls
+        self._lanes = [_Lane(seq) for seq in range(n)]
+        self._cond = threading.Condition()
+        self._pending: list[_Lane] = []
+        self._inside = 0  # lanes inside a call (generate, prefill): the ones a batch waits for
+        self._closed = False
+        self.tokenizing = threading.Lock()
+        self.views = [LaneView(self, lane, parent) for lane in self._lanes]
+        self._thread = threading.Thread(target=self._serve, name="llama.cpp lanes", daemon=True)
+        self._thread.start()
+
+    # ------------------------------------------------------------ lanes' side
+
+    @contextlib.contextmanager
+    def inside(self) -> Iterator[None]:
+        """A lane's call: while it lasts, a batch waits for the lane's request; after it, no longer."""
+        with self._cond:
+            self._inside += 1
+        try:
+            yield
+        finally:
+            with self._cond:
+                self._inside -= 1
+                self._cond.notify_all()
+
+    def ask(self, lane: _Lane, tokens: list[int], *, extend: bool,
+            state: tuple[list[int], bytes] | None = None) -> None:
+        """Make ``lane``'s sequence hold ``tokens`` (or hold them after what it holds: ``extend``), with the logits
+        of the last; returns once a batch has evaluated them. ``state``: a prefix of ``tokens`` and its kept state,
+        loaded where no sequence holds as much."""
+        with self._cond:
+            if self._closed:
+                raise ModelError("the lanes were closed: a lane was used after its lanes' context ended")
+            lane.target, lane.todo = (None, list(tokens)) if extend else (list(tokens), None)
+            lane.done, lane.error, lane.state = False, "", state
+            self._pending.append(lane)
+            self._cond.notify_all()
+            while not lane.done:
+                self._cond.wait()
+            if lane.error:
+                raise ModelError(lane.error)
+
+    # ------------------------------------------------------------ engine's side
+
+    def _serve(self) -> None:
+        """Evaluate a batch whenever every lane inside a call has a request waiting, until closed."""
+        while True:
+            with self._cond:
+                while not self._closed and not (self._pending and len(self._pending) >= self._inside):
+                    self._cond.wait()
+                if self._closed:
+                    self._fail(list(self._pending), "the lanes were closed while a lane waited for a batch")
+                    return
+                waiting = list(self._pending)
+            try:
+                finished = self._step(waiting)
+            except Exception as exc:  # noqa: BLE001 - every waiting lane must hear of it, never hang
+                with self._cond:
+                    self._fail(waiting, str(exc) if isinstance(exc, ModelError) else f"the lanes failed: {exc!r}")
+                continue
+            with self._cond:
+                for lane in finished:
+                    lane.done = True
+                    self._pending.remove(lane)
+                self._cond.notify_all()
+
+    def _fail(self, lanes: list[_Lane], why: str) -> None:
+        """Fail requests (called with the lock held): their sequences are emptied, their threads raise ``why``."""
+        for lane in lanes:
+            self._lib.llama_memory_seq_rm(self._memory, lane.seq, -1, -1)
+            lane.tokens, lane.logits, lane.target, lane.todo, lane.state = [], None, None, None, None
+            lane.error, lane.done = why, True
+            if lane in self._pending:
+                self._pending.remove(lane)
+        self._cond.notify_all()
+
+    def _step(self, waiting: list[_Lane]) -> list[_Lane]:
+        """One batch, as much as fits; the lanes whose requests it completed. In a unified cache: single tokens
+        first, then forced tokens and prompts. With a stream of cells per lane, llama.cpp would split a batch into
+        pieces of as many tokens from each lane, evaluating a piece of a lane's tokens otherwise than the backend
+        alone does (a lone token computes otherwise): so a batch holds the first lane to have asked and those whose
+        next piece is as long, and each lane's pieces are those the backend would evaluate."""
+        room, chunks, size = self.n_batch, [], None
+        order = sorted(waiting, key=lambda ln: (ln.todo is None, len(ln.todo or ()) > 1, ln.seq)) if self.unified \
+            else waiting  # in the order they asked
+        for lane in order:
+            if room == 0:
+                break
+            if lane.todo is None and not self._start(lane, waiting):
+                continue
+            chunk = lane.todo[:room] if self.unified else lane.todo[:self.n_batch]
+            if not self.unified and (len(chunk) > room or size not in (None, len(chunk))):
+                continue
+            size = len(chunk)
+            chunks.append((lane, chunk))
+            room -= len(chunk)
+        if not chunks:  # cannot be: the first request started is never held back (and a request is never empty)
+            raise ModelError("the lanes' requests wait on one another")
+        outputs = self._decode(chunks)
+        finished = []
+        for lane, chunk in chunks:
+            lane.tokens.extend(chunk)
+            lane.todo = lane.todo[len(chunk):]
+            lane.evaluated += len(chunk)
+            lane.logits = outputs.get(lane.seq)
+            if not lane.todo:
+                lane.target = lane.todo = None
+                finished.append(lane)
+        return finished
+
+    def _start(self, lane: _Lane, waiting: list[_Lane]) -> bool:
+        """Begin a request for a whole context: keep what the lane's sequence shares with it, or copy a longer
+        shared prefix from another lane's, or load a longer one's state the request brought; the rest (at least
+        the last token, for its logits) is to evaluate. False (it waits) where a prompt another lane is
+        evaluating now shares more with it."""
+        target = lane.target
+        limit = len(target) - 1
+        source, kept = lane, min(_common(lane.tokens, target), limit)
+        for other in self._lanes:
+            shared = min(_common(other.tokens, target), limit) if other is not lane else 0
+            if shared > kept:
+                source, kept = other, shared
+        state = lane.state if lane.state is not None and kept < len(lane.state[0]) <= limit else None
+        reach = len(state[0]) if state is not None else kept
+        for other in waiting:
+            if other is not lane and other.target is not None and other.todo:
+                if min(_common(other.target, target), limit) > reach:
+                    return False
+        lib = self._lib
+        if state is not None:
+            source, kept = lane, len(state[0]) if self._load(lane, state[1]) else 0
+        if source is lane:
+            lib.llama_memory_seq_rm(self._memory, lane.seq, kept, -1)
+        elif self.unified:
+            lib.llama_memory_seq_rm(self._memory, lane.seq, -1, -1)
+            lib.llama_memory_seq_cp(self._memory, source.seq, lane.seq, 0, kept)
+        else:  # a sequence of its own cells: llama.cpp copies another's whole
+            lib.llama_memory_seq_rm(self._memory, lane.seq, -1, -1)
+            lib.llama_memory_seq_cp(self._memory, source.seq, lane.seq, -1, -1)
+            lib.llama_memory_seq_rm(self._memory, lane.seq, kept, -1)
+        lane.tokens, lane.todo, lane.logits, lane.state = target[:kept], target[kept:], None, None
+        return True
+
+    def _load(self, lane: _Lane, state: bytes) -> bool:
+        """Load a state kept by the backend into the lane's sequence, in place of what it held; False (the sequence
+        left empty) where llama.cpp refuses it (no room for its cells in one piece)."""
+        lib = self._lib
+        for blob in self._blobs(state):
+            lib.llama_memory_seq_rm(self._memory, lane.seq, -1, -1)
+            source = ctypes.cast(blob, ctypes.POINTER(ctypes.c_uint8))  # read in place, not copied
+            if lib.llama_state_seq_set_data(self.ctx, source, len(blob), lane.seq):
+                return True
+        lib.llama_memory_seq_rm(self._memory, lane.seq, -1, -1)
+        return False
+
+    def _blobs(self, state: bytes) -> Iterator[bytes]:
+        """A state kept by the backend, as it is; and, in a cache of a stream of cells per sequence, as such a cache
+        reads one: the backend's says one stream (after llama.cpp 0.3.36's 8-byte header), and llama.cpp reads a
+        sequence's state only where it says as many, so the others are said to be empty (every stream's cells of
+        a sequence's state go into that sequence's own)."""
+        yield state
+        if self._streams > 1 and state[8:12] == _ONE_STREAM:
+            yield state[:8] + struct.pack("<I", self._streams) + state[12:] + bytes(4 * (self._streams - 1))
+
+    def _decode(self, chunks: list[tuple[_Lane, list[int]]]) -> dict[int, np.ndarray]:
+        """Evaluate the chunks in one call; the logits of each lane whose chunk ends its request, by sequence."""
+        lib, batch = self._lib, self._batch
+        at, wanted = 0, {}
+        for lane, chunk in chunks:
+            start = len(lane.tokens)
+            for i, token in enumerate(chunk):
+                batch.token[at], batch.pos[at], batch.n_seq_id[at] = token, start + i, 1
+                batch.seq_id[at][0], batch.logits[at] = lane.seq, False
+                at += 1
+            if len(chunk) == len(lane.todo):
+                batch.logits[at - 1] = True
+                wanted[lane.seq] = at - 1
+        batch.n_tokens = at
+        status = lib.llama_decode(self.ctx, batch)
+        if status != 0:
+            held = sum(len(lane.tokens) for lane in self._lanes)
+            raise ModelError(f"llama.cpp could not evaluate the lanes' batch (status {status}"
+                             + (f": their key/value cache is full, {held} tokens in the lanes' sequences; give the "
+                                "lanes more cells (n_ctx) or use fewer lanes)" if status == 1 else ")"))
+        lib.llama_synchronize(self.ctx)
+        self.evaluated_tokens += at
+        self.decodes += 1
+        return {seq: np.ctypeslib.as_array(lib.llama_get_logits_ith(self.ctx, i), shape=(self.n_vocab,)).copy()
+                for seq, i in wanted.items()}
+
+    def close(self) -> None:
+        """Stop the engine's thread (a lane still waiting raises) and free the lanes' context."""
+        with self._cond:
+            self._closed = True
+            self._cond.notify_all()
+        self._thread.join()
+        self._lib.llama_batch_free(self._batch)
+        self._lib.llama_free(self.ctx)
+
+
+class LaneView(LlamaDecoding):
+    """One lane as a whole backend: the parent's tokenizer and model, a sequence of its own in the lanes' context,
+    the backend's decoding loop (its own grammar sampler, buffers and end-of-sequence setting). Drive each view
+    from one thread."""
+
+    def __init__(self, engine: LaneEngine, lane: _Lane, parent: Any):
+        self._engine, self._lane, self._parent = engine, lane, parent
+        self.name, self.model, self.n_ctx = parent.name, parent.model, parent.n_ctx
+        self.chat_template, self.bos_token, self.eos_token = parent.chat_template, parent.bos_token, parent.eos_token
+        self.trained_context, self.n_gpu_layers = parent.trained_context, parent.n_gpu_layers
+        self._lib, self._vocab, self.n_vocab = parent._lib, parent._vocab, parent.n_vocab
+        self._init_decoding(parent._eog)
+
+    @property
+    def evaluated_tokens(self) -> int:
+        """Tokens this lane's sequence had evaluated (a prefix copied from another lane's is not counted)."""
+        return self._lane.evaluated
+
+    @property
+    def batches(self) -> int:
+        """``llama_decode`` calls the lanes have made, all together."""
+        return self._engine.decodes
+
+    # the parent's tokenizer, one thread at a time
+    def tokenize(self, text: str, *, bos: bool = False, special: bool = False) -> list[int]:
+        with self._engine.tokenizing:
+            return self._parent.tokenize(text, bos=bos, special=special)
+
+    def detokenize(self, tokens: Sequence[int]) -> str:
+        return self._parent.detokenize(tokens)
+
+    def tokenize_continuation(self, text: str) -> list[int]:
+        return continuation_tokens(text, self.tokenize, self._piece)
+
+    def text_of(self, tokens: Sequence[int]) -> str:
+        return self._parent.text_of(tokens)
+
+    def adds_bos(self) -> bool:
+        return self._parent.adds_bos()
+
+    def _piece(self, token: int, special: bool = False) -> bytes:
+        return self._parent._piece(token, special)
+
+    # a sequence of the lanes' context
+    def prefill(self, context: Sequence[int], prefixes: Sequence[int]) -> int:
+        """Make the lane's sequence hold ``context``: from what a lane's sequence shares with it, or else from the
+        longest prefix whose state the backend keeps (loaded, never stored); returns how many of its tokens were
+        not evaluated now."""
+        with self._engine.inside():
+            before = self._lane.evaluated
+            kept = self._parent.kept_state(context, prefixes) if prefixes else None
+            self._sync(context, kept)
+            return len(context) - (self._lane.evaluated - before)
+
+    def generate(self, context: Sequence[int], *, grammar: Grammar | None, max_tokens: int, sampling: Sampling,
+                 stop: Sequence[str] = (), rng: np.random.Generator | None = None, lines: int = 1) -> Generated:
+        with self._engine.inside():
+            return super().generate(context, grammar=grammar, max_tokens=max_tokens, sampling=sampling, stop=stop,
+                                    rng=rng, lines=lines)
+
+    def _sync(self, context: Sequence[int], state: tuple[list[int], bytes] | None = None) -> None:
+        if not context:
+            raise ModelError("a lane was given an empty context: there is no token to go on from")
+        if len(context) >= self.n_ctx:
+            raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
+        lane = self._lane
+        if lane.logits is None or len(lane.tokens) != len(context) or lane.tokens != list(context):
+            self._engine.ask(lane, list(context), extend=False, state=state)
+
+    def _evaluate(self, tokens: list[int]) -> None:
+        if tokens:
+            self._engine.ask(self._lane, tokens, extend=True)
+
+    def _logits(self) -> np.ndarray:
+        return self._lane.logits
+
+    def close(self) -> None:
+        """Nothing: the lanes' context is freed when the lanes end."""

@@ -1,19 +1,4 @@
-"""The llama.cpp backend (llama-cpp-python), with a sampling loop of its own.
-
-llama-cpp-python's sampler chain applies a grammar to the whole vocabulary at
-every step: ~60 ms per token for Gemma-3's 262k tokens on two cores. Here the
-grammar is asked first only about the likeliest tokens: greedy decoding takes
-the likeliest token if the grammar admits it, else the best of the top 64 that
-it admits (the same token a full mask would give, since any admitted token
-outside the top 64 scores lower; finding the 64 costs 0.5 ms a step on
-SmolLM2's vocabulary and 2.8 ms on Gemma-3's, so it is done only then), and
-sampling draws from the full distribution and keeps the draw if the grammar
-admits it (rejection sampling, which gives exactly the masked distribution).
-Only when that fails is the full vocabulary masked.
-
-Grammars are checked by llama.cpp before use: ``llama_sampler_init_grammar``
-returns NULL for a bad one (llama-cpp-python 0.3.36 does not check, and a bad
-grammar would crash the process at the first token).
+"""The llama.cpp backend (llama-cpp-python), with a sampling loop of its own (:mod:`.llamacpp_decoding`).
 
 The key/value cache holds the last context; a new context that shares a
 prefix with it only evaluates the rest. A stage's prompt begins with its
@@ -22,35 +7,27 @@ examples, whose state (one sequence's key/value cells, llama.cpp's
 :class:`PrefixStore` on disk, and the rest of a prompt is always evaluated on a
 loaded state (see :class:`PrefixReuse`).
 
-The text of generated tokens is their bytes, decoded as they come (a
-character split across tokens is held back until complete), and it is
-followed through the planner's own grammar: where that grammar does not
-allow what llama.cpp's let through, or llama.cpp's refuses text the planner's
-grammar forces, the two disagree and generation stops with an error.
+Several sequences decoded together in one batch are the :meth:`LlamaCppBackend.lanes` (see :mod:`.lanes`).
 """
 
 from __future__ import annotations
 
-import codecs
 import contextlib
 import ctypes
 import io
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
-from ..decoding.grammar import Grammar, GrammarError
-from ..decoding.matcher import Matcher
-from .base import END_RANK, Generated, Sampling, continuation_tokens, keep_whole, may_end, shared_prefix
+from ...errors import BackendUnavailableError, ModelError
+from .base import continuation_tokens, keep_whole, shared_prefix
+from .llamacpp_decoding import LlamaDecoding
 from .prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
-from .repetition import TRIES, current_line, draw
 
-_TOP = END_RANK  # the candidates looked at before the whole vocabulary is masked
 CPU_BATCH, GPU_BATCH, UBATCH = 512, 2048, 512
 
 
@@ -108,7 +85,7 @@ def _flash_attention_auto(llama_cpp, wanted: bool):
         module.LLAMA_FLASH_ATTN_TYPE_DISABLED = off
 
 
-class LlamaCppBackend(PrefixReuse):
+class LlamaCppBackend(LlamaDecoding, PrefixReuse):
     """A GGUF model run by llama.cpp."""
 
     name = "llamacpp"
@@ -134,6 +111,7 @@ class LlamaCppBackend(PrefixReuse):
         llama_cpp, self.llm = _open(model_path, n_ctx=n_ctx, threads=self._threads, n_gpu_layers=n_gpu_layers,
                                     seed=seed, n_batch=n_batch, vocab_only=vocab_only)
         self._lib = llama_cpp
+        self._vocab_only = vocab_only
         self.model = str(model_path)
         self.n_ctx = self.llm.n_ctx()
         self.n_vocab = self.llm.n_vocab()
@@ -142,7 +120,6 @@ class LlamaCppBackend(PrefixReuse):
         self._tokens: list[int] = []  # what the key/value cache holds
         self._alone: list[bool] = []  # which of them were evaluated alone (a lone token computes otherwise)
         self._states = MemoryStates()
-        self._ends = True  # whether the end of sequence is always admitted (Sampling.aligned)
         self.prefix_store = prefix_store
         if not n_gpu_layers:  # on the CPU keeping states always pays (see PrefixReuse): measured on a GPU only
             self.keeps_states = self.stores_states = True
@@ -152,10 +129,8 @@ class LlamaCppBackend(PrefixReuse):
         self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
         self._pieces: dict[tuple[int, bool], bytes] = {}
-        self._eog = np.array([bool(llama_cpp.llama_vocab_is_eog(self._vocab, t)) for t in range(self.n_vocab)])
-        self.end_tokens = frozenset(int(t) for t in np.flatnonzero(self._eog))  # llama.cpp's end-of-generation
-        self._full = np.zeros(self.n_vocab, dtype=[("id", np.intc), ("logit", np.single), ("p", np.single)])
-        self._few = np.zeros(_TOP, dtype=self._full.dtype)
+        self._init_decoding(np.array([bool(llama_cpp.llama_vocab_is_eog(self._vocab, t))
+                                      for t in range(self.n_vocab)]))
         self.n_gpu_layers = n_gpu_layers
         self.chat_template = self.llm.metadata.get("tokenizer.chat_template")
         # Prompts are fitted within what the model was trained on: a Llama-2 keeps 4,096 tokens.
@@ -270,13 +245,8 @@ class LlamaCppBackend(PrefixReuse):
         lib = self._lib
         if not tokens:
             return 0.0
-        mine = self.llm.context_params
-        params = type(mine).from_buffer_copy(mine)
-        params.n_ctx = min(self.n_ctx, -(-(len(tokens) + 8) // 256) * 256)
-        params.n_batch, params.n_ubatch = n_batch, UBATCH
-        ctx = lib.llama_init_from_model(self.llm._model.model, params)
-        if not ctx:
-            raise ModelError("llama.cpp could not make a second context for the engine's own timing")
+        ctx = self._new_context("the engine's own timing", n_ctx=min(self.n_ctx, -(-(len(tokens) + 8) // 256) * 256),
+                                n_batch=n_batch, n_ubatch=UBATCH)
         batch = lib.llama_batch_init(n_batch, 0, 1)
         try:
             def run(chunk: Sequence[int], start: int, last: bool) -> None:
@@ -299,182 +269,38 @@ class LlamaCppBackend(PrefixReuse):
             lib.llama_batch_free(batch)
             lib.llama_free(ctx)
 
+    def _new_context(self, purpose: str, **settings: int | bool) -> Any:
+        """A second llama.cpp context on the same weights, with this backend's settings (threads, attention) but
+        ``settings`` (fields of llama.cpp's context parameters); free it with ``llama_free``."""
+        mine = self.llm.context_params
+        params = type(mine).from_buffer_copy(mine)
+        for name, value in settings.items():
+            setattr(params, name, value)
+        ctx = self._lib.llama_init_from_model(self.llm._model.model, params)
+        if not ctx:
+            raise ModelError(f"llama.cpp could not make a second context for {purpose} (out of memory?)")
+        return ctx
+
     def _logits(self) -> np.ndarray:
         ptr = self._lib.llama_get_logits_ith(self._ctx, -1)
         return np.ctypeslib.as_array(ptr, shape=(self.n_vocab,)).copy()
 
-    # -------------------------------------------------------------- grammars
+    @contextlib.contextmanager
+    def lanes(self, n: int, *, n_ctx: int | None = None, unified: bool = False) -> Iterator[list[Any]]:
+        """``n`` views of this model that decode ``n`` sequences together, each from a thread of its own (see
+        :mod:`.lanes`), in a context of their own that is freed on exit; this backend and its cache are left as
+        they were. ``n_ctx``: the key/value cells of each lane (this backend's n_ctx unless given); ``unified``:
+        instead, all lanes share ``n_ctx`` cells (a prefix they share is held once, not once per lane), and greedy
+        lanes may then part from what this backend writes where two tokens are all but tied."""
+        from .lanes import LaneEngine
 
-    def _grammar_sampler(self, grammar: Grammar):
-        sampler = self._lib.llama_sampler_init_grammar(self._vocab, grammar.to_gbnf().encode(), b"root")
-        if not sampler:
-            raise GrammarError("llama.cpp rejected a grammar:\n" + grammar.to_gbnf())
-        return sampler
-
-    def _apply(self, sampler, buffer: np.ndarray, count: int) -> None:
-        array = self._lib.llama_token_data_array(
-            data=buffer.ctypes.data_as(self._lib.llama_token_data_p), size=count, selected=-1, sorted=False
-        )
-        self._lib.llama_sampler_apply(sampler, ctypes.byref(array))
-
-    def _allowed(self, sampler, token: int) -> bool:
-        self._few[0] = (token, 0.0, 0.0)
-        self._apply(sampler, self._few, 1)
-        return bool(np.isfinite(self._few["logit"][0]))
-
-    def _masked(self, sampler, logits: np.ndarray) -> np.ndarray:
-        self._full["id"] = np.arange(self.n_vocab, dtype=np.intc)
-        self._full["logit"] = logits
-        self._apply(sampler, self._full, self.n_vocab)
-        masked = np.full(self.n_vocab, -np.inf, dtype=np.float32)
-        masked[self._full["id"]] = self._full["logit"]
-        if self._ends:  # the end of sequence is the model's to choose (see END_RANK)
-            for end in self.end_tokens:
-                if may_end(logits, end):
-                    masked[end] = logits[end]
-        return masked
-
-    def _pick(self, logits: np.ndarray, sampler, sampling: Sampling, rng: np.random.Generator,
-              avoid: Callable[[int], bool] | None = None) -> int:
-        """The next token, greedy or sampled, among those the grammar admits and, where any of them is
-        left, those ``avoid`` does not refuse. The end of sequence is always admitted: where the model
-        ends, the planner completes the output (see :mod:`..decoding.writer`)."""
-        if not np.isfinite(logits[int(np.argmax(logits))]):
-            raise ModelError("the model's scores are not numbers (NaN or infinite logits): its weights, or the build "
-                             "that runs them, are broken (on a GPU, see whether --n-gpu-layers 0 runs it)")
-        if sampling.temperature <= 0:
-            best = int(np.argmax(logits))
-            if (self._admits(sampler, best)) and not (avoid and avoid(best)):
-                return best
-            top = np.argpartition(-logits, _TOP)[:_TOP]
-            top = top[np.argsort(-logits[top], kind="stable")]
-            self._few["id"] = top
-            self._few["logit"] = logits[top]
-            if sampler is not None:
-                self._apply(sampler, self._few, _TOP)
-                if self._ends:
-                    self._few["logit"][self._eog[top]] = logits[top][self._eog[top]]
-            admitted = self._few["id"][np.isfinite(self._few["logit"])]
-            if not len(admitted) or (avoid and len(admitted) < TRIES and all(avoid(int(t)) for t in admitted)):
-                masked = self._masked(sampler, logits)
-                if not np.isfinite(masked).any():
-                    raise GrammarError("the grammar admits no token here")
-                admitted = np.argsort(-masked, kind="stable")[: int(np.isfinite(masked).sum())]
-            # The best admitted token that ``avoid`` does not refuse, among the best TRIES; else the best.
-            return next((int(t) for t in admitted[:TRIES] if not (avoid and avoid(int(t)))), int(admitted[0]))
-        scaled = logits.astype(np.float64) / sampling.temperature
-        probs = np.exp(scaled - scaled.max())
-        probs /= probs.sum()
-        token = int(rng.choice(self.n_vocab, p=probs))
-        if self._admits(sampler, token) and not (avoid and avoid(token)):
-            return token
-        masked = self._masked(sampler, logits).astype(np.float64) / sampling.temperature if sampler else scaled
-        if not np.isfinite(masked).any():
-            raise GrammarError("the grammar admits no token here")
-        return draw(np.exp(masked - masked[np.isfinite(masked)].max()), rng, avoid, TRIES)
-
-    def _admits(self, sampler, token: int) -> bool:
-        return sampler is None or (self._ends and bool(self._eog[token])) or self._allowed(sampler, token)
-
-    # ------------------------------------------------------------ generation
-
-    def generate(
-        self,
-        context: Sequence[int],
-        *,
-        grammar: Grammar | None,
-        max_tokens: int,
-        sampling: Sampling,
-        stop: Sequence[str] = (),
-        rng: np.random.Generator | None = None,
-        lines: int = 1,
-    ) -> Generated:
-        rng = rng or np.random.default_rng(sampling.seed)
-        if len(context) + max_tokens > self.n_ctx:
-            max_tokens = self.n_ctx - len(context) - 1
-        self._sync(context)
-        self._ends = sampling.aligned
-        sampler = self._grammar_sampler(grammar) if grammar is not None else None
-        matcher = Matcher(grammar) if grammar is not None else None
-        guard = sampling.loop_guard
-        out = Generated([], "", "length")
-        decoder = codecs.getincrementaldecoder("utf-8")("replace")
+        if self._vocab_only:
+            raise ModelError("a vocabulary cannot generate: load the model's weights for lanes")
+        engine = LaneEngine(self, n, n_ctx or self.n_ctx, unified)
         try:
-            while len(out.tokens) < max_tokens:
-                new = self._forced_tokens(matcher.forced(), sampler, heal=sampling.aligned) if matcher else []
-                forced = len(new)
-                if not new:
-                    logits = self._logits()
-                    token = self._pick(logits, sampler, sampling, rng)
-                    line = current_line(out.text)
-                    if guard is not None and guard.loops(line + self._text(token)):
-                        # A loop: end the free text it runs in (the grammar's shortest way on), or else
-                        # take the best token that does not close the loop.
-                        new = self._forced_tokens(matcher.shortest_way(), sampler, way=True) if matcher else []
-                        forced = len(new)
-                        token = token if new else self._pick(
-                            logits, sampler, sampling, rng, lambda t: guard.loops(line + self._text(t)))
-                        out.loops += 1
-                    if not new:
-                        self._measure(out, logits, token, sampler)
-                if not new:
-                    if self._eog[token]:
-                        out.text += decoder.decode(b"", final=True)
-                        out.stop = "eos"
-                        return out
-                    if sampler is not None:
-                        self._lib.llama_sampler_accept(sampler, token)
-                    new = [token]
-                out.tokens.extend(new)
-                out.forced += forced
-                self._evaluate(new)
-                piece = decoder.decode(b"".join(self._piece(t) for t in new))
-                if matcher is not None and not matcher.advance(piece):
-                    raise GrammarMismatchError(out.text + piece, "llama.cpp's grammar let the model write it, "
-                                               "the planner's grammar does not allow it")
-                out.text += piece
-                if sampler is not None and out.text.count("\n") >= lines:
-                    out.stop = "line"
-                    return out
-                for s in stop:
-                    if s in out.text:
-                        out.text, out.stop = out.text[: out.text.index(s)], "stop"
-                        return out
-            out.text += decoder.decode(b"", final=True)
-            return out
+            yield engine.views
         finally:
-            if sampler is not None:
-                self._lib.llama_sampler_free(sampler)
-
-    def _measure(self, out: Generated, logits: np.ndarray, token: int, sampler) -> None:
-        """How far the grammar bent the model at a token it chose: whether its likeliest token was refused,
-        and the chosen token's log-probability under the unconstrained model."""
-        best = int(np.argmax(logits))
-        out.choices += 1
-        out.refused += best != token and not self._admits(sampler, best)
-        top = float(logits[best])
-        out.logprob += float(logits[token]) - top - float(np.log(np.exp(logits - top, dtype=np.float64).sum()))
-
-    def _forced_tokens(self, forced: str, sampler, *, way: bool = False, heal: bool = True) -> list[int]:
-        """The tokens of text the planner's grammar forces, all in one batch, accepted by llama.cpp's grammar;
-        with ``heal``, all but the last, which the model writes itself (it may run on into what follows: token
-        healing). A loop guard's ``way`` out is written whole.
-
-        Each is checked before llama.cpp accepts it: accepting a token its grammar refuses aborts the process.
-        """
-        if len(forced) < 2 and not way:  # one character costs no more sampled than forced
-            return []
-        tokens = self.tokenize_continuation(forced)
-        if heal and not way:
-            tokens = tokens[:-1]
-        for token in tokens:
-            if not self._allowed(sampler, token):
-                raise GrammarMismatchError(forced, "the planner's grammar forces it, llama.cpp's grammar refuses it")
-            self._lib.llama_sampler_accept(sampler, token)
-        return tokens
-
-    def _text(self, token: int) -> str:
-        return self._piece(token).decode("utf-8", errors="replace")
+            engine.close()
 
     def close(self) -> None:
         llm, self.llm = getattr(self, "llm", None), None

@@ -22,7 +22,7 @@ import json
 import os
 import time
 from collections import OrderedDict
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -237,13 +237,8 @@ class PrefixReuse:
         if not ends:
             return 0
         start, reused = 0, 0
-        for depth in reversed(range(len(ends))):
-            prefix = list(context[: ends[depth]])
-            state = self._states.get(prefix)
-            store = self._stored(lookup=True) if state is None else None
-            if store is not None:
-                state = store.load(self._store_key(prefix), prefix)
-            if state is not None and self._restore(prefix, state):
+        for depth, prefix, state in self._kept(context, ends):
+            if self._restore(prefix, state):
                 self._states.put(prefix, state, self._state_size(state))
                 self._touch([list(context[:end]) for end in ends[:depth]])
                 start, reused = depth + 1, len(prefix)
@@ -266,6 +261,27 @@ class PrefixReuse:
             if (store := self._stored()) is not None:
                 store.save(self._store_key(prefix), prefix, state)
         return reused
+
+    def _kept(self, context: Sequence[int], ends: Sequence[int]) -> Iterator[tuple[int, list[int], Any]]:
+        """The kept states (in memory or the store) of the prefixes of ``context`` ending at ``ends``, longest
+        first: (its index in ``ends``, the prefix, its state)."""
+        for depth in reversed(range(len(ends))):
+            prefix = list(context[: ends[depth]])
+            state = self._states.get(prefix)
+            store = self._stored(lookup=True) if state is None else None
+            if store is not None:
+                state = store.load(self._store_key(prefix), prefix)
+            if state is not None:
+                yield depth, prefix, state
+
+    def kept_state(self, context: Sequence[int], prefixes: Sequence[int]) -> tuple[list[int], Any] | None:
+        """The longest of ``context``'s prefixes (ending at ``prefixes``) whose state is kept, and that state; None
+        where none is (lanes of a llama.cpp backend load it into a sequence of their own)."""
+        if self.keeps_states is False:
+            return None
+        ends = [end for end in prefixes if 0 < end < min(len(context), self.n_ctx)]
+        found = next(self._kept(context, ends), None)
+        return None if found is None else (found[1], found[2])
 
     def _touch(self, prefixes: Sequence[list[int]]) -> None:
         """Mark shorter prefixes used with a longer one, so that bounded stores keep them as long."""
