@@ -135,6 +135,9 @@ def why(task: Mapping[str, Any]) -> list[str]:
     unmet = [c["condition"] for c in trace.get("conditions") or [] if not c["met"]]
     if unmet:
         reasons.append("goal conditions not met: " + "; ".join(unmet))
+        if not failed:
+            reasons.append(f"every one of the plan's {len(trace.get('actions') or [])} action(s) succeeded: the "
+                           "plan does not do what the goals need (see its stages)")
     if trace.get("truncated"):
         reasons.append("the run was cut at the executor's tick limit")
     if outcome.get("RU") is not None and outcome["RU"] < 1 and outcome.get("TCR") == 1:

@@ -56,9 +56,9 @@
     return el("span", { class: "pill " + status, text: status });
   }
 
-  function palette(keys) {
+  function palette(keys, offset = 0) {
     const colors = {};
-    keys.forEach((key, k) => { colors[key] = PALETTE[k % PALETTE.length]; });
+    keys.forEach((key, k) => { colors[key] = PALETTE[(k + offset) % PALETTE.length]; });
     return colors;
   }
 
@@ -319,8 +319,8 @@
       part.append(codeBlock(stage.output, stage.name !== "coalition"));
       const fold = (label, text) => text ? el("details", {}, el("summary", { text: label }),
         el("pre", { text: text })) : null;
-      part.append(fold("prompt", TEXTS[stage.prompt]), fold("grammar", TEXTS[stage.grammar]),
-        fold("raw output", stage.raw), fold("timings", JSON.stringify(t, null, 2)));
+      append(part, [fold("prompt", TEXTS[stage.prompt]), fold("grammar", TEXTS[stage.grammar]),
+        fold("raw output", stage.raw), fold("timings", JSON.stringify(t, null, 2))]);
       box.append(part);
     }
     return box;
@@ -346,7 +346,7 @@
     const lanes = lanesOf(task);
     const ticks = Math.max(task.trace.ticks || 0, ...actions.map((a) => a.tick + 1), 1);
     const subtasks = [...new Set(actions.map((a) => a.subtask))];
-    const colors = palette(subtasks);
+    const colors = palette(subtasks, 5);  // not the robots' colours (the map's): a bar's colour is its sub-task
     const labelW = 110, laneH = 36, step = Math.max(10, Math.min(48, 1100 / ticks));
     const width = labelW + ticks * step + 20, height = lanes.length * laneH + 30;
     const chart = sv("svg", { id: "timeline", width: width, height: height, viewBox: `0 0 ${width} ${height}` });
@@ -371,7 +371,11 @@
         const y = lanes.indexOf(r) * laneH + 5;
         const x = labelW + a.tick * step;
         bar.append(sv("rect", { x: x, y: y, width: step - 1, height: laneH - 10, rx: 2, fill: colors[a.subtask] }));
-        if (!a.success) bar.append(sv("text", { class: "fail-mark", x: x + step / 2 - 4, y: y + laneH / 2, text: "✘" }));
+        if (step >= 40) {
+          bar.append(sv("text", { x: x + 3, y: y + laneH / 2, "font-size": 10, fill: "#fff", "pointer-events": "none",
+            text: a.skill.replace(/Object$/, "").slice(0, Math.floor((step - (a.success ? 4 : 14)) / 6.5)) }));
+        }
+        if (!a.success) bar.append(sv("text", { class: "fail-mark", x: x + step - 12, y: y + laneH / 2 + 4, text: "✘" }));
       }
       bar.append(sv("title", { text: words }));
       chart.append(bar);
@@ -427,12 +431,14 @@
       chart.append(sv("path", { class: "cells", d: d.join("") }));
     }
     const targets = new Set(actions.map((a) => a.objectId));
+    const named = new Set();  // a type is named once: ten cabinets' labels would hide the floor
     for (const l of (floor && floor.landmarks) || []) {
       if (l.type === "Floor" || targets.has(l.id)) continue;
       const [px, py] = P(l.x, l.z);
       chart.append(sv("rect", { class: "landmark", x: px - 5, y: py - 5, width: 10, height: 10 },
-        sv("title", { text: l.type })));
-      chart.append(sv("text", { class: "landmark-label", x: px + 7, y: py + 3, text: l.type }));
+        sv("title", { text: l.id })));
+      if (!named.has(l.type)) chart.append(sv("text", { class: "landmark-label", x: px + 7, y: py + 3, text: l.type }));
+      named.add(l.type);
     }
     const seen = new Set();
     for (const a of actions) {
@@ -508,4 +514,5 @@
   header();
   window.addEventListener("hashchange", route);
   route();
+  performance.mark("viewer-drawn");  // how long the page took to draw, by its own clock (the browser tests report it)
 })();
