@@ -85,6 +85,9 @@ def test_the_task_list_filters(browser, pages):
     assert page.locator("#task-table tbody tr").evaluate_all("rows => rows.map(r => r.dataset.id)") == [
         "kitchen-inf-01"]
     page.select_option("#filter-feasible", "")
+    page.click("#tally button[data-status=error]")  # the outcomes' counts filter too
+    assert page.locator("#task-table tbody tr").evaluate_all("rows => rows.map(r => r.dataset.id)") == ["kitchen-99"]
+    page.select_option("#filter-status", "")
     page.fill("#filter-text", "apple")
     assert page.locator("#task-table tbody tr").evaluate_all("rows => rows.map(r => r.dataset.id)") == [
         "kitchen-99", "kitchen-01"]

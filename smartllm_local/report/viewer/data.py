@@ -69,7 +69,7 @@ def _benchmark_view(folder: Path) -> dict[str, Any]:
             "method": identity.get("arguments", {}).get("method") or "smartllm",
             "arguments": identity.get("arguments", {}), "versions": identity.get("versions", {}),
             "summary": summary(list(lines.values())), "missing": missing, "tasks": tasks,
-            "floors": _floors(folder, tasks), "texts": texts.table}
+            "floors": _floors(tasks), "texts": texts.table}
 
 
 def _plan_view(folder: Path) -> dict[str, Any]:
@@ -82,7 +82,7 @@ def _plan_view(folder: Path) -> dict[str, Any]:
     return {"kind": "plan", "folder": str(folder), "label": folder.name, "finished": True, "started": None,
             "model": result.get("model"), "method": "smartllm", "arguments": {}, "versions": {},
             "summary": summary([task["outcome"]]) if task["outcome"] else None, "missing": missing,
-            "tasks": [task], "floors": _floors(folder, [task]), "texts": texts.table}
+            "tasks": [task], "floors": _floors([task]), "texts": texts.table}
 
 
 def summary(lines: list[dict[str, Any]]) -> dict[str, Any]:
@@ -120,7 +120,9 @@ def _read_object(path: Path) -> dict[str, Any]:
 
 
 def _label(folder: Path) -> str:
-    return folder.name or str(folder)
+    """The folder's name; a seed's run (``DIR/seed-3``) is named with its parent's."""
+    folder = folder.resolve()
+    return f"{folder.parent.name}/{folder.name}" if folder.name.startswith("seed-") else folder.name or str(folder)
 
 
 def _catalogue(manifest: Mapping[str, Any]) -> dict[int, dict[str, Any]]:
@@ -137,7 +139,7 @@ def _catalogue(manifest: Mapping[str, Any]) -> dict[int, dict[str, Any]]:
                   "kind": r.kind} for rid, r in domain.catalogue.robots.items()}
 
 
-def _floors(folder: Path, tasks: list[dict[str, Any]]) -> dict[str, Any]:
+def _floors(tasks: list[dict[str, Any]]) -> dict[str, Any]:
     """Each floor plan's reachable cells and fixed objects, once (the tasks on it share them)."""
     floors: dict[str, Any] = {}
     for task in tasks:

@@ -201,6 +201,14 @@
     }, el("option", { value: "", text: "all" }), options.map(([value, text]) =>
       el("option", { value: value, text: text, selected: filters[name] === value ? "selected" : null }))));
     const count = el("span", { class: "count" });
+    const tally = {};
+    DATA.tasks.forEach((t) => { tally[t.status] = (tally[t.status] || 0) + 1; });
+    box.append(el("p", { class: "legend", id: "tally" }, Object.entries(tally).map(([status, n]) =>
+      el("button", { "data-status": status, title: "show only these", onclick: () => {
+        filters.status = status;
+        box.querySelector("#filter-status").value = status;
+        fill();
+      } }, pill(status), ` ${n}`))));
     box.append(el("div", { class: "filters" },
       select("category", "category", categories.map((c) => [c, c])),
       select("status", "outcome", statuses.map((s) => [s, s])),
