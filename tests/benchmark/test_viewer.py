@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 from smartllm_local.domain import load_domain
-from smartllm_local.report.viewer import load_view, render_page
+from smartllm_local.errors import UserError
+from smartllm_local.report.viewer import load_view, render_page, write_viewer
 
 from .conftest import benchmark_run
 
@@ -149,6 +150,8 @@ def test_a_plan_folder_is_a_page_of_one_task(kitchen01):
     trace = json.loads((kitchen01.out / "trace.json").read_text())
     assert task["trace"]["actions"] == trace["actions"] and task["instruction"].startswith("Put the apple")
     assert [s["name"] for s in task["stages"]] == ["decomposition", "coalition", "allocation"]
+    assert data["summary"] is None and data["missing"] == []  # its metrics are the task's own
+    assert task["outcome"]["GCR"] == json.loads((kitchen01.out / "result.json").read_text())["metrics"]["GCR"]
 
 
 def _seeds_folder(root: Path) -> Path:
@@ -164,15 +167,20 @@ def _seeds_folder(root: Path) -> Path:
     (lambda tmp: (tmp / "run.json").write_text("{not json") and tmp, "cannot read"),
     (lambda tmp: (tmp / "result.json").write_text("[1, 2]") and tmp, "is not a JSON object"),
 ])
-def test_a_folder_that_is_not_a_run_is_exit_2_and_writes_nothing(tmp_path, make, message):
+def test_a_folder_that_is_not_a_run_is_refused_and_nothing_written(tmp_path, make, message):
     folder = make(tmp_path)
     before = sorted(tmp_path.rglob("*"))
-    proc = view(folder)
-    assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr
-    assert len(proc.stderr.strip().splitlines()) == 1 and sorted(tmp_path.rglob("*")) == before
+    with pytest.raises(UserError, match=re.escape(message)):
+        write_viewer(folder)
+    assert sorted(tmp_path.rglob("*")) == before
 
 
-def test_an_out_that_is_a_folder_is_exit_2(mixed, tmp_path):
+def test_the_command_refuses_bad_input_with_exit_2_and_one_line(mixed, tmp_path):
+    proc = view(tmp_path)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().splitlines() == [f"error: {tmp_path} is not a run: it has no run.json (a benchmark "
+                                                "run) and no result.json (a plan's --out); give the --out folder of "
+                                                "a `smartllm-local benchmark run` or of a `smartllm-local plan`"]
     proc = view(mixed, "--out", tmp_path)
     assert proc.returncode == 2 and "is an existing folder" in proc.stderr
     assert list(tmp_path.iterdir()) == []
@@ -203,9 +211,7 @@ def test_an_unfinished_run_is_a_page_that_says_what_is_missing(mixed, tmp_path):
     record = json.loads((folder / "kitchen-01" / "allocation" / "record.json").read_text())
     assert pending["stages"][0]["output"] == record["output"] and pending["trace"] is None
     (folder / "results.jsonl").unlink()  # nothing scored yet: still a page, of begun tasks
-    proc = view(folder)
-    assert proc.returncode == 0, proc.stderr
-    page = _embedded((folder / "viewer.html").read_text())
+    page = _embedded(write_viewer(folder).read_text())
     assert {t["status"] for t in page["tasks"]} == {"pending"} and "0 task(s) scored" in page["missing"][0]
 
 

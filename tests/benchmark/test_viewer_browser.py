@@ -45,14 +45,14 @@ def pages(tmp_path_factory) -> dict[str, Path]:
 class Opened:
     """A page opened in a fresh tab, with every console error and uncaught exception it raised."""
 
-    def __init__(self, browser, path: Path, fragment: str = ""):
+    def __init__(self, browser, path: Path, fragment: str = "", ready: str = "#task-table tbody tr"):
         self.page = browser.new_page(viewport={"width": 1400, "height": 1000})
         self.errors: list[str] = []
         self.page.on("console", lambda m: self.errors.append(m.text) if m.type == "error" else None)
         self.page.on("pageerror", lambda e: self.errors.append(str(e)))
         started = time.perf_counter()
         self.page.goto(path.as_uri() + fragment)
-        self.page.wait_for_selector("#task-view" if fragment else "#task-table tbody tr")
+        self.page.wait_for_selector("#task-view" if fragment else ready)
         self.seconds = time.perf_counter() - started
         # from navigation to the first view drawn, by the page's own clock (no driver round trips in it)
         self.drawn = self.page.evaluate("performance.getEntriesByName('viewer-drawn')[0].startTime") / 1000
@@ -136,4 +136,15 @@ def test_the_map_draws_each_robots_path_and_the_objects_acted_on(browser, pages)
     page.locator("#timeline .bar").nth(2).locator("rect").first.click()  # an action: where the robots stood
     assert page.locator("#map-here circle.here").count() == len(trace["robots"])
     assert "tick " in page.locator("#action-detail").inner_text()
+    assert opened.errors == []
+
+
+def test_a_plans_page_opens_on_its_task(browser, kitchen01):
+    """A ``plan --execute --out`` folder (SmolLM2 on kitchen-01): one task, shown at once."""
+    trace = json.loads((kitchen01.out / "trace.json").read_text())
+    opened = Opened(browser, write_viewer(kitchen01.out, kitchen01.out.parent / "plan.html"), ready="#task-view")
+    page = opened.page
+    assert page.locator("#timeline .bar").count() == len(trace["actions"])
+    assert page.locator("#stages .stage").count() == 3 and page.locator("#conditions li").count() == len(
+        trace["conditions"])
     assert opened.errors == []

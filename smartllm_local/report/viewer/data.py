@@ -81,7 +81,7 @@ def _plan_view(folder: Path) -> dict[str, Any]:
                                         "timeline, map or goal conditions"]
     return {"kind": "plan", "folder": str(folder), "label": folder.name, "finished": True, "started": None,
             "model": result.get("model"), "method": "smartllm", "arguments": {}, "versions": {},
-            "summary": summary([task["outcome"]]) if task["outcome"] else None, "missing": missing,
+            "summary": None, "missing": missing,  # one task: its own metrics are the summary
             "tasks": [task], "floors": _floors([task]), "texts": texts.table}
 
 

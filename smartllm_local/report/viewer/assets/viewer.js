@@ -95,8 +95,9 @@
     const app = document.getElementById("app");
     app.replaceChildren();
     showOnMap = () => {};
-    if (hash.startsWith("task/")) {
-      const task = DATA.tasks.find((t) => t.id === hash.slice(5));
+    const only = DATA.kind === "plan" && !hash ? "task/" + DATA.tasks[0].id : hash;  // a plan: its one task
+    if (only.startsWith("task/")) {
+      const task = DATA.tasks.find((t) => t.id === only.slice(5));
       if (task) { app.append(taskView(task)); window.scrollTo(0, 0); return; }
     }
     app.append(runView());
