@@ -53,21 +53,26 @@ class SmartLLM:
         self.planner, self.catalogue = planner, catalogue
 
     def stages(self) -> list[Stage]:
-        if not self.planner.config.prompts.coalition:
-            return [Stage("decomposition", self.decompose), Stage("allocation", self.allocate)]
-        return [Stage("decomposition", self.decompose), Stage("coalition", self.coalition),
+        config = self.planner.config
+        goal = [Stage("goal", self.check_goals)] if config.goal_check and config.grammar else []
+        if not config.prompts.coalition:
+            return [*goal, Stage("decomposition", self.decompose), Stage("allocation", self.allocate)]
+        return [*goal, Stage("decomposition", self.decompose), Stage("coalition", self.coalition),
                 Stage("allocation", self.allocate, follows=True)]
+
+    def check_goals(self, task: Task, result: PlanResult) -> None:
+        self.planner.check_goals(result, self.planner.scene(task.floor_plan))
 
     def decompose(self, task: Task, result: PlanResult) -> None:
         self.planner.decompose(result, self.planner.scene(task.floor_plan))
 
     def coalition(self, task: Task, result: PlanResult) -> None:
-        self.planner.form_coalition(result, result.stages[0].plan, self.catalogue.team(task.robots),  # type: ignore[arg-type]
+        self.planner.form_coalition(result, result.stage("decomposition").plan, self.catalogue.team(task.robots),  # type: ignore[arg-type]
                                     self.planner.scene(task.floor_plan))
 
     def allocate(self, task: Task, result: PlanResult) -> None:
-        coalition = result.stages[1] if len(result.stages) > 1 else None
-        self.planner.allocate(result, result.stages[0].plan, coalition, self.catalogue.team(task.robots),  # type: ignore[arg-type]
+        coalition = next((r for r in result.stages if r.stage == "coalition"), None)
+        self.planner.allocate(result, result.stage("decomposition").plan, coalition, self.catalogue.team(task.robots),  # type: ignore[arg-type]
                               self.planner.scene(task.floor_plan))
 
 
@@ -86,7 +91,7 @@ class DecompositionThenRule(SmartLLM):
         started = time.perf_counter()
         team = self.catalogue.team(task.robots)
         scene = self.planner.scene(task.floor_plan)
-        decomposed = result.stages[0].plan
+        decomposed = result.stage("decomposition").plan
         pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
         choose = rule_chooser(team) if self.rule == "rule" else \
             random_chooser(team, self.planner.stage_rng(result, "allocation"))

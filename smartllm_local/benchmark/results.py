@@ -22,8 +22,8 @@ from .tasks import CATEGORIES
 
 METRICS = ("SR", "TCR", "GCR", "RU", "Exe", "Speed")
 PAPER_METRICS = METRICS[:5]
-STAGE_NAMES = ("decomposition", "coalition", "allocation")
-REFUSERS = ("model", "grammar", "rule")
+STAGE_NAMES = ("goal", "decomposition", "coalition", "allocation")
+REFUSERS = ("model", "grammar", "goal check", "rule")
 
 Line = Mapping[str, Any]
 
@@ -136,11 +136,26 @@ def summary_table(lines: Sequence[Line]) -> str:
             f"{'n/a' if m is None else f'{m:.2f}':>7}" for m in means) + f"{refused:>9}")
     counts = refusals(lines, feasible=False)
     if counts["tasks"]:
-        who = ", ".join(f"{counts[f'by {k}']} by {k}" for k in REFUSERS if counts[f"by {k}"] or k != "rule")
+        who = ", ".join(f"{counts[f'by {k}']} by {k}" for k in REFUSERS
+                        if counts[f"by {k}"] or k in ("model", "grammar"))
         rows.append(f"{'infeasible':<14}{counts['tasks']:>6}{counts['errors']:>7}"
                     f"   correctly refused {counts['refused']}/{counts['tasks']} ({who})")
     bent = bending_line(lines)
-    return "\n".join(rows + ([bent] if bent else []))
+    ceiling = candidates_line(lines)
+    return "\n".join(rows + ([bent] if bent else []) + ([ceiling] if ceiling else []))
+
+
+def candidates_line(lines: Sequence[Line]) -> str:
+    """Over the feasible tasks that wrote several candidates: how many any candidate's dry run meets the task's
+    goals in (pass@N, the ceiling of choosing), and how many the chosen one's does ("" where none did)."""
+    ran = [line for line in lines if line["feasible"] and line.get("candidates")]
+    if not ran:
+        return ""
+    n = max(len(line["candidates"]) for line in ran)
+    chosen = sum(any(c["chosen"] and c["meets_task_goals"] for c in line["candidates"]) for line in ran)
+    passed = sum(bool(line.get("pass_at_n")) for line in ran)
+    return (f"candidates (dry runs meeting the task's goals, measured only): pass@{n} {passed}/{len(ran)}, "
+            f"chosen {chosen}/{len(ran)}")
 
 
 def variability_table(runs: Sequence[Sequence[Line]]) -> str:

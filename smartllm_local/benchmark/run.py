@@ -29,6 +29,7 @@ from ..planner.prompting.scene_context import scene_objects, site_objects
 from ..robots import Catalogue
 from ..scoring import Goal, Scores, score_execution
 from ..world.controller import open_controller
+from .candidates import candidate_measures
 from .methods import Method, SmartLLM, Stage
 from .reference_plans import reference_ticks
 from .results import metric_mean, summary_table
@@ -240,6 +241,8 @@ def _execute_all(outcomes: list[TaskOutcome], catalogue: Catalogue, site: Domain
             started = time.perf_counter()
             if outcome.task.feasible and result.plan is not None and not outcome.error:
                 controller = _execute(outcome, catalogue, site, build, controller)
+            scene = site_objects(site) if site is not None else scene_objects(outcome.task.floor_plan)
+            outcome.extra.update(candidate_measures(result, outcome.task, catalogue.skills, scene))
             outcome.seconds = time.perf_counter() - started + sum(r.seconds for r in result.stages)
             if out is not None:
                 write_artifacts(result, out / outcome.task.id, {"outcome": outcome.as_json()})

@@ -26,10 +26,12 @@ from ..planner.backends import (
     trained_context,
 )
 from ..planner.backends.prefix_cache import open_store
+from ..planner.candidates import CANDIDATE_TEMPERATURE, Candidates
 from ..planner.models import DEFAULT_MODEL, EMBEDDED, WITHOUT_SUMMARY, default_model, summary_for
 from ..planner.pipeline import Planner, PlannerConfig
 from ..planner.prompting.chat import CHAT_TEMPLATE_MODES, mode_for
 from ..planner.prompting.prompts import PromptOptions
+from ..planner.verifier import SELECTORS
 
 DOMAIN_HELP = "The domain: household (the default), patrol, or a domain folder (see `smartllm-local domain`)."
 CATALOGUE_HELP = "A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."
@@ -37,6 +39,9 @@ THOR_BUILD_HELP = "A Unity AI2-THOR executable to run in (default: $SMARTLLM_THO
 MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transformers), or an embedded model: "
               f"{', '.join(EMBEDDED)} (default: {DEFAULT_MODEL}, or what SMARTLLM_MODEL names).")
 
+#: The candidates a stage writes, and whether the goal stage runs first, unless the user says (chosen on the
+#: development half: docs/measurements.md).
+DEFAULT_CANDIDATES, DEFAULT_GOAL_CHECK = 1, True
 MAX_SEED = 2**32 - 1  # llama.cpp takes an unsigned 32-bit seed
 DEFAULT_N_CTX = 8192  # or less, where the model was trained on less (the backends fit it within that)
 
@@ -50,13 +55,21 @@ class ModelOptions:
                  no_grammar: bool = False, free_teams: bool = False, chat_template: str = "auto",
                  free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None,
                  endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None,
-                 no_loop_guard: bool = False, no_token_alignment: bool = False):
+                 no_loop_guard: bool = False, no_token_alignment: bool = False,
+                 candidates: int = DEFAULT_CANDIDATES, candidate_temperature: float = CANDIDATE_TEMPERATURE,
+                 select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
             raise UserError(f"--temperature must be a number, 0 (greedy) or more, not {temperature}")
         if not 0 <= seed <= MAX_SEED:
             raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
+        if candidates < 1:
+            raise UserError(f"--candidates must be 1 or more, not {candidates}")
+        if not math.isfinite(candidate_temperature) or candidate_temperature <= 0:
+            raise UserError(f"--candidate-temperature must be a number above 0, not {candidate_temperature}")
+        if select not in SELECTORS:
+            raise UserError(f"--select must be one of {', '.join(SELECTORS)}, not {select!r}")
         if n_ctx is not None and n_ctx < 512:
             raise UserError(f"--n-ctx must be at least 512 tokens, not {n_ctx}")
         if threads is not None and threads < 1:
@@ -90,6 +103,8 @@ class ModelOptions:
             chat_template=chat_template,
             restate=not free_allocation,
             world_check=not no_world_check,
+            candidates=Candidates(candidates, candidate_temperature, select),
+            goal_check=goal_check,
         )
         self.seed = seed
 
@@ -177,6 +192,20 @@ _WORKERS = typer.Option(1, "--workers", help=(
     "(llama-server -np N has N; vLLM batches them all). Through a server, plans can differ with it: see "
     "docs/servers-and-gpus.md."))
 
+_CANDIDATES = typer.Option(DEFAULT_CANDIDATES, "--candidates", envvar="SMARTLLM_CANDIDATES", help=(
+    "Write the decomposition this many times (the first as --temperature says, greedy by default; the others "
+    "sampled at --candidate-temperature) and keep the one --select chooses; 1 writes one, as before "
+    "(see docs/planner.md, \"Candidates\")."))
+_CANDIDATE_TEMPERATURE = typer.Option(CANDIDATE_TEMPERATURE, "--candidate-temperature", help=(
+    "The sampling temperature of the second and later candidates."))
+_SELECT = typer.Option("verifier", "--select", help=(
+    "How a candidate is chosen: verifier (each dry-run in the world and checked against the goals the model "
+    "stated) or likelihood (the model's mean log-probability alone)."))
+_GOAL_CHECK = typer.Option(DEFAULT_GOAL_CHECK, "--goal-check/--no-goal-check", envvar="SMARTLLM_GOAL_CHECK", help=(
+    "State the task's goals first (the goal stage) and refuse a task whose stated goals the team cannot meet "
+    "(a state no robot's skill gives, a load too heavy for every lifter); the verifier checks candidates "
+    "against them. With the grammar only."))
+
 #: Every model option: its parameter name, type and typer option, in the order --help lists them.
 MODEL_PARAMETERS = [
     inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=option, annotation=kind)
@@ -190,7 +219,9 @@ MODEL_PARAMETERS = [
         ("no_world_check", bool, _NO_WORLD_CHECK), ("no_loop_guard", bool, _NO_LOOP_GUARD),
         ("no_token_alignment", bool, _NO_TOKEN_ALIGNMENT), ("prefix_cache", str | None, _PREFIX_CACHE),
         ("endpoint", str | None, _ENDPOINT), ("workers", int, _WORKERS),
-        ("server_timeout", float | None, _SERVER_TIMEOUT),
+        ("server_timeout", float | None, _SERVER_TIMEOUT), ("candidates", int, _CANDIDATES),
+        ("candidate_temperature", float, _CANDIDATE_TEMPERATURE), ("select", str, _SELECT),
+        ("goal_check", bool, _GOAL_CHECK),
     )
 ]
 

@@ -19,7 +19,7 @@ from ..executor import Execution
 from ..executor.dispatch import Dispatch, dispatch_plan, load_dispatch
 from ..files import check_output_folder
 from ..planner.backends import Backend
-from ..planner.goal_stage import StatedGoals
+from ..planner.goal_stage import StatedGoals, restated_goals
 from ..planner.models import default_model
 from ..planner.pipeline import Planner, PlanResult, write_artifacts
 from ..planner.prompting.goal_prompt import load_goal_examples
@@ -75,7 +75,7 @@ def plan_command(
     dom = load_domain(domain, catalogue=catalogue)
     cat = dom.catalogue
     refuse_household_options(dom, floor_plan, thor_build)
-    if goals:
+    if goals or options.config.goal_check:
         load_goal_examples(dom.prompts_dir())  # a domain without them fails before the model loads
     instruction, scene, team_ids, chosen = _what_to_plan(dom, instruction, floor_plan, robots, tasks, task)
     team = cat.team(team_ids)
@@ -85,8 +85,6 @@ def plan_command(
         check_build(thor_build)
     functions = _dispatch_functions(dispatch, cat, team)
     planner, result, stated = _plan(options, dom, instruction, scene, team_ids, quiet=quiet, goals=goals)
-    if stated is not None:
-        result.stages.append(stated.record)  # written to --out as the other stages are
     for notice in result.notices:
         print(f"notice: {notice}", file=sys.stderr)
     planned = result.plan is not None and not result.error
@@ -132,7 +130,13 @@ def _plan(options: ModelOptions, dom: Domain, instruction: str, scene: str, team
         try:
             planner.progress, progress.kept = progress, examples_kept(planner.backend)
             result = planner.plan(instruction, scene, team_ids)
-            return planner, result, planner.goals(instruction, scene) if goals else None
+            stated = None
+            if goals:  # the goal check's statement where it ran; else the goal stage now, written to --out too
+                ran = next((r for r in result.stages if r.stage == "goal"), None)
+                stated = restated_goals(ran, planner.scene(scene)) if ran else planner.goals(instruction, scene)
+                if ran is None:
+                    result.stages.append(stated.record)
+            return planner, result, stated
         finally:
             planner.backend.close()
 

@@ -9,21 +9,29 @@ does not run it.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..domain import load_domain
+from ..domain import Domain, load_domain
 from ..errors import PlanError
+from ..executor import reach, site
 from ..goal_language import GoalStatement, parse_goal_statement
-from ..scoring import STATES
+from ..robots import Robot
+from ..scoring import STATES, Condition
+from ..skills import SkillSet
+from ..world.scenes import load_scene
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
+from .prompting.scene_context import SceneObjects
 from .stages import StageRecord, fit_prompt, run_stage
 
 if TYPE_CHECKING:
-    from .pipeline import Planner
+    from .pipeline import Planner, PlanResult
 
 STAGE = "goal"
+#: Who refused a task whose stated goals its team cannot meet.
+GOAL_CHECK = "goal check"
 GOAL_BUDGET = 384  # tokens: MAX_GOALS of the longest conditions (some 40 characters) fit
 
 
@@ -62,8 +70,9 @@ def goal_examples(planner: Planner) -> list[GoalExample]:
     return load_goal_examples(folder)
 
 
-def state_goals(planner: Planner, instruction: str, floor_plan: str | int) -> StatedGoals:
-    """Run the goal stage for one instruction in one scene."""
+def state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, refusals: bool = True) -> StatedGoals:
+    """Run the goal stage for one instruction in one scene; without ``refusals`` the model must state goals
+    (the grammar offers no refusal unless the scene gives it nothing to state)."""
     scene = planner.scene(floor_plan)
     vocabulary = goal_vocabulary(scene)
     # The states the prompt names are the domain's, the same for every scene (the examples stay a shared prefix).
@@ -72,7 +81,7 @@ def state_goals(planner: Planner, instruction: str, floor_plan: str | int) -> St
     record = StageRecord(STAGE, chat_template=planner.chat_status)
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex, states), examples, planner.backend,
                         GOAL_BUDGET, planner.chat)
-    constraint = GoalConstraint(vocabulary) if planner.config.grammar else None
+    constraint = GoalConstraint(vocabulary, allow_refusal=refusals) if planner.config.grammar else None
     from .pipeline import PlanResult  # the pipeline's module imports this one
 
     # No team: the goal is what the instruction asks, whoever reaches it.
@@ -92,3 +101,33 @@ def state_goals(planner: Planner, instruction: str, floor_plan: str | int) -> St
         record.refusal = statement.refusal
         record.refused_by = record.refused_by or "model"
     return StatedGoals(record, statement)
+
+
+def restated_goals(record: StageRecord, scene: SceneObjects) -> StatedGoals:
+    """The statement a goal stage's ``record`` holds (none where it wrote none)."""
+    try:
+        return StatedGoals(record, parse_goal_statement(record.output, types=goal_vocabulary(scene).types))
+    except PlanError:
+        return StatedGoals(record, None)
+
+
+def stated_conditions(result: PlanResult, scene: SceneObjects, record: StageRecord | None = None) -> list[Condition]:
+    """The conditions the goal stage stated for a task (its ``record``, or the one in ``result``); none where it
+    did not run, refused or wrote no statement."""
+    record = record or next((r for r in result.stages if r.stage == STAGE), None)
+    if record is None or record.error or not record.output.strip():
+        return []
+    try:
+        statement = parse_goal_statement(record.output, types=goal_vocabulary(scene).types)
+    except PlanError:
+        return []
+    return statement.conditions if statement.refusal is None else []
+
+
+def unattainable_for(domain: Domain | None, statement: GoalStatement | None, conditions: Sequence[Condition],
+                     team: Sequence[Robot], skills: SkillSet, scene: SceneObjects) -> list[str]:
+    """The stated conditions no plan of ``team`` can meet, each with why: on a site domain's site, or in the
+    AI2-THOR scene from its initial state."""
+    if domain is not None:
+        return site.unattainable(domain, statement.goals, team) if statement is not None else []
+    return reach.unattainable(conditions, team, skills, load_scene(scene.floor_plan))

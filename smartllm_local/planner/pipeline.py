@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import re
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,6 +27,7 @@ from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
 from ..skills import SkillSet
 from .backends.base import Backend, Sampling
+from .candidates import Candidates, mean_logprob, write_all
 from .constraints.coalition import LINE as COALITION_LINE
 from .constraints.coalition import CoalitionConstraint
 from .constraints.feasibility import function_needs
@@ -33,7 +36,7 @@ from .constraints.plan import PlanConstraint
 from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
-from .goal_stage import StatedGoals, state_goals
+from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions, unattainable_for
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -49,6 +52,7 @@ from .prompting.prompts import (
 )
 from .prompting.scene_context import SceneObjects, scene_objects, site_objects
 from .stages import Fitted, StageRecord, check_output, fit_prompt, run_stage
+from .verifier import check_decomposition, choose, score
 
 DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 896, "allocation": 1280}
 #: Room for a task's own part of the coalition prompt (its plan, team and objects: 325-630 tokens on average, measured).
@@ -74,7 +78,9 @@ class PlannerConfig:
     rewrites the plan freely. ``world_check``: offer only steps that succeed in the scene from the
     state the steps so far produce (decomposition, and a restated allocation). ``chat_template``:
     "auto" gives an instruct model each prompt as a user turn of its own chat template; "none"
-    gives raw text."""
+    gives raw text. ``candidates``: how many decompositions to write and how to choose one; ``goal_check``:
+    state the goals first (the goal stage), refuse a task whose stated goals the team cannot meet, and give the
+    verifier the goals to check candidates against (with the grammar only)."""
 
     sampling: Sampling = Sampling()
     grammar: bool = True
@@ -84,6 +90,8 @@ class PlannerConfig:
     chat_template: str = "auto"
     restate: bool = True
     world_check: bool = True
+    candidates: Candidates = Candidates()
+    goal_check: bool = False
 
 
 @dataclass
@@ -98,6 +106,13 @@ class PlanResult:
     plan: Plan | None = None
     refusal: str | None = None
     error: str = ""
+
+    def stage(self, name: str) -> StageRecord:
+        """The record of the stage ``name`` (a KeyError where it has not run)."""
+        found = next((r for r in self.stages if r.stage == name), None)
+        if found is None:
+            raise KeyError(f"the stage {name!r} has not run for this task")
+        return found
 
     @property
     def refused_by(self) -> str | None:
@@ -156,30 +171,75 @@ class Planner:
 
     def decompose(self, result: PlanResult, scene: SceneObjects) -> StageRecord:
         """The decomposed plan, written for the task's team: its prompt and its grammar offer the team's
-        skills, and only the calls the team can make (a step for several robots together included)."""
-        opts = self.config.prompts
-        record = StageRecord("decomposition", chat_template=self.chat_status)
-        budget = self.config.budgets["decomposition"]
-        skills = self.catalogue.skills
+        skills, and only the calls the team can make (a step for several robots together included). With
+        several candidates, the one the verifier (or the likelihood) chooses, the others in its record."""
         team = self.catalogue.team(result.robots)
         prompt = self.decomposition_prompt(result.instruction, scene, team)
+        count = self.config.candidates.count
+        if count == 1:
+            record = self._decomposition(result, scene, team, prompt, self.backend, 0, self.progress)
+        else:
+            started = time.perf_counter()
+            records = write_all(self.backend, count, lambda lane, k: self._decomposition(
+                result, scene, team, prompt, lane, k, self.progress if k == 0 else SILENT))
+            record = self._choose(result, scene, records)  # type: ignore[arg-type]
+            record.seconds = time.perf_counter() - started
+        result.stages.append(record)
+        self._finish_plan_stage(record, result, form="decomposed", scene=scene, parsed=record.plan)
+        return record
+
+    def _decomposition(self, result: PlanResult, scene: SceneObjects, team: Sequence[Robot], prompt: Fitted,
+                       backend: Backend, k: int, progress: StageProgress) -> StageRecord:
+        """Candidate ``k`` of the decomposition, written on ``backend`` (the planner's, or a lane of it)."""
+        opts = self.config.prompts
+        record = StageRecord("decomposition", chat_template=self.chat_status)
+        skills = self.catalogue.skills
         world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site) if self.config.world_check else None
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
                                     for_team=team) if self.config.grammar else None
-        run_stage(record, self.backend, prompt, constraint, output_budget=budget,
-                  sampling=self.config.sampling, rng=self.stage_rng(result, record.stage), progress=self.progress)
-        self._finish_plan_stage(record, result, form="decomposed", scene=scene)
+        rng = self.stage_rng(result, record.stage if k == 0 else f"{record.stage} candidate {k}")
+        run_stage(record, backend, prompt, constraint, output_budget=self.config.budgets["decomposition"],
+                  sampling=self.config.candidates.sampling(self.config.sampling, k), rng=rng, progress=progress)
+        self._finish_plan_stage(record, PlanResult(result.instruction, result.floor_plan, result.robots),
+                                form="decomposed", scene=scene)
         if record.refusal is not None and constraint is not None and constraint.must_refuse:
             record.refused_by = "grammar"  # the team can make no call in this scene
-        result.stages.append(record)
         return record
+
+    def _choose(self, result: PlanResult, scene: SceneObjects, records: Sequence[StageRecord]) -> StageRecord:
+        """The candidate with the best score, its record carrying every candidate's text, check and score. A
+        refusal or a broken plan scores below every plan."""
+        settings = self.config.candidates
+        conditions = stated_conditions(result, scene)
+        summaries, scores = [], []
+        for k, record in enumerate(records):
+            mean = mean_logprob(record.logprob, record.choices)
+            check = None
+            if isinstance(record.plan, Plan) and not record.plan.is_refusal:
+                check = check_decomposition(record.plan, scene, self.catalogue.skills, conditions,
+                                            idle=settings.select == "verifier")
+            value = -math.inf if check is None else mean if settings.select == "likelihood" else \
+                score(check, mean, settings.weights)
+            scores.append(value)
+            sampling = settings.sampling(self.config.sampling, k)
+            summaries.append({"candidate": k, "temperature": sampling.temperature, "seed": sampling.seed,
+                              "output": record.output, "refusal": record.refusal, "error": record.error or None,
+                              "generated_tokens": record.generated_tokens, "seconds": round(record.seconds, 3),
+                              "mean_logprob": round(mean, 4), "check": check.as_dict() if check else None,
+                              "score": None if math.isinf(value) else round(value, 4)})
+        best = choose(scores)
+        chosen = records[best]
+        for k, summary in enumerate(summaries):
+            summary["chosen"] = k == best
+        chosen.candidates = summaries
+        return chosen
 
     def form_coalition(self, result: PlanResult, decomposed: Plan, team: Sequence[Robot],
                        scene: SceneObjects) -> StageRecord:
         """The coalition, in a context that leaves room for the allocation to go on in it."""
         opts = self.config.prompts
         record = StageRecord("coalition", chat_template=self.chat_status)
-        decomposition = result.stages[0].output
+        decomposition = result.stage("decomposition").output
         examples = examples_for("coalition", self.examples, opts)
         floor = self.config.budgets["coalition"]
         shared = self._shares_context(scene)
@@ -220,7 +280,7 @@ class Planner:
         if coalition is not None and self._shares_context(scene):
             prompt = self._after_coalition(result, coalition, team, scene, budget)
         else:
-            decomposition, opts = result.stages[0].output, self.config.prompts
+            decomposition, opts = result.stage("decomposition").output, self.config.prompts
             text = coalition.output if coalition is not None else None
             prompt = fit_prompt(lambda ex: allocation_prompt(decomposition, text, team, self.catalogue.skills,
                                                              self.catalogue.robots, ex, opts),
@@ -234,7 +294,7 @@ class Planner:
     def _allocation_setup(self, result: PlanResult, decomposed: Plan, team: Sequence[Robot],
                           scene: SceneObjects) -> tuple[Constraint | None, int]:
         """The allocation's constraint and output budget (which the coalition keeps room for)."""
-        decomposition = result.stages[0].output
+        decomposition = result.stage("decomposition").output
         skills = self.catalogue.skills
         names = [f.name for f in decomposed.functions]
         constraint: Constraint | None = None
@@ -254,8 +314,8 @@ class Planner:
             return constraint, constraint.maximum_output()
         # never below what the shortest complete allocation needs
         minimum = constraint.minimum_budget() if isinstance(constraint, PlanConstraint) else 0
-        return constraint, max(allocation_budget(result.stages[0], len(names), self.config.budgets["allocation"]),
-                               minimum)
+        written = allocation_budget(result.stage("decomposition"), len(names), self.config.budgets["allocation"])
+        return constraint, max(written, minimum)
 
     def _coalition_prompt(self, decomposition: str, team: Sequence[Robot], scene: SceneObjects,
                           examples: Sequence[Example], shared: bool = True) -> Prompt:
@@ -287,7 +347,7 @@ class Planner:
                 if e.name in coalition.examples]
         dropped = [e for e in self.examples if e.name in coalition.dropped]
         text, tokens, prefixes = prompt_tokens(
-            self.backend, self._coalition_prompt(result.stages[0].output, team, scene, kept), self.chat)
+            self.backend, self._coalition_prompt(result.stage("decomposition").output, team, scene, kept), self.chat)
         live = coalition.context[:len(tokens)] == tokens
         written = coalition.context[len(tokens):] if live else self.backend.tokenize_continuation(coalition.output)
         context = tokens + written + self.backend.tokenize_continuation(ALLOCATION_GLUE)
@@ -298,8 +358,8 @@ class Planner:
         return Fitted(text + coalition.output + ALLOCATION_GLUE, context, prefixes, kept, dropped, continues=live)
 
     def _finish_plan_stage(self, record: StageRecord, result: PlanResult, *, form: str, scene: SceneObjects,
-                           team_size: int | None = None) -> None:
-        plan = check_output(record, lambda text: parse_plan(
+                           team_size: int | None = None, parsed: object = None) -> None:
+        plan = parsed if parsed is not None else check_output(record, lambda text: parse_plan(
             text, form=form, skills=self.catalogue.skills, team_size=team_size, scene_types=scene.types,  # type: ignore[arg-type]
             name=f"<{record.stage} output>"))
         if isinstance(plan, Plan) and plan.is_refusal:
@@ -309,6 +369,24 @@ class Planner:
         if record.error:
             result.error = record.error
         record.plan = plan
+
+    def check_goals(self, result: PlanResult, scene: SceneObjects) -> StageRecord:
+        """The goal stage for a task, and the check of what it stated against the team: a stated condition no
+        plan of this team can meet (a state no robot's skill gives, a closed fridge nobody can open, a load too
+        heavy for every lifter together) refuses the task, with that reason. The model may not refuse here (it
+        refused feasible tasks for untrue reasons, measured): a task is refused for what the world shows."""
+        stated = state_goals(self, result.instruction, scene.floor_plan, refusals=False)
+        record = stated.record
+        conditions = stated_conditions(result, scene, record)
+        team = self.catalogue.team(result.robots)
+        problems = unattainable_for(self.site, stated.statement, conditions, team, self.catalogue.skills,
+                                    scene) if conditions else []
+        if problems:
+            record.refusal, record.refused_by = "; ".join(problems), GOAL_CHECK
+        if record.refusal is not None:
+            result.refusal = record.refusal
+        result.stages.append(record)
+        return record
 
     def goals(self, instruction: str, floor_plan: str | int) -> StatedGoals:
         """The goal stage, on demand: what must hold when the task is done, stated from the instruction and the
@@ -322,8 +400,10 @@ class Planner:
         team = self.catalogue.team(robot_ids)
         scene = self.scene(floor_plan)
         result = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=list(robot_ids))
-        first = self.decompose(result, scene)
-        if self.continue_after(result, first):
+        if self.config.goal_check and self.config.grammar:
+            self.check_goals(result, scene)
+        first = self.decompose(result, scene) if result.refusal is None else None
+        if first is not None and self.continue_after(result, first):
             decomposed = first.plan
             coalition = self.form_coalition(result, decomposed, team, scene) if self.config.prompts.coalition else None
             if result.refusal is None and not result.error:
@@ -348,7 +428,7 @@ class Planner:
             result.plan = last.plan  # type: ignore[assignment]
 
 
-STAGE_FILES = ("prompt.txt", "grammar.gbnf", "raw_output.txt", "timings.json")
+STAGE_FILES = ("prompt.txt", "grammar.gbnf", "raw_output.txt", "timings.json", "candidates.json")
 STAGE_OUTPUTS = {"decomposition": "decomposed.py", "coalition": "coalition.txt", "allocation": "allocated.py",
                  "goal": "goals.txt"}
 
@@ -376,6 +456,8 @@ def write_artifacts(result: PlanResult, out: Path, extra: dict | None = None) ->
                 for k, g in enumerate(record.grammars)))
         write(folder / "raw_output.txt", record.raw)
         write(folder / "timings.json", json_text(record.timings()))
+        if record.candidates:
+            write(folder / "candidates.json", json_text(record.candidates))
         write(out / STAGE_OUTPUTS[record.stage], record.output)
     summary = {
         "instruction": result.instruction, "floor_plan": result.floor_plan, "robots": result.robots,
@@ -412,7 +494,7 @@ def restore_stage(result: PlanResult, record: StageRecord, skills: SkillSet, sce
     Raises:
         PlanError: the saved output is not the plan it claims to be (the record is not to be trusted).
     """
-    if record.stage != "coalition" and not record.error:
+    if record.stage in ("decomposition", "allocation") and not record.error:
         form = "decomposed" if record.stage == "decomposition" else "allocated"
         record.plan = parse_plan(record.output, form=form, skills=skills,  # type: ignore[arg-type]
                                  team_size=team_size if form == "allocated" else None,
@@ -421,6 +503,6 @@ def restore_stage(result: PlanResult, record: StageRecord, skills: SkillSet, sce
             raise PlanError(f"the saved {record.stage} output and its record disagree on refusing")
     if record.refusal is not None:
         result.refusal = record.refusal
-    if record.error and record.stage != "coalition":
+    if record.error and record.stage in ("decomposition", "allocation"):
         result.error = record.error
     result.stages.append(record)

@@ -71,6 +71,7 @@ class StageRecord:
     plan: object = None  # the parsed plan of a plan stage
     context: list[int] = field(default_factory=list)  # the tokens the stage ended with, for the next to go on from
     chat_template: str = ""  # "applied", "none (base model)" or "off" (--chat-template none)
+    candidates: list[dict[str, Any]] = field(default_factory=list)  # each candidate written, its check and score
 
     def saved(self) -> dict[str, Any]:
         """Everything but the parsed plan (parsed again when a run resumes) and the tokens (not kept)."""
