@@ -91,6 +91,7 @@ def _stages(folder: Path, texts: Texts) -> list[dict[str, Any]]:
             "raw": _text(where / "raw_output.txt") or record.get("raw", ""),
             "refusal": record.get("refusal"), "error": record.get("error", ""),
             "timings": timings,
+            "candidates": _json(where / "candidates.json") or record.get("candidates") or [],
         })
     return stages
 
@@ -140,6 +141,10 @@ def why(task: Mapping[str, Any]) -> list[str]:
                            "plan does not do what the goals need (see its stages)")
     if trace.get("truncated"):
         reasons.append("the run was cut at the executor's tick limit")
+    better = [c["candidate"] for c in outcome.get("candidates") or [] if c.get("meets_task_goals") and not c["chosen"]]
+    if better and unmet:
+        reasons.append(f"candidate(s) {', '.join(map(str, better))} of the decomposition would have met the task's "
+                       "goals in the dry run, but another was chosen")
     if outcome.get("RU") is not None and outcome["RU"] < 1 and outcome.get("TCR") == 1:
         reasons.append(f"every goal met, but with {outcome.get('transitions')} transition(s): RU "
                        f"{outcome['RU']:.2f}, so SR 0")

@@ -326,6 +326,7 @@
       if (stage.refusal) part.append(el("p", { class: "why", text: "refused: " + stage.refusal }));
       if (stage.error) part.append(el("p", { class: "why", text: "error: " + stage.error }));
       part.append(codeBlock(stage.output, stage.name !== "coalition"));
+      if ((stage.candidates || []).length) part.append(candidatesView(stage.candidates, task.outcome || {}));
       const fold = (label, text) => text ? el("details", {}, el("summary", { text: label }),
         el("pre", { text: text })) : null;
       append(part, [fold("prompt", TEXTS[stage.prompt]), fold("grammar", TEXTS[stage.grammar]),
@@ -333,6 +334,31 @@
       box.append(part);
     }
     return box;
+  }
+
+  // The decompositions written when the planner keeps several: each one's check (the stated goals its dry run
+  // meets, its failed calls), its score, and whether it meets the task's own goals (measured after the run).
+  function candidatesView(candidates, outcome) {
+    const measured = Object.fromEntries((outcome.candidates || []).map((c) => [c.candidate, c.meets_task_goals]));
+    const yesNo = (v) => v === true ? "yes" : v === false ? "no" : "—";
+    return el("details", { class: "candidates", open: "open" }, el("summary", { text: `${candidates.length} ` +
+      `candidates (the chosen one is above)` + (outcome.pass_at_n != null ? `; any meets the task's goals: ` +
+      yesNo(outcome.pass_at_n) : "") }),
+    el("table", {}, el("thead", {}, el("tr", {}, ["#", "chosen", "temperature", "stated goals met", "failed calls",
+      "idle sub-tasks", "mean log-prob", "score", "meets the task's goals", "output"].map((h) => el("th", { text: h })))),
+    el("tbody", {}, candidates.map((c) => {
+      const check = c.check || {};
+      return el("tr", { "data-candidate": c.candidate, class: c.chosen ? "chosen" : null },
+        el("td", { class: "num", text: c.candidate }), el("td", { text: c.chosen ? "✔" : "" }),
+        el("td", { class: "num", text: num(c.temperature) }),
+        el("td", { class: "num", text: c.check ? `${check.met}/${check.goals}` : "—" }),
+        el("td", { class: "num", text: c.check ? `${check.failed}/${check.calls}` : "—" }),
+        el("td", { class: "num", text: c.check ? check.idle : "—" }),
+        el("td", { class: "num", text: num(c.mean_logprob, 3) }), el("td", { class: "num", text: num(c.score, 3) }),
+        el("td", { text: yesNo(measured[c.candidate]) }),
+        el("td", {}, el("details", {}, el("summary", { text: c.refusal ? "refused" : c.error ? "error" : "plan" }),
+          codeBlock(c.output || c.refusal || c.error || "", true))));
+    }))));
   }
 
   // ------------------------------------------------------------------ timeline
