@@ -91,14 +91,25 @@
   // ------------------------------------------------------------------ routing
 
   function route() {
-    const hash = decodeURIComponent(location.hash.slice(1));
     const app = document.getElementById("app");
     app.replaceChildren();
     showOnMap = () => {};
+    try {
+      draw(app);
+    } catch (error) {  // a view that cannot be drawn says so rather than leave the page blank
+      console.error(error);
+      app.append(el("div", { class: "why" }, el("p", { text: "This view could not be drawn (" + error + "). " +
+        "Everything the page knows is in its run-data script, as JSON; the run folder holds the same files." })));
+    }
+  }
+
+  function draw(app) {
+    const hash = decodeURIComponent(location.hash.slice(1));
     const only = DATA.kind === "plan" && !hash ? "task/" + DATA.tasks[0].id : hash;  // a plan: its one task
     if (only.startsWith("task/")) {
       const task = DATA.tasks.find((t) => t.id === only.slice(5));
       if (task) { app.append(taskView(task)); window.scrollTo(0, 0); return; }
+      app.append(el("p", { class: "banner", text: `This run has no task ${only.slice(5)}: its tasks are below.` }));
     }
     app.append(runView());
   }
