@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import webbrowser
 from pathlib import Path
 
@@ -22,5 +23,5 @@ def view(
 
     written = write_viewer(run, out)
     typer.echo(str(written))
-    if open_page:
-        webbrowser.open(written.resolve().as_uri())
+    if open_page and not webbrowser.open(written.resolve().as_uri()):
+        print("notice: no browser to open it with here; open the file above in one", file=sys.stderr)
