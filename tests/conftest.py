@@ -15,6 +15,10 @@ os.environ.setdefault("SMARTLLM_CACHE_DIR", os.path.join(os.path.dirname(__file_
 # Where a test names no model it plans with the tiny SmolLM2 (the default model plans, at four times the cost);
 # the tests of the default itself clear this.
 os.environ["SMARTLLM_MODEL"] = "smollm2"
+# ... one candidate and no goal stage before the plan (the CLI's defaults for a model that can plan; the tests of
+# candidates and of the goal check name them).
+os.environ["SMARTLLM_CANDIDATES"] = "1"
+os.environ["SMARTLLM_GOAL_CHECK"] = "false"
 
 
 @pytest.fixture(scope="session")
