@@ -69,7 +69,7 @@ def _check_against_files(folder: Path, data: dict) -> None:
             known = DOMAIN.catalogue.robots[robot["id"]]
             assert (robot["name"], set(robot["skills"]), robot["mass"]) == (known.name, known.skills,
                                                                              known.mass_capacity)
-        assert [s["name"] for s in task["stages"]] == [s for s in ("decomposition", "coalition", "allocation")
+        assert [s["name"] for s in task["stages"]] == [s for s in ("goal", "decomposition", "coalition", "allocation")
                                                        if (where / s).is_dir()]
         for stage in task["stages"]:
             written = (where / stage["name"] / "prompt.txt").read_text()  # empty for a method without a model

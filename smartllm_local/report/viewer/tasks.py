@@ -10,7 +10,7 @@ from typing import Any
 from ...benchmark.trace_file import TRACE
 from ...planner.pipeline import STAGE_OUTPUTS
 
-STAGE_ORDER = ("decomposition", "coalition", "allocation", "goal")
+STAGE_ORDER = ("goal", "decomposition", "coalition", "allocation")  # the goal check states the goals first
 
 
 class Texts:
