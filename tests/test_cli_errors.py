@@ -132,6 +132,7 @@ def test_a_task_whose_instruction_has_no_words_is_refused_before_any_work(tmp_pa
     (["bench", "--benchmark-out", " "], "--benchmark-out"),
     (["execute", "plan.py", "--task", "kitchen-01", "--trace", ""], "--trace"),
     (["dispatch", "plan.py", "lab.toml", "--robots", "1", "--trace", ""], "--trace"),
+    (["view", "run", "--out", ""], "--out"),
 ])
 def test_an_empty_path_to_write_is_refused_not_taken_for_the_working_folder(tmp_path, args, option):
     one_line_error(cli(*args, cwd=tmp_path), f"Invalid value for '{option}': an empty path: give a file or "

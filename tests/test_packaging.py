@@ -1,5 +1,5 @@
-"""The wheel carries the domains (household's and patrol's files, the starter) and both console scripts, and its
-default install what a first plan needs: the default model, not the tests' tiny model."""
+"""The wheel carries the domains (household's and patrol's files, the starter), the run viewer's page and both
+console scripts, and its default install what a first plan needs: the default model, not the tests' tiny model."""
 
 from __future__ import annotations
 
@@ -26,7 +26,9 @@ def test_the_wheel_holds_the_domains(tmp_path):
                      "smartllm_local/_data/domains/_starter/domain.toml",
                      "smartllm_local/_data/domains/_starter/benchmark/tasks.jsonl",
                      "smartllm_local/_data/domains/_starter/prompts/examples.json",
-                     "smartllm_local/world/thor_server.py"):
+                     "smartllm_local/world/thor_server.py",
+                     # the run viewer's page, script and style: `smartllm-local view` inlines them
+                     *(f"smartllm_local/report/viewer/assets/viewer.{ext}" for ext in ("html", "js", "css"))):
         assert required in names, required
     entry_points = next(n for n in names if n.endswith("entry_points.txt"))
     text = zipfile.ZipFile(wheel).read(entry_points).decode()

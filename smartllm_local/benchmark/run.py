@@ -22,7 +22,7 @@ from typing import Any
 
 from ..domain import Domain
 from ..errors import SmartLLMError
-from ..executor import run_plan
+from ..executor import Execution, run_plan
 from ..files import write_atomic
 from ..planner.pipeline import Planner, PlanResult, restore_stage, write_artifacts
 from ..planner.prompting.scene_context import scene_objects, site_objects
@@ -35,6 +35,7 @@ from .reference_plans import reference_ticks
 from .results import metric_mean, summary_table
 from .run_store import RunStore
 from .tasks import Task
+from .trace_file import TRACE, write_trace
 
 
 @dataclass
@@ -45,6 +46,7 @@ class TaskOutcome:
     seconds: float = 0.0  # this task's own time: its stages and its execution, not its wait for the others
     error: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    execution: Execution | None = None  # what its plan did (for trace.json); None where nothing ran
 
     @property
     def refused(self) -> bool:
@@ -111,12 +113,20 @@ def execute_and_score(result: PlanResult, goals: Sequence[Goal], catalogue: Cata
                       trans: int | None = None, max_trans: int | None = None, controller: Any = None,
                       build: str | None = None, site: Domain | None = None) -> Scores:
     """Run a planned task's allocated plan (in AI2-THOR, or on ``site``) and score it (a refusal runs nothing)."""
+    return execute_scored(result, goals, catalogue, trans=trans, max_trans=max_trans, controller=controller,
+                          build=build, site=site)[1]
+
+
+def execute_scored(result: PlanResult, goals: Sequence[Goal], catalogue: Catalogue, *,
+                   trans: int | None = None, max_trans: int | None = None, controller: Any = None,
+                   build: str | None = None, site: Domain | None = None) -> tuple[Execution, Scores]:
+    """:func:`execute_and_score`, with the execution itself (its trace, for trace.json)."""
     if result.plan is None:
         raise SmartLLMError(result.error or "there is no valid plan to execute")
     team = catalogue.team(result.robots)
     execution = run_plan(result.plan, result.floor_plan, team, controller=controller, build=build,
                          skills=catalogue.skills, site=site)
-    return score_execution(execution, goals, trans=trans, max_trans=max_trans)
+    return execution, score_execution(execution, goals, trans=trans, max_trans=max_trans)
 
 
 def run_benchmark(
@@ -236,6 +246,7 @@ def _execute_all(outcomes: list[TaskOutcome], catalogue: Catalogue, site: Domain
             outcome.seconds = time.perf_counter() - started + sum(r.seconds for r in result.stages)
             if out is not None:
                 write_artifacts(result, out / outcome.task.id, {"outcome": outcome.as_json()})
+                _write_trace(out / outcome.task.id, outcome)
             if store is not None:
                 store.append_result(outcome.as_json())
             counts.scored.append(outcome)
@@ -252,8 +263,9 @@ def _execute(outcome: TaskOutcome, catalogue: Catalogue, site: Domain | None, bu
     try:
         if controller is None and site is None:
             controller = open_controller(outcome.task.floor_plan, len(outcome.task.robots), build=build)
-        scores = execute_and_score(outcome.result, outcome.task.goals, catalogue, trans=outcome.task.trans,
-                                   max_trans=outcome.task.max_trans, controller=controller, site=site)
+        outcome.execution, scores = execute_scored(outcome.result, outcome.task.goals, catalogue,
+                                                   trans=outcome.task.trans, max_trans=outcome.task.max_trans,
+                                                   controller=controller, site=site)
         outcome.scores = scores.with_speed(reference_ticks(outcome.task, catalogue, controller, site=site))
     except SmartLLMError as exc:
         outcome.error = f"execution: {exc}"
@@ -263,6 +275,14 @@ def _execute(outcome: TaskOutcome, catalogue: Catalogue, site: Domain | None, bu
             controller.stop()
             controller = None
     return controller
+
+
+def _write_trace(folder: Path, outcome: TaskOutcome) -> None:
+    """The task's trace.json, or none (one an earlier run left is removed) where its plan did not run."""
+    if outcome.execution is not None and outcome.scores is not None:
+        write_trace(folder, outcome.execution, outcome.scores, outcome.task.floor_plan, outcome.task.robots)
+    else:
+        (folder / TRACE).unlink(missing_ok=True)
 
 
 def _spread(batch: Sequence[TaskOutcome], workers: Sequence[Method],

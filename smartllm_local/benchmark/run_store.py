@@ -29,7 +29,7 @@ RESULTS = "results.jsonl"
 RECORD = "record.json"
 STAGES = ("decomposition", "coalition", "allocation")
 # What a run writes in a task's folder (removed when the user starts over; nothing else is).
-TASK_FILES = ("decomposed.py", "coalition.txt", "allocated.py", "result.json")
+TASK_FILES = ("decomposed.py", "coalition.txt", "allocated.py", "result.json", "trace.json")
 
 
 class RunStore:

@@ -22,6 +22,7 @@ from . import execute as _execute
 from . import plan as _plan
 from . import scenes as _scenes
 from . import validate as _validate
+from . import view as _view
 
 app = typer.Typer(
     help="Offline multi-robot task planning (SMART-LLM) on local models, executed in AI2-THOR.",
@@ -37,6 +38,7 @@ app.command("validate")(_validate.validate)
 app.command("execute")(_execute.execute)
 app.command("dispatch")(_dispatch.dispatch)
 app.command("bench")(_bench.bench_command)
+app.command("view")(_view.view)
 
 
 # Typer may bundle its own copy of click: take the exception classes from wherever it raises them.

@@ -128,6 +128,9 @@ def report(
                                                 "row with its spread)."),
     out: Path | None = typer.Option(None, "--out", parser=given_path, metavar="DIR", help=(
         "Where to write report.md, the CSVs and the figures (default: FIRST_RUN/report).")),
+    html: bool = typer.Option(False, "--html", help=(
+        "Also write each run's viewer page (as `smartllm-local view` does; one per seed) and link it from "
+        "report.md.")),
 ) -> None:
     """The paper's Tables I-III, refusals, efficiency, time and tokens per stage (Markdown and CSV) and
     figures (PNG), from the runs' results.jsonl and run.json alone."""
@@ -137,7 +140,7 @@ def report(
     twice = sorted({str(run) for run, folder in zip(runs, folders) if folders.count(folder) > 1})
     if twice:
         raise UserError(f"{', '.join(twice)}: a run folder given more than once would be a row of the report twice")
-    written = write_report(runs, out if out is not None else runs[0] / "report")
+    written = write_report(runs, out if out is not None else runs[0] / "report", html=html)
     typer.echo(written[0].read_text(encoding="utf-8"))
     typer.echo(f"wrote {', '.join(str(p) for p in written)}")
 

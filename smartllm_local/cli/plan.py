@@ -10,8 +10,9 @@ from typing import Any
 
 import typer
 
-from ..benchmark.run import execute_and_score
+from ..benchmark.run import execute_scored
 from ..benchmark.tasks import Task, find_task, has_words, load_tasks
+from ..benchmark.trace_file import TRACE, write_trace
 from ..domain import Domain, load_domain
 from ..errors import UserError
 from ..executor import Execution
@@ -87,12 +88,12 @@ def plan_command(
     for notice in result.notices:
         print(f"notice: {notice}", file=sys.stderr)
     planned = result.plan is not None and not result.error
-    scores = None
+    scores = execution = None
     if execute and planned:
-        scores = execute_and_score(result, chosen.goals if chosen else (), cat,
-                                   trans=chosen.trans if chosen else None,
-                                   max_trans=chosen.max_trans if chosen else None,
-                                   build=str(thor_build) if thor_build else None, site=dom.as_site)
+        execution, scores = execute_scored(result, chosen.goals if chosen else (), cat,
+                                           trans=chosen.trans if chosen else None,
+                                           max_trans=chosen.max_trans if chosen else None,
+                                           build=str(thor_build) if thor_build else None, site=dom.as_site)
     dispatched = None
     if functions is not None and planned and not result.plan.is_refusal:
         dispatched = dispatch_plan(result.plan, team, functions, skills=cat.skills)
@@ -107,6 +108,10 @@ def plan_command(
         extra["goals"] = stated.summary()
     if out is not None:
         write_artifacts(result, out, extra)
+        if execution is not None and scores is not None:
+            write_trace(out, execution, scores, result.floor_plan, result.robots)
+        else:  # one an earlier plan left here is not this plan's
+            (out / TRACE).unlink(missing_ok=True)
     _print_result(result, extra, scores, dispatched, as_json, chosen)
     if stated is not None and not as_json:
         typer.echo(stated.report(), nl=False)

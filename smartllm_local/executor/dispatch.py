@@ -124,6 +124,10 @@ class DispatchWorld:
     def objects(self) -> list[dict[str, Any]]:
         return []  # a lab's world reports no AI2-THOR metadata
 
+    @property
+    def layout(self) -> None:
+        return None  # nor where its robots are
+
 
 class _Call:
     """One skill call on a thread of its own (a daemon: one that never returns cannot keep the run alive)."""

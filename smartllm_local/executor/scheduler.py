@@ -59,12 +59,20 @@ class TraceEntry:
     object_id: str | None
     success: bool
     error: str
+    positions: list[tuple[float, float]] | None = None  # (x, z) of each of ``robots`` after the action
+    object_position: tuple[float, float] | None = None  # (x, z) of ``object_id`` after the action
 
     def as_dict(self) -> dict[str, Any]:
-        """The entry as ``execute --trace`` writes it, with AI2-THOR's names for the action's fields."""
-        return {"tick": self.tick, "subtask": self.subtask, "robots": list(self.robots), "skill": self.skill,
-                "objects": list(self.objects), "action": self.action, "objectId": self.object_id,
-                "success": self.success, "errorMessage": self.error}
+        """The entry as ``execute --trace`` writes it, with AI2-THOR's names for the action's fields (and the
+        positions, where the world has them)."""
+        entry = {"tick": self.tick, "subtask": self.subtask, "robots": list(self.robots), "skill": self.skill,
+                 "objects": list(self.objects), "action": self.action, "objectId": self.object_id,
+                 "success": self.success, "errorMessage": self.error}
+        if self.positions is not None:
+            entry["positions"] = [list(p) for p in self.positions]
+        if self.object_position is not None:
+            entry["objectPosition"] = list(self.object_position)
+        return entry
 
 
 @dataclass
@@ -77,6 +85,7 @@ class Execution:
     starts: list[tuple[str, int]]  # (sub-task, tick it began working)
     final_objects: list[dict[str, Any]] = field(repr=False)
     truncated: bool = False
+    layout: dict[str, Any] | None = field(default=None, repr=False)  # the world's floor, for a map (None: none)
 
     @property
     def attempted(self) -> int:
@@ -179,6 +188,11 @@ class World(Protocol):
     def objects(self) -> list[dict[str, Any]]:
         """The world's objects as the run left them (AI2-THOR's metadata; [] where unknown)."""
 
+    @property
+    def layout(self) -> dict[str, Any] | None:
+        """The floor for a map: ``cells`` (x, z), each member's ``start``, ``landmarks`` (id, type, x, z); None
+        where the world has no positions."""
+
 
 def run(plan: Plan, world: World, team: Sequence[Robot], *, skills: SkillSet = DEFAULT_SKILL_SET,
         max_ticks: int = DEFAULT_MAX_TICKS) -> Execution:
@@ -232,6 +246,7 @@ class _Run:
             starts=self.starts,
             final_objects=self.world.objects,
             truncated=truncated,
+            layout=self.world.layout,
         )
 
     def _launch(self, fn: Function, env: Env) -> _Task:
@@ -312,5 +327,6 @@ class _Run:
             self.trace.append(TraceEntry(
                 tick=self.tick, subtask=name, robots=[self.team[m].id for m in members], skill=call.skill,
                 objects=list(call.objects), action=outcome.action, object_id=outcome.object_id,
-                success=outcome.success, error=outcome.error,
+                success=outcome.success, error=outcome.error, positions=outcome.positions,
+                object_position=outcome.object_position,
             ))

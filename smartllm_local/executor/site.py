@@ -39,7 +39,14 @@ class SiteWorld:
         self.photographed: set[str] = set()
 
     def perform_all(self, steps: Sequence[tuple[Skill, Sequence[str], Sequence[int]]]) -> list[Outcome]:
-        return [self.perform(skill, objects, members) for skill, objects, members in steps]
+        outcomes = []
+        for skill, objects, members in steps:
+            outcome = self.perform(skill, objects, members)
+            outcome.positions = [self.positions[m] for m in members]
+            place = self.domain.places.get(outcome.object_id or "")
+            outcome.object_position = place.at if place is not None else None
+            outcomes.append(outcome)
+        return outcomes
 
     def perform(self, skill: Skill, objects: Sequence[str], members: Sequence[int]) -> Outcome:
         """Carry out one call; a failure leaves the site as it was and says why."""
@@ -72,6 +79,14 @@ class SiteWorld:
 
     def release(self) -> None:
         pass
+
+    @property
+    def layout(self) -> dict[str, Any]:
+        """The site for a map: no cells (it is open ground), the start, and every site entry as a landmark."""
+        start = self.domain.places[self.domain.start].at
+        return {"cells": [], "start": [list(start) for _ in self.team],
+                "landmarks": [{"id": p.name, "type": p.kind, "x": p.at[0], "z": p.at[1]}
+                              for p in self.domain.places.values()]}
 
     @property
     def objects(self) -> list[dict[str, Any]]:

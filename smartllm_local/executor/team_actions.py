@@ -48,6 +48,10 @@ class Outcome:
     object_id: str | None = None
     action: str = ""
     actor: int | None = None
+    # Where each acting member stands after the call, and the object it acted on (x, z in metres): the
+    # run viewer's map. None where the world has no positions (a lab's robots).
+    positions: list[tuple[float, float]] | None = None
+    object_position: tuple[float, float] | None = None
 
 
 class TeamWorld:
@@ -70,6 +74,7 @@ class TeamWorld:
         self.helping: dict[int, str] = {}  # member -> object it helps carry
         # Target box -> the cells nearest first; the cells are fixed for a TeamWorld, so no ranking goes stale.
         self._ranked_cells: dict[tuple[float, float, float, float], list[tuple[float, float]]] = {}
+        self.start = [self.position(m) for m in range(len(self.event.events))]
         self.focus = set(focus) if focus is not None else None
         if self.focus is not None:
             self._set_filter()
@@ -191,8 +196,26 @@ class TeamWorld:
     # ---------------------------------------------------------------- acting
 
     def perform_all(self, steps: Sequence[tuple[Skill, Sequence[str], Sequence[int]]]) -> list[Outcome]:
-        """One tick's steps, one after another in launch order (a later step sees what earlier ones did)."""
-        return [self.perform(*step) for step in steps]
+        """One tick's steps, one after another in launch order (a later step sees what earlier ones did), each
+        with where its members and its object are after it."""
+        outcomes = []
+        for step in steps:
+            outcome = self.perform(*step)
+            outcome.positions = [self.position(m) for m in step[2]]
+            found = next((o for o in self.objects if o["objectId"] == outcome.object_id), None)
+            if found is not None:
+                outcome.object_position = (found["position"]["x"], found["position"]["z"])
+            outcomes.append(outcome)
+        return outcomes
+
+    @property
+    def layout(self) -> dict[str, Any]:
+        """The floor as the run saw it, for a map: the reachable cells, where each member started, and the
+        fixed objects (furniture, appliances: what is not picked up) where the run left them."""
+        return {"cells": [list(c) for c in self.cells], "start": [list(p) for p in self.start],
+                "landmarks": [{"id": o["objectId"], "type": o["objectType"],
+                               "x": o["position"]["x"], "z": o["position"]["z"]}
+                              for o in self.objects if not o.get("pickupable")]}
 
     def perform(self, skill: Skill, objects: Sequence[str], members: Sequence[int]) -> Outcome:
         """Run one skill call by the team members ``members`` (team indices)."""

@@ -12,14 +12,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from ..benchmark.run_store import RUN_FILE
 from ..errors import UserError
 from ..files import check_output_folder, write_atomic
 from .runs import Run, load_run
 from .tables import Table, all_tables
 
 
-def write_report(folders: Sequence[str | Path], out: str | Path) -> list[Path]:
-    """Read the runs in ``folders`` and write report.md, a CSV per table and the figures into ``out``.
+def write_report(folders: Sequence[str | Path], out: str | Path, *, html: bool = False) -> list[Path]:
+    """Read the runs in ``folders`` and write report.md, a CSV per table and the figures into ``out``; with
+    ``html``, each run's viewer page too (one per seed of a ``--seeds`` run), linked from report.md.
 
     Raises:
         UserError: no folder given, a folder holds no readable run, or ``out`` cannot be a folder.
@@ -29,7 +31,9 @@ def write_report(folders: Sequence[str | Path], out: str | Path) -> list[Path]:
     out = check_output_folder(Path(out), "--out")
     runs = [load_run(folder) for folder in folders]
     tables = all_tables(runs)
-    written = [write_atomic(out / "report.md", markdown(runs, tables))]
+    viewers = _viewers(runs, out) if html else []
+    written = [write_atomic(out / "report.md", markdown(runs, tables, [(label, p.name) for label, p in viewers]))]
+    written += [path for _, path in viewers]
     written += [write_atomic(out / f"{table.name}.csv", table.csv()) for table in tables]
     from .figures import metric_bars, stage_times  # matplotlib loads only when a report is drawn
 
@@ -38,7 +42,22 @@ def write_report(folders: Sequence[str | Path], out: str | Path) -> list[Path]:
     return written
 
 
-def markdown(runs: Sequence[Run], tables: Sequence[Table]) -> str:
+def _viewers(runs: Sequence[Run], out: Path) -> list[tuple[str, Path]]:
+    """Write each run's viewer page into ``out`` (a run of several seeds: one per seed), labelled."""
+    from .viewer import write_viewer
+
+    pages = []
+    for k, run in enumerate(runs, 1):
+        parts = [run.folder] if (run.folder / RUN_FILE).is_file() else sorted(
+            (p for p in run.folder.glob("seed-*") if (p / RUN_FILE).is_file()), key=lambda p: (len(p.name), p.name))
+        for part in parts:
+            label = run.label if part == run.folder else f"{run.label}, {part.name}"
+            name = f"viewer-{k}" + ("" if part == run.folder else f"-{part.name}") + ".html"
+            pages.append((label, write_viewer(part, out / name)))
+    return pages
+
+
+def markdown(runs: Sequence[Run], tables: Sequence[Table], viewers: Sequence[tuple[str, str]] = ()) -> str:
     parts = ["# Benchmark report", "", "## Runs", ""]
     for run in runs:
         identity = run.manifests[0].get("identity", {})
@@ -60,6 +79,9 @@ def markdown(runs: Sequence[Run], tables: Sequence[Table]) -> str:
     parts.append("")
     parts += [table.markdown() for table in tables]
     parts += ["## Figures", "", "![metrics per category](metrics.png)", "", "![time per stage](stages.png)", ""]
+    if viewers:
+        parts += ["## Viewers", "", "Each run's tasks, with their timelines, maps, stages and plans (open in a "
+                  "browser):", ""] + [f"- **{label}**: [{name}]({name})" for label, name in viewers] + [""]
     return "\n".join(parts)
 
 

@@ -229,6 +229,7 @@ def test_a_folder_with_another_run_is_refused_and_restart_clears_only_the_runs_f
     RunStore(tmp_path, {"identity": {"arguments": {"seed": 0}}, "started": "now"}).save_stage(
         "t", StageRecord("decomposition"))
     (tmp_path / "notes.txt").write_text("mine")
+    (tmp_path / "t" / "trace.json").write_text("{}")  # what the task's execution wrote goes with it
     with pytest.raises(SmartLLMError, match=r"arguments.seed: 0 -> 1.*--restart"):
         RunStore(tmp_path, {"identity": {"arguments": {"seed": 1}}, "started": "now"})
     RunStore(tmp_path, {"identity": {"arguments": {"seed": 1}}, "started": "now"}, restart=True)

@@ -153,10 +153,12 @@ def test_execute_writes_the_trace(files):
     actions = trace["actions"]
     assert len(actions) == 8
     for entry in actions:
-        # AI2-THOR's names for what the action did, plus which sub-task and skill it carried out
+        # AI2-THOR's names for what the action did, plus which sub-task and skill it carried out, and where the
+        # robots and the object were after it (the run viewer's map)
         assert list(entry) == ["tick", "subtask", "robots", "skill", "objects", "action", "objectId", "success",
-                               "errorMessage"]
+                               "errorMessage", "positions"] + (["objectPosition"] if entry["objectId"] else [])
         assert isinstance(entry["tick"], int) and isinstance(entry["success"], bool)
+        assert len(entry["positions"]) == len(entry["robots"]) and all(len(p) == 2 for p in entry["positions"])
     assert [(a["tick"], a["robots"], a["skill"], a["action"]) for a in actions[:4]] == [
         (0, [1], "GoToObject", "Teleport"), (0, [2, 3], "GoToObject", "Teleport"),
         (1, [1], "PickupObject", "PickupObject"), (1, [2, 3], "PickupObject", "PickupObject")]

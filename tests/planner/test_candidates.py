@@ -64,6 +64,18 @@ def test_the_candidates_are_written_to_the_run_folder(three, tmp_path):
     assert not (tmp_path / "decomposition" / "candidates.json").exists()
 
 
+def test_the_viewer_shows_every_candidate_and_the_one_chosen(three, tmp_path):
+    from smartllm_local.report.viewer import load_view
+
+    _, many = three
+    write_artifacts(many, tmp_path)
+    stage = load_view(tmp_path)["tasks"][0]["stages"][0]
+    assert stage["name"] == "decomposition"
+    assert stage["candidates"] == json.loads((tmp_path / "decomposition" / "candidates.json").read_text())
+    chosen = [c for c in stage["candidates"] if c["chosen"]]
+    assert len(chosen) == 1 and chosen[0]["output"] == stage["output"]  # the chosen one is the stage's output
+
+
 def _stating(text: str):
     """The goal stage replaced by one that states ``text`` (the code around the model, not the model)."""
     def state_goals(planner, instruction, floor_plan, *, refusals=True):

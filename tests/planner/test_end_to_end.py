@@ -29,6 +29,11 @@ def test_the_plan_command_writes_its_artifacts_and_executes(kitchen01):
     summary = json.loads((out / "result.json").read_text())
     assert set(summary["metrics"]) == {"SR", "TCR", "GCR", "RU", "Exe", "transitions"}
     assert summary["stages"]["decomposition"]["prompt_tokens"] > 1000
+    trace = json.loads((out / "trace.json").read_text())  # --execute --out keeps the execution (the run viewer's)
+    actions, conditions = trace["actions"], trace["conditions"]
+    assert trace["floor_plan"] == "FloorPlan1" and trace["transitions"] == summary["metrics"]["transitions"]
+    assert (sum(a["success"] for a in actions) / len(actions) if actions else 0.0) == summary["metrics"]["Exe"]
+    assert sum(c["met"] for c in conditions) / len(conditions) == summary["metrics"]["GCR"]
 
 
 def test_the_plan_command_shows_a_line_per_stage_on_stderr_and_only_the_plan_on_stdout(kitchen01):
