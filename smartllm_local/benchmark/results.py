@@ -23,7 +23,7 @@ from .tasks import CATEGORIES
 METRICS = ("SR", "TCR", "GCR", "RU", "Exe", "Speed")
 PAPER_METRICS = METRICS[:5]
 STAGE_NAMES = ("decomposition", "coalition", "allocation")
-REFUSERS = ("model", "grammar", "rule")
+REFUSERS = ("model", "grammar", "rule", "planner")
 
 Line = Mapping[str, Any]
 
@@ -136,7 +136,8 @@ def summary_table(lines: Sequence[Line]) -> str:
             f"{'n/a' if m is None else f'{m:.2f}':>7}" for m in means) + f"{refused:>9}")
     counts = refusals(lines, feasible=False)
     if counts["tasks"]:
-        who = ", ".join(f"{counts[f'by {k}']} by {k}" for k in REFUSERS if counts[f"by {k}"] or k != "rule")
+        who = ", ".join(f"{counts[f'by {k}']} by {k}" for k in REFUSERS
+                        if counts[f"by {k}"] or k not in ("rule", "planner"))
         rows.append(f"{'infeasible':<14}{counts['tasks']:>6}{counts['errors']:>7}"
                     f"   correctly refused {counts['refused']}/{counts['tasks']} ({who})")
     bent = bending_line(lines)

@@ -102,7 +102,8 @@ class PlanResult:
     @property
     def refused_by(self) -> str | None:
         """Who refused: "grammar" (no team can do a sub-task the model wrote: it admitted nothing else),
-        "rule" (a rule-based allocation found no team), "model", or None."""
+        "rule" (a rule-based allocation found no team), "planner" (the goal-planner's search found no plan),
+        "model", or None."""
         if self.refusal is None:
             return None
         return next((r.refused_by for r in self.stages if r.refusal is not None and r.refused_by), "model")
@@ -412,7 +413,7 @@ def restore_stage(result: PlanResult, record: StageRecord, skills: SkillSet, sce
     Raises:
         PlanError: the saved output is not the plan it claims to be (the record is not to be trusted).
     """
-    if record.stage != "coalition" and not record.error:
+    if record.stage not in ("coalition", "goal") and not record.error:
         form = "decomposed" if record.stage == "decomposition" else "allocated"
         record.plan = parse_plan(record.output, form=form, skills=skills,  # type: ignore[arg-type]
                                  team_size=team_size if form == "allocated" else None,
