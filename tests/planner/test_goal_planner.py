@@ -4,12 +4,14 @@ leave both in the same states), and its search's refusals and time limit."""
 
 from __future__ import annotations
 
+import itertools
+
 import pytest
 
 pytest.importorskip("unified_planning")
 pytest.importorskip("up_fast_downward")
 
-from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import HealthCheck, Phase, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 from unified_planning.io import PDDLReader  # noqa: E402
 from unified_planning.shortcuts import SequentialSimulator  # noqa: E402
@@ -20,7 +22,7 @@ from smartllm_local.executor.dry_run import DryRun  # noqa: E402
 from smartllm_local.goal_language import parse_goal_statement, statement_of  # noqa: E402
 from smartllm_local.plan_language import parse_plan  # noqa: E402
 from smartllm_local.planner.classical.planning import plan_to_goal  # noqa: E402
-from smartllm_local.planner.classical.problem import Unreachable, planning_task  # noqa: E402
+from smartllm_local.planner.classical.problem import Unreachable, planning_task, with_future_pieces  # noqa: E402
 from smartllm_local.planner.classical.search import pddl, search  # noqa: E402
 from smartllm_local.planner.classical.threads import parts  # noqa: E402
 from smartllm_local.scoring import condition_holds  # noqa: E402
@@ -41,17 +43,24 @@ def _problem(task_id: str):
     return task, team, dry, planning_task(dry, team, SKILLS, statement_of(task.goals).conditions, name="t")
 
 
+def _kinds(dry, problem) -> set[str]:
+    types = {o["objectId"]: o["objectType"] for o in with_future_pieces(dry.objects)[0]}
+    return {types[oid] for oid in problem.things.values()}
+
+
 def test_the_problem_names_the_scene_s_objects_the_team_and_the_goal():
     task, team, dry, problem = _problem("kitchen-12")  # a potato cooked in a pan on a burner; bread in the fridge
     ids = {o["objectId"] for o in dry.objects}
-    kinds = {oid.split("|")[0] for oid in problem.things.values()}
+    kinds = _kinds(dry, problem)
     assert {"Potato", "Pan", "StoveBurner", "StoveKnob", "Fridge", "Bread"} <= kinds
-    assert {"PotatoSliced", "BreadSliced"} <= kinds, "the pieces cutting would make are objects too"
+    assert not {"PotatoSliced", "BreadSliced", "Knife"} & kinds, "nothing to cut: no pieces, no knife"
+    _, _, cut_dry, cut_problem = _problem("kitchen-16")
+    assert {"AppleSliced", "Knife"} <= _kinds(cut_dry, cut_problem), "pieces a cut would make, and a knife"
     assert all(oid in ids or oid.rsplit("|", 1)[0] in ids for oid in problem.things.values())
     assert sorted(problem.robots.values()) == list(range(len(team)))
     actions = {a.name for a in problem.problem.actions}
     assert {"GoToObject", "PickupObject", "PickupObject_together", "PutObject", "OpenObject", "CloseObject",
-            "SwitchOn", "SwitchOff", "SliceObject", "BreakObject", "CleanObject"} == actions
+            "SwitchOn", "SwitchOff", "SliceObject", "SliceObject_lent", "BreakObject", "CleanObject"} == actions
     # robot 13 cannot slice, robot 18 cannot switch: each robot's skills are its own
     simulator = SequentialSimulator(problem.problem)
     state = simulator.get_initial_state()
@@ -179,6 +188,31 @@ def _model_state(problem, simulator, state) -> dict[tuple[str, ...], bool]:
     return out
 
 
+def _applicable(problem, simulator, state) -> list:
+    """The model's applicable actions, in a fixed order. Unified Planning's own enumeration (its grounder)
+    fails on actions with two static conditions on one parameter, so they are enumerated here, a robot acting
+    only on what it stands by or holds, as every action but GoToObject requires."""
+    fluents = {f.name: f for f in problem.problem.fluents}
+    objects = [o for o in problem.problem.all_objects]
+    robots = [o for o in objects if o.name in problem.robots]
+    things = [o for o in objects if o.name in problem.things]
+
+    def true(fluent: str, *args) -> bool:
+        return state.get_value(fluents[fluent](*args)).bool_constant_value()
+
+    found = []
+    for action in sorted(problem.problem.actions, key=lambda a: a.name):
+        for r in robots:
+            near = [t for t in things if true("at", r, t) or true("holding", r, t)]
+            choices = {"r": [r], "helper": robots, "lender": robots, "receptacle": near,
+                       "t": things if action.name == "GoToObject" else near}
+            for params in itertools.product(*(choices[p.name] for p in action.parameters)):
+                if all(o.type.is_compatible(p.type) for o, p in zip(params, action.parameters)) and \
+                        simulator.is_applicable(state, action, params):
+                    found.append((action, params))
+    return found
+
+
 @pytest.fixture(scope="module")
 def property_world():
     team = CATALOGUE.team([1, 7])  # every skill; robot 7 lifts 0.08 kg
@@ -188,9 +222,10 @@ def property_world():
     return team, goal, problem
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
-                                                                 HealthCheck.too_slow])
-@given(choices=st.lists(st.integers(min_value=0, max_value=10_000), min_size=1, max_size=14))
+# No shrinking: each example builds a world and grounds the model's actions, and a failure names its step already.
+@settings(max_examples=10, deadline=None, phases=[Phase.explicit, Phase.reuse, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(choices=st.lists(st.integers(min_value=0, max_value=10_000), min_size=1, max_size=12))
 def test_random_steps_leave_the_model_and_the_dry_run_world_in_the_same_states(property_world, choices):
     team, goal, problem = property_world
     dry = DryRun(1, team, SKILLS)
@@ -198,14 +233,16 @@ def test_random_steps_leave_the_model_and_the_dry_run_world_in_the_same_states(p
         state = simulator.get_initial_state()
         assert _model_state(problem, simulator, state) == _world_state(problem, dry)
         for choice in choices:
-            applicable = sorted(simulator.get_applicable_actions(state), key=lambda a: (a[0].name, str(a[1])))
+            applicable = _applicable(problem, simulator, state)
             if not applicable:
                 break
-            action, params = applicable[choice % len(applicable)]
+            acting = [a for a in applicable if a[0].name != "GoToObject"]  # two thirds of the steps act, where any can
+            pool = acting if acting and choice % 3 else applicable
+            action, params = pool[choice // 3 % len(pool)]
             names = [str(p) for p in params]
             robots = [problem.robots[n] for n in names if n in problem.robots]
             objects = [problem.things[n] for n in names if n in problem.things]
-            skill = action.name.removesuffix("_together")
+            skill = problem.skill_of[action.name]
             outcome = dry.apply(robots, skill, objects)
             assert outcome.success, f"{skill}{tuple(names)}: the model allows it, the world says {outcome.error}"
             state = simulator.apply(state, action, params)

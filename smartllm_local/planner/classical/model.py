@@ -149,10 +149,12 @@ def settle_contents(action: InstantaneousAction, v: Vocabulary, source: FNode, *
 # ------------------------------------------------------------------ actions, by AI2-THOR action
 
 
-def _action(skill: Skill, v: Vocabulary, name: str = "", **params) -> tuple[InstantaneousAction, dict[str, FNode]]:
+def _action(skill: Skill, v: Vocabulary, name: str = "", skilled: str = "r",
+            **params) -> tuple[InstantaneousAction, dict[str, FNode]]:
+    """An action for ``skill`` whose parameter ``skilled`` (a robot) has the skill."""
     action = InstantaneousAction(name or skill.name, **params)
     bound = {p.name: action.parameter(p.name) for p in action.parameters}
-    action.add_precondition(v.fluents[skill_fluent(skill.name)](bound["r"]))
+    action.add_precondition(v.fluents[skill_fluent(skill.name)](bound[skilled]))
     if skill.arguments and skill.arguments[0]:
         action.add_precondition(v.fluents[skill.arguments[0]](bound["t"]))
     return action, bound
@@ -257,10 +259,19 @@ def switch(skill: Skill, v: Vocabulary, on: bool) -> InstantaneousAction:
     return action
 
 
-def cut(skill: Skill, v: Vocabulary, slicing: bool) -> InstantaneousAction:
+def cut(skill: Skill, v: Vocabulary, slicing: bool, lent: bool = False) -> InstantaneousAction:
     """SliceObject (a knife in the robot's hand; the whole gives way to its pieces) or BreakObject (an
-    egg cracks into pieces too, and stays); either on a thing in no hand."""
-    action, p = _action(skill, v, r=ROBOT, t=THING)
+    egg cracks into pieces too, and stays); either on a thing in no hand. ``lent``: a team's call, in
+    which the robot with the knife slices and a teammate without one has the skill (a team acts with
+    the union of its members' skills, and the member holding the knife is the one that slices)."""
+    if lent:
+        action, p = _action(skill, v, f"{skill.name}_lent", "lender", r=ROBOT, lender=ROBOT, t=THING)
+        k = Variable("k", ITEM)
+        r, lender = p["r"], p["lender"]
+        action.add_precondition(And(Not(Equals(r, lender)), Not(v.fluents[skill_fluent(skill.name)](r)),
+                                    Not(Exists(And(v.holding(lender, k), v.knife(k)), k))))
+    else:
+        action, p = _action(skill, v, r=ROBOT, t=THING)
     r, t = p["r"], p["t"]
     action.add_precondition(within_reach(v, r, t))
     if slicing:
@@ -294,7 +305,8 @@ def clean(skill: Skill, v: Vocabulary) -> InstantaneousAction:
 
 def skill_actions(skill: Skill, v: Vocabulary, team_size: int) -> list[InstantaneousAction]:
     """The actions for one skill: none for a skill whose outcome depends on positions (see the module's
-    docstring), two for PickupObject where a team can lift together."""
+    docstring); where the team has two robots or more, a second PickupObject (a lift shared) and a
+    second SliceObject (the skill lent)."""
     kind = skill.action
     if kind == "":
         return [go_to(skill, v)]
@@ -306,8 +318,10 @@ def skill_actions(skill: Skill, v: Vocabulary, team_size: int) -> list[Instantan
         return [open_or_close(skill, v, kind == "OpenObject")]
     if kind in ("ToggleObjectOn", "ToggleObjectOff"):
         return [switch(skill, v, kind == "ToggleObjectOn")]
-    if kind in ("SliceObject", "BreakObject"):
-        return [cut(skill, v, kind == "SliceObject")]
+    if kind == "SliceObject":
+        return [cut(skill, v, True)] + ([cut(skill, v, True, lent=True)] if team_size > 1 else [])
+    if kind == "BreakObject":
+        return [cut(skill, v, False)]
     if kind == "CleanObject":
         return [clean(skill, v)]
     return []

@@ -67,14 +67,16 @@ class PlanningTask:
     things: dict[str, str]  # planning name -> objectId
     robots: dict[str, int]  # planning name -> team index
     actions: dict[str, str]  # skill -> the AI2-THOR action it performs
+    skill_of: dict[str, str]  # planning action -> the skill a plan calls for it
 
 
 def _name(text: str, taken: set[str]) -> str:
-    base = re.sub(r"[^A-Za-z0-9]+", "_", text).strip("_").lower() or "thing"
+    """A PDDL name: letters and digits only (a grounder joins an action's and its arguments' names with _)."""
+    base = re.sub(r"[^A-Za-z0-9]+", "", text).lower() or "thing"
     name, k = base, 1
     while name in taken:
         k += 1
-        name = f"{base}_{k}"
+        name = f"{base}x{k}"
     taken.add(name)
     return name
 
@@ -132,21 +134,24 @@ def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditio
     v = vocabulary(skills)
     problem = Problem(name)
     add_fluents(problem, v)
+    skill_of: dict[str, str] = {}
     for skill in skills.values():
         for action in skill_actions(skill, v, len(team)):
             problem.add_action(action)
+            skill_of[action.name] = skill.name
     table, future = with_future_pieces(dry.objects)
     chosen = relevant(table, conditions)
     taken: set[str] = set()
-    things = {o["objectId"]: Object(_name(o["objectId"].split("|")[0] + "_" + str(k), taken),
+    things = {o["objectId"]: Object(_name(o["objectType"] + str(k), taken),
                                     ITEM if o.get("pickupable") else FIXTURE)
               for k, o in enumerate(chosen)}
-    robots = [Object(_name(f"robot{i}_{r.name}", taken), ROBOT) for i, r in enumerate(team)]
+    robots = [Object(_name(f"robot{i}", taken), ROBOT) for i in range(len(team))]  # robots[i] of a plan
     problem.add_objects([*things.values(), *robots])
     _initial_state(problem, v, dry, chosen, things, future, team)
     problem.add_goal(And(*(_condition(v, c, chosen, things, future) for c in conditions)))
     return PlanningTask(problem, {o.name: oid for oid, o in things.items()},
-                        {o.name: i for i, o in enumerate(robots)}, {s.name: s.action for s in skills.values()})
+                        {o.name: i for i, o in enumerate(robots)}, {s.name: s.action for s in skills.values()},
+                        skill_of)
 
 
 def _initial_state(problem: Problem, v: Vocabulary, dry: DryRun, chosen: Sequence[Mapping[str, Any]],
@@ -178,7 +183,7 @@ def _initial_state(problem: Problem, v: Vocabulary, dry: DryRun, chosen: Sequenc
         for fluent, value in facts.items():
             if value:
                 true(fluent, t)
-        for parent in o.get("parentReceptacles") or ():
+        for parent in () if oid in future else o.get("parentReceptacles") or ():  # a piece lies only once cut
             if parent in things:
                 true("inside", t, things[parent])
         for burner in o.get("controlledObjects") or ():

@@ -9,17 +9,33 @@ Unified Planning writes for Fast Downward is kept, for a reader or another plann
 from __future__ import annotations
 
 import io
+import tempfile
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import unified_planning.shortcuts as up
 from unified_planning.engines import PlanGenerationResultStatus as Status
 from unified_planning.io import PDDLWriter
 from unified_planning.plans import ActionInstance
+from up_fast_downward import FastDownwardPDDLPlanner
 
 from .problem import PlanningTask
 
 SEARCH = "astar(hmax())"
 up.get_environment().credits_stream = None  # the engines' banners are not the planner's log
+
+
+class _FastDownward(FastDownwardPDDLPlanner):
+    """Fast Downward with its intermediate file in a folder of its own: by default its translator writes
+    output.sas in the working directory, where two searches at once (or a user's file) would collide."""
+
+    def __init__(self, sas_file: Path):
+        super().__init__(fast_downward_search_config=SEARCH)
+        self._sas_file = sas_file
+
+    def _base_cmd(self, plan_filename: str) -> list[str]:
+        interpreter, driver, *rest = super()._base_cmd(plan_filename)
+        return [interpreter, driver, "--sas-file", str(self._sas_file), *rest]
 
 
 @dataclass(frozen=True)
@@ -62,7 +78,8 @@ def search(task: PlanningTask, time_limit: float) -> Search:
     domain, problem = pddl(task)
     result = Search(domain_pddl=domain, problem_pddl=problem)
     log = io.StringIO()
-    with up.OneshotPlanner(name="fast-downward", params={"fast_downward_search_config": SEARCH}) as planner:
+    with tempfile.TemporaryDirectory(prefix="smartllm-fd-") as folder, \
+            _FastDownward(Path(folder) / "output.sas") as planner:
         answer = planner.solve(task.problem, timeout=time_limit, output_stream=log)
     result.log, result.status = log.getvalue(), answer.status.name
     if answer.status == Status.TIMEOUT:
@@ -78,9 +95,10 @@ def search(task: PlanningTask, time_limit: float) -> Search:
 
 
 def _step(task: PlanningTask, action: ActionInstance) -> Step:
-    """A planner action as a skill call: PickupObject_together(r, helper, t) is one call by both robots."""
+    """A planner action as a skill call: PickupObject_together(r, helper, t) is one call by both robots,
+    the first of whom acts (the executor's choice: the free hand with the skill, the hand with the knife)."""
     names = [str(p) for p in action.actual_parameters]
     robots = tuple(task.robots[n] for n in names if n in task.robots)
     objects = tuple(task.things[n] for n in names if n in task.things)
-    skill = action.action.name.removesuffix("_together")
+    skill = task.skill_of[action.action.name]
     return Step(skill, robots, objects, task.actions[skill])

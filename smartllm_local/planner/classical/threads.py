@@ -12,6 +12,7 @@ shares them, to run one after the other.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -23,6 +24,8 @@ from ...world.rules import basins_of
 from .model import ROBOT
 from .problem import PlanningTask
 from .search import Step
+
+_TRIES = 24  # robot assignments tried per part (each a check of the whole plan in the model)
 
 
 @dataclass
@@ -116,16 +119,18 @@ def spread(task: PlanningTask, actions: Sequence[ActionInstance], steps: list[St
     actions, steps = list(actions), list(steps)
     for part in found:
         free = [i for i in range(team_size) if i not in used]
-        if set(part.robots) & used and len(free) >= len(part.robots):
-            mapping = dict(zip(part.robots, free))
-            trial = list(actions)
-            for k in part.indices:
-                trial[k] = _recast(actions[k], mapping, robot_objects, task)
-            if valid(task, trial):
-                actions = trial
+        if set(part.robots) & used:
+            for chosen in itertools.islice(itertools.permutations(free, len(part.robots)), _TRIES):
+                mapping = dict(zip(part.robots, chosen))
+                trial = list(actions)
                 for k in part.indices:
-                    steps[k] = replace(steps[k], robots=tuple(mapping[r] for r in steps[k].robots))
-                part.robots = sorted(mapping.values())
+                    trial[k] = _recast(actions[k], mapping, robot_objects, task)
+                if valid(task, trial):
+                    actions = trial
+                    for k in part.indices:
+                        steps[k] = replace(steps[k], robots=tuple(mapping[r] for r in steps[k].robots))
+                    part.robots = sorted(mapping.values())
+                    break
         used |= set(part.robots)
     return actions, steps, _merge(found)
 
