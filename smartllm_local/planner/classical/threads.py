@@ -20,6 +20,7 @@ from typing import Any
 from unified_planning.plans import ActionInstance
 from unified_planning.shortcuts import SequentialSimulator
 
+from ...world.object_types import SLICE_RESULTS
 from ...world.rules import basins_of
 from .model import ROBOT
 from .problem import PlanningTask
@@ -54,13 +55,17 @@ def linked_objects(objects: Sequence[Mapping[str, Any]]) -> dict[str, set[str]]:
 
 
 def touched(steps: Sequence[Step], objects: Sequence[Mapping[str, Any]]) -> list[set[str]]:
-    """The objects each step depends on or changes, following where things are as the plan moves them."""
+    """The objects each step depends on or changes (a piece's whole among them), following where things are
+    as the plan moves them."""
     holders = _holders(objects)
     links = linked_objects(objects)
+    ids = set(holders)
     out = []
     for step in steps:
-        names = set(step.objects)
-        for oid in step.objects:
+        # a piece (<whole's id>|<Derived>_<k>) depends on the step that cut its whole
+        named = [*step.objects, *(oid.rsplit("|", 1)[0] for oid in step.objects if oid.rsplit("|", 1)[0] in ids)]
+        names = set(named)
+        for oid in named:
             names |= links.get(oid, set())
             stack = list(holders.get(oid, ()))
             while stack:
@@ -81,9 +86,9 @@ def _move(step: Step, holders: dict[str, set[str]]) -> None:
         holders[first] = {step.objects[1]}
     elif step.action == "PickupObject":
         holders[first] = set()
-    elif step.action in ("SliceObject", "BreakObject"):
-        for piece in [p for p in holders if p.startswith(first + "|")]:
-            holders[piece] = set(holders.get(first, ()))
+    elif step.action in ("SliceObject", "BreakObject"):  # its pieces lie where it lay
+        for k in range(SLICE_RESULTS.get(first.split("|")[0], ("", 0))[1]):
+            holders[f"{first}|{SLICE_RESULTS[first.split('|')[0]][0]}_{k}"] = set(holders.get(first, ()))
 
 
 def parts(steps: Sequence[Step], objects: Sequence[Mapping[str, Any]]) -> list[Part]:
