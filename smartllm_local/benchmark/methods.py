@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Protocol
 
 from ..errors import UserError
+from ..goal_language import parse_goal_statement, statement_of
 from ..plan_language import parse_plan
 from ..planner.baselines import allocate_by, random_chooser, rule_chooser
 from ..planner.constraints.feasibility import function_needs
@@ -25,6 +26,18 @@ from ..planner.stages import StageRecord
 from ..robots import Catalogue
 from .reference_plans import default_plans_dir
 from .tasks import Task
+
+DEFAULT_TIME_LIMIT = 60.0  # seconds of search per task for the goal-planner (the household tasks need far less)
+
+
+def require_goal_planner() -> None:
+    """The goal-planner's tools are an extra: say how to get them, where they are missing."""
+    try:
+        import unified_planning  # noqa: F401
+        import up_fast_downward  # noqa: F401
+    except ImportError as exc:
+        raise UserError(f"the goal-planner needs Unified Planning and Fast Downward ({exc.name} is not installed): "
+                        "pip install 'smartllm-local[goal-planner]'") from None
 
 
 @dataclass(frozen=True)
@@ -106,6 +119,46 @@ class DecompositionThenRule(SmartLLM):
         result.stages.append(record)
 
 
+class GoalPlanner:
+    """The goal stage states the goal; Fast Downward finds the steps for the team (``goal-planner``).
+
+    With ``oracle``, the task's own goal conditions are the goal and no model runs
+    (``goal-planner-oracle``): it measures the planner alone, what it reaches when the goal is right.
+    """
+
+    def __init__(self, planner: Planner | None, catalogue: Catalogue, *, time_limit: float, oracle: bool = False):
+        self.planner, self.catalogue, self.time_limit, self.oracle = planner, catalogue, time_limit, oracle
+        self.name = "goal-planner-oracle" if oracle else "goal-planner"
+
+    def stages(self) -> list[Stage]:
+        search = Stage("allocation", self.allocate)
+        return [search] if self.oracle else [Stage("goal", self.state_goals), search]
+
+    def state_goals(self, task: Task, result: PlanResult) -> None:
+        assert self.planner is not None
+        stated = self.planner.goals(task.instruction, task.floor_plan)
+        result.stages.append(stated.record)
+        if stated.refusal is not None:
+            result.refusal = stated.refusal
+        elif stated.error:
+            result.error = stated.error
+
+    def allocate(self, task: Task, result: PlanResult) -> None:
+        from ..planner.classical.planning import plan_to_goal  # Unified Planning loads only for this method
+
+        if self.oracle:
+            conditions = statement_of(task.goals).conditions
+        else:
+            conditions = parse_goal_statement(result.stages[0].output, where="<goal output>").conditions
+        record = plan_to_goal(conditions, task.floor_plan, self.catalogue.team(task.robots), self.catalogue.skills,
+                              time_limit=self.time_limit, name=task.id)
+        result.stages.append(record)
+        if record.refusal is not None:
+            result.refusal = record.refusal
+        elif record.error:
+            result.error = record.error
+
+
 class Reference:
     """The benchmark's hand-written reference plans: the ceiling, and proof that the harness is sound."""
 
@@ -137,15 +190,24 @@ class Reference:
         result.stages.append(record)
 
 
-METHODS = ("smartllm", "decomp-random", "decomp-rule", "reference")
+METHODS = ("smartllm", "decomp-random", "decomp-rule", "goal-planner", "goal-planner-oracle", "reference")
+#: The methods that run no model.
+MODEL_FREE = frozenset({"reference", "goal-planner-oracle"})
 
 
-def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_dir: Path | None = None) -> Method:
-    """The method ``name`` (the reference plans, from ``plans_dir`` or the benchmark's, need no planner)."""
+def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_dir: Path | None = None, *,
+                planner_time_limit: float = DEFAULT_TIME_LIMIT) -> Method:
+    """The method ``name`` (the reference plans, from ``plans_dir`` or the benchmark's, and the goal-planner
+    on the task's own goals need no model); ``planner_time_limit``: the goal-planner's search, per task."""
     if name == "reference":
         return Reference(catalogue, plans_dir)
     if name not in METHODS:
         raise UserError(f"--method must be one of {', '.join(METHODS)}, not {name!r}")
+    if name.startswith("goal-planner"):
+        require_goal_planner()
+        if not planner_time_limit > 0:
+            raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
+        return GoalPlanner(planner, catalogue, time_limit=planner_time_limit, oracle=name == "goal-planner-oracle")
     assert planner is not None
     if name == "smartllm":
         return SmartLLM(planner, catalogue)

@@ -23,7 +23,7 @@ from .tasks import CATEGORIES
 METRICS = ("SR", "TCR", "GCR", "RU", "Exe", "Speed")
 PAPER_METRICS = METRICS[:5]
 STAGE_NAMES = ("goal", "decomposition", "coalition", "allocation")
-REFUSERS = ("model", "grammar", "goal check", "rule")
+REFUSERS = ("model", "grammar", "goal check", "rule", "planner")
 
 Line = Mapping[str, Any]
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import typer
 
-from ..benchmark.methods import METHODS, make_method
+from ..benchmark.methods import DEFAULT_TIME_LIMIT, METHODS, MODEL_FREE, make_method
 from ..benchmark.results import summary_table, variability_table
 from ..benchmark.run import run_benchmark
 from ..benchmark.run_store import RunStore
@@ -176,7 +176,11 @@ def run(
         "over the seeds (the paper's Table II).")),
     method: str = typer.Option("smartllm", help=(
         f"{', '.join(METHODS)}: SMART-LLM's stages; the model's decomposition with robots at random (seeded) "
-        "or by a rule (a capable robot, else the smallest capable team); the reference plans (no model).")),
+        "or by a rule (a capable robot, else the smallest capable team); the model states the goal and Fast "
+        "Downward finds the steps (needs the goal-planner extra); the same with the task's own goal conditions "
+        "as the goal (an oracle: no model); the reference plans (no model).")),
+    planner_time_limit: float = typer.Option(DEFAULT_TIME_LIMIT, "--planner-time-limit", metavar="SECONDS", help=(
+        "The goal-planner's search time per task; a task whose search runs out of it fails with an error.")),
     tasks: Path | None = TASKS,
     category: str | None = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
     task: list[str] | None = typer.Option(None, help="Only these task ids (repeatable)."),
@@ -209,7 +213,10 @@ def run(
     arguments = {k: v for k, v in ctx.params.items()
                  if k not in ("out", "restart", "seeds", "prefix_cache", "workers", "server_timeout")}
     arguments["n_ctx"] = options.n_ctx  # the context asked for, given or not, as run.json has always named it
-    model_path = None if method == "reference" else model_location(options.backend, options.model)
+    if method.startswith("goal-planner") and not dom.is_ai2thor:
+        raise UserError(f"--method {method} plans in AI2-THOR domains; the {dom.name} domain's site world has no "
+                        "planning model yet")
+    model_path = None if method in MODEL_FREE else model_location(options.backend, options.model)
     runs = []
     for s in chosen_seeds:  # every run folder is checked before the model loads
         folder = out if seeds is None else out / f"seed-{s}"
@@ -217,7 +224,8 @@ def run(
                                 Path(dom.catalogue.path), dom.prompts_dir(),
                                 split=found.record() if found is not None else None)
         runs.append((s, RunStore(folder, manifest, restart=restart)))
-    _run_seeds(runs, chosen, options, method, dom, thor_build, labelled=seeds is not None)
+    _run_seeds(runs, chosen, options, method, dom, thor_build, labelled=seeds is not None,
+               planner_time_limit=planner_time_limit)
     per_run = [[lines[t.id] for t in chosen if t.id in lines] for lines in (store.results() for _, store in runs)]
     if split is not None and found is not None:
         typer.echo(f"the {split} half of {found.path} (seed {found.seed}), and every infeasible task:")
@@ -270,10 +278,10 @@ def _chosen_tasks(half: list[Task], found: Split | None, category: str | None, i
 
 
 def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: ModelOptions, method: str,
-               dom: Domain, thor_build: Path | None, *, labelled: bool) -> None:
+               dom: Domain, thor_build: Path | None, *, labelled: bool, planner_time_limit: float) -> None:
     """Plan, execute and score the tasks once per seed, resuming each run; Ctrl-C says how far it got."""
     cat = dom.catalogue
-    planners = [] if method == "reference" else options.planners(cat, dom)
+    planners = [] if method in MODEL_FREE else options.planners(cat, dom)
     try:
         for s, store in runs:
             done = store.results()
@@ -282,7 +290,9 @@ def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: Mo
                       "tasks done", file=sys.stderr)
             seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.site) for p in planners] or [None]
             with RunProgress(f"seed {s}" if labelled else "") as progress:
-                run_benchmark(chosen, [make_method(method, cat, p, dom.plans_dir()) for p in seeded], cat,
+                methods = [make_method(method, cat, p, dom.plans_dir(), planner_time_limit=planner_time_limit)
+                           for p in seeded]
+                run_benchmark(chosen, methods, cat,
                               out=store.out, store=store, build=str(thor_build) if thor_build else None,
                               progress=progress, domain=dom)
     except KeyboardInterrupt:

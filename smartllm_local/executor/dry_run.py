@@ -183,6 +183,10 @@ class DryRun:
         """The scene's objects now, as the executor sees them (read-only: they are shared with snapshots)."""
         return self._world.objects
 
+    def fits(self, obj: dict[str, Any], receptacle: dict[str, Any]) -> str | None:
+        """Why the world would not let ``obj`` go into ``receptacle``, or None if it would."""
+        return self._thor.sim.fits(obj, receptacle)
+
     def succeeds(self, members: Sequence[int], skill_name: str, objects: Sequence[str]) -> Outcome:
         """What the call would do from the current state, which it leaves as it was."""
         saved = self.snapshot()

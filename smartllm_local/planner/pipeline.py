@@ -117,7 +117,8 @@ class PlanResult:
     @property
     def refused_by(self) -> str | None:
         """Who refused: "grammar" (no team can do a sub-task the model wrote: it admitted nothing else),
-        "rule" (a rule-based allocation found no team), "model", or None."""
+        "rule" (a rule-based allocation found no team), "planner" (the goal-planner's search found no plan),
+        "model", or None."""
         if self.refusal is None:
             return None
         return next((r.refused_by for r in self.stages if r.refusal is not None and r.refused_by), "model")

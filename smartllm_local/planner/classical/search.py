@@ -1,0 +1,104 @@
+"""Fast Downward, through Unified Planning, on a planning task: the shortest plan, a proof there is none, or
+the time limit.
+
+The search is A* with the h^max heuristic: admissible (so the plan found is a shortest one in actions)
+and, unlike LM-cut, defined for the conditional effects the world's rules need. The PDDL that
+Unified Planning writes for Fast Downward is kept, for a reader or another planner.
+"""
+
+from __future__ import annotations
+
+import io
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import unified_planning.shortcuts as up
+from unified_planning.engines import PlanGenerationResultStatus as Status
+from unified_planning.io import PDDLWriter
+from unified_planning.plans import ActionInstance
+from up_fast_downward import FastDownwardPDDLPlanner
+
+from .problem import PlanningTask
+
+SEARCH = "astar(hmax())"
+up.get_environment().credits_stream = None  # the engines' banners are not the planner's log
+
+
+class _FastDownward(FastDownwardPDDLPlanner):
+    """Fast Downward with its intermediate file in a folder of its own: by default its translator writes
+    output.sas in the working directory, where two searches at once (or a user's file) would collide."""
+
+    def __init__(self, sas_file: Path):
+        super().__init__(fast_downward_search_config=SEARCH)
+        self._sas_file = sas_file
+
+    def _base_cmd(self, plan_filename: str) -> list[str]:
+        interpreter, driver, *rest = super()._base_cmd(plan_filename)
+        return [interpreter, driver, "--sas-file", str(self._sas_file), *rest]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One action of the plan: the skill, the acting robots (team indices) and the objectIds."""
+
+    skill: str
+    robots: tuple[int, ...]
+    objects: tuple[str, ...]
+    action: str  # the AI2-THOR action the skill performs ("" for GoToObject)
+
+
+@dataclass
+class Search:
+    """What the search gave: ``steps`` (a plan; empty when the goal already holds), or ``unsolvable``,
+    or ``timed_out``; the planner's log and the PDDL it read."""
+
+    steps: list[Step] = field(default_factory=list)
+    actions: list[ActionInstance] = field(default_factory=list)  # the same plan, as the model's actions
+    unsolvable: bool = False
+    timed_out: bool = False
+    status: str = ""
+    log: str = ""
+    domain_pddl: str = ""
+    problem_pddl: str = ""
+
+    @property
+    def found(self) -> bool:
+        return not (self.unsolvable or self.timed_out)
+
+
+def pddl(task: PlanningTask) -> tuple[str, str]:
+    """The domain and the problem, as PDDL files would hold them."""
+    writer = PDDLWriter(task.problem)
+    return writer.get_domain(), writer.get_problem()
+
+
+def search(task: PlanningTask, time_limit: float) -> Search:
+    """Run Fast Downward for at most ``time_limit`` seconds."""
+    domain, problem = pddl(task)
+    result = Search(domain_pddl=domain, problem_pddl=problem)
+    log = io.StringIO()
+    with tempfile.TemporaryDirectory(prefix="smartllm-fd-") as folder, \
+            _FastDownward(Path(folder) / "output.sas") as planner:
+        answer = planner.solve(task.problem, timeout=time_limit, output_stream=log)
+    result.log, result.status = log.getvalue(), answer.status.name
+    if answer.status == Status.TIMEOUT:
+        result.timed_out = True
+    elif answer.status in (Status.UNSOLVABLE_PROVEN, Status.UNSOLVABLE_INCOMPLETELY):
+        result.unsolvable = True
+    elif answer.plan is None:
+        raise RuntimeError(f"Fast Downward ended with {answer.status.name} and no plan:\n{result.log[-2000:]}")
+    else:
+        result.actions = list(answer.plan.actions)
+        result.steps = [_step(task, a) for a in result.actions]
+    return result
+
+
+def _step(task: PlanningTask, action: ActionInstance) -> Step:
+    """A planner action as a skill call: PickupObject_together(r, helper, t) is one call by both robots,
+    the first of whom acts (the executor's choice: the free hand with the skill, the hand with the knife)."""
+    names = [str(p) for p in action.actual_parameters]
+    robots = tuple(task.robots[n] for n in names if n in task.robots)
+    objects = tuple(task.things[n] for n in names if n in task.things)
+    skill = task.skill_of[action.action.name]
+    return Step(skill, robots, objects, task.actions[skill])

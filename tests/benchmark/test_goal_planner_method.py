@@ -1,0 +1,106 @@
+"""The goal-planner method: the goal stage's goal (or, as an oracle, the task's own) handed to Fast Downward, its plan
+run by the same executor and scorer as every method's, through the real CLI and Controller."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+pytest.importorskip("unified_planning")
+pytest.importorskip("up_fast_downward")
+
+from smartllm_local.benchmark.methods import GoalPlanner, make_method  # noqa: E402
+from smartllm_local.benchmark.tasks import load_tasks  # noqa: E402
+from smartllm_local.domain import load_domain  # noqa: E402
+from smartllm_local.planner.pipeline import Planner, PlanResult  # noqa: E402
+from smartllm_local.planner.stages import StageRecord  # noqa: E402
+
+from .conftest import benchmark_run  # noqa: E402
+
+HOUSEHOLD = load_domain("household")
+CATALOGUE = HOUSEHOLD.catalogue
+TASKS = {t.id: t for t in load_tasks(HOUSEHOLD.task_files(), catalogue=CATALOGUE, domain=HOUSEHOLD)}
+
+
+def _lines(out) -> dict[str, dict]:
+    return {line["id"]: line for line in map(json.loads, (out / "results.jsonl").read_text().splitlines())}
+
+
+def test_the_methods_stages_and_options():
+    assert [s.name for s in make_method("goal-planner-oracle", CATALOGUE, None).stages()] == ["allocation"]
+    method = make_method("goal-planner", CATALOGUE, None, planner_time_limit=5)
+    assert isinstance(method, GoalPlanner) and method.time_limit == 5
+    assert [s.name for s in method.stages()] == ["goal", "allocation"]
+
+
+def _stated(text: str) -> PlanResult:
+    task = TASKS["kitchen-05"]
+    result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
+    result.stages.append(StageRecord("goal", output=text))
+    return result
+
+
+def test_the_planner_plans_for_the_goal_the_goal_stage_stated():
+    # the goal stage's record, written here: what the planner reads is the stated goal, never the task's
+    task = TASKS["kitchen-05"]  # its own goal is the apple, the tomato and the lettuce in the fridge
+    method = GoalPlanner(None, CATALOGUE, time_limit=300)
+    result = _stated("Apple in Fridge\n")
+    method.allocate(task, result)
+    record = result.stages[-1]
+    assert record.stage == "allocation" and record.plan is not None and result.refusal is None, record.raw[-2000:]
+    assert "'Apple|" in record.output and "'Tomato|" not in record.output and "'Lettuce|" not in record.output
+
+
+def test_a_stated_goal_the_scene_cannot_meet_is_the_planner_s_refusal():
+    task = TASKS["kitchen-05"]
+    result = _stated("Fridge on\n")
+    GoalPlanner(None, CATALOGUE, time_limit=300).allocate(task, result)
+    assert result.refusal is not None and result.refused_by == "planner"
+
+
+def test_the_oracle_s_plans_run_in_the_executor_with_sr_1(tmp_path):
+    # a light and a lettuce (two parts in parallel); a laptop two light robots lift together
+    out = tmp_path / "oracle"
+    benchmark_run(out, "--method", "goal-planner-oracle", "--task", "kitchen-08", "--task", "living-07",
+                  "--task", "kitchen-inf-01", "--planner-time-limit", "600")
+    lines = _lines(out)
+    for task_id in ("kitchen-08", "living-07"):
+        assert lines[task_id]["SR"] == 1.0 and lines[task_id]["Exe"] == 1.0, lines[task_id]
+    assert lines["kitchen-inf-01"]["refused"] and lines["kitchen-inf-01"]["refused_by"] == "planner"
+    folder = out / "kitchen-08"
+    assert "(define (domain" in (folder / "allocation" / "prompt.txt").read_text()
+    assert "Fast Downward" in (folder / "allocated.py").read_text()
+    assert "search" in (folder / "allocation" / "raw_output.txt").read_text().lower()
+
+
+def test_the_time_limit_fails_the_task_with_its_error(tmp_path):
+    out = tmp_path / "limited"
+    benchmark_run(out, "--method", "goal-planner-oracle", "--task", "kitchen-12", "--planner-time-limit", "0.001")
+    line = _lines(out)["kitchen-12"]
+    assert "time limit" in line["error"] and "--planner-time-limit" in line["error"] and not line["refused"]
+
+
+def test_a_time_limit_that_is_not_positive_is_refused_at_the_command_line(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "smartllm_local", "benchmark", "run", "--out", str(tmp_path / "x"),
+                           "--method", "goal-planner-oracle", "--planner-time-limit", "0"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2 and "--planner-time-limit must be a positive" in proc.stderr
+
+
+def test_the_goal_stage_on_smollm2_then_the_planner(tmp_path, smollm2):
+    # the whole method on a model: whatever the tiny model states is what the planner is given
+    task = TASKS["kitchen-01"]
+    planner = Planner(smollm2, CATALOGUE)
+    method = GoalPlanner(planner, CATALOGUE, time_limit=600)
+    result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
+    method.state_goals(task, result)
+    stated = result.stages[0]
+    assert stated.stage == "goal" and stated.output
+    if result.refusal is None and not result.error:
+        method.allocate(task, result)
+        record = result.stages[-1]
+        assert record.stage == "allocation"
+        assert record.plan is not None or record.refused_by == "planner" or "holds already" in record.error
