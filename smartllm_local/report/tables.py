@@ -179,7 +179,8 @@ def refusal_table(runs: Sequence[Run]) -> Table:
                                        good["tasks"], good["refused"], bad["errors"] + good["errors"]])
     table.notes += [
         "by model: the model chose to refuse; by grammar: the grammar left it no other output (no team of the "
-        "robots can do a sub-task it wrote); by rule: a method without a model (decomp-rule, reference); by "
+        "robots can do a sub-task it wrote); by goal check: a goal the model stated is out of the team's reach; "
+        "by rule: a method without a model (decomp-rule, reference); by "
         "planner: the goal-planner's search proved the goal unreachable for the team.",
         "Counts are summed over seeds."]
     return table
