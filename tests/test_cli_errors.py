@@ -166,7 +166,8 @@ def test_a_reference_plans_folder_that_is_not_there_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize("args, parts", [
-    (["--method", "oracle"], ["--method must be one of smartllm, decomp-random, decomp-rule, reference, not 'oracle'"]),
+    (["--method", "oracle"], ["--method must be one of smartllm, decomp-random, decomp-rule, goal-planner, "
+                              "goal-planner-oracle, reference, not 'oracle'"]),
     (["--seeds", "three"], ["--seeds must be a count (e.g. 5) or a list of seeds (e.g. 0,1,2), not 'three'"]),
     (["--seeds", "1,1", "--temperature", "0.7"], ["--seeds must name distinct seeds"]),
     (["--seeds", "0"], ["--seeds must name distinct seeds between 0 and 4294967295, at least one"]),
