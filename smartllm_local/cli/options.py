@@ -57,7 +57,7 @@ class ModelOptions:
                  endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None,
                  no_loop_guard: bool = False, no_token_alignment: bool = False,
                  candidates: int = DEFAULT_CANDIDATES, candidate_temperature: float = CANDIDATE_TEMPERATURE,
-                 select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK):
+                 select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -105,6 +105,7 @@ class ModelOptions:
             world_check=not no_world_check,
             candidates=Candidates(candidates, candidate_temperature, select),
             goal_check=goal_check,
+            stop_at_goals=not no_stop_at_goals,
         )
         self.seed = seed
 
@@ -205,6 +206,10 @@ _GOAL_CHECK = typer.Option(DEFAULT_GOAL_CHECK, "--goal-check/--no-goal-check", e
     "State the task's goals first (the goal stage) and refuse a task whose stated goals the team cannot meet "
     "(a state no robot's skill gives, a load too heavy for every lifter); the verifier checks candidates "
     "against them. With the grammar only."))
+_NO_STOP_AT_GOALS = typer.Option(False, "--no-stop-at-goals", help=(
+    "Let the decomposition begin another sub-task after the goals the goal stage stated all hold in the dry "
+    "run, rather than end the plan there (for measuring what that changes; see docs/planner.md, \"Stopping at "
+    "the stated goals\")."))
 
 #: Every model option: its parameter name, type and typer option, in the order --help lists them.
 MODEL_PARAMETERS = [
@@ -221,7 +226,7 @@ MODEL_PARAMETERS = [
         ("endpoint", str | None, _ENDPOINT), ("workers", int, _WORKERS),
         ("server_timeout", float | None, _SERVER_TIMEOUT), ("candidates", int, _CANDIDATES),
         ("candidate_temperature", float, _CANDIDATE_TEMPERATURE), ("select", str, _SELECT),
-        ("goal_check", bool, _GOAL_CHECK),
+        ("goal_check", bool, _GOAL_CHECK), ("no_stop_at_goals", bool, _NO_STOP_AT_GOALS),
     )
 ]
 

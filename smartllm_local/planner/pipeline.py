@@ -92,6 +92,7 @@ class PlannerConfig:
     world_check: bool = True
     candidates: Candidates = Candidates()
     goal_check: bool = False
+    stop_at_goals: bool = True
 
 
 @dataclass
@@ -196,13 +197,15 @@ class Planner:
         record = StageRecord("decomposition", chat_template=self.chat_status)
         skills = self.catalogue.skills
         world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site) if self.config.world_check else None
+        goals = stated_conditions(result, scene) if self.config.stop_at_goals else []
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
-                                    for_team=team) if self.config.grammar else None
+                                    for_team=team, goals=goals) if self.config.grammar else None
         rng = self.stage_rng(result, record.stage if k == 0 else f"{record.stage} candidate {k}")
         run_stage(record, backend, prompt, constraint, output_budget=self.config.budgets["decomposition"],
                   sampling=self.config.candidates.sampling(self.config.sampling, k), rng=rng, progress=progress)
         self._finish_plan_stage(record, PlanResult(result.instruction, result.floor_plan, result.robots),
                                 form="decomposed", scene=scene)
+        record.ended_at_goals = constraint is not None and constraint.ended_at_goals
         if record.refusal is not None and constraint is not None and constraint.must_refuse:
             record.refused_by = "grammar"  # the team can make no call in this scene
         return record

@@ -61,6 +61,7 @@ class StageRecord:
     capped: list[str] = field(default_factory=list)  # what the output budget kept the grammar from offering
     world_tries: int = 0  # calls the world check tried
     dead_ends: int = 0  # lines for which it found nothing that succeeds
+    ended_at_goals: bool = False  # a decomposition's next sub-task was withheld: the stated goals all held
     loops_ended: int = 0  # loops the loop guard ended: in free text, and of whole lines (see backends.repetition)
     choices: int = 0  # tokens the model chose (not forced), where the backend measures them
     refused: int = 0  # of those, where the model's likeliest token was one the grammar refused

@@ -13,11 +13,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any
 
 from ..plan_language import Plan
 from ..plan_language.ir import Call, Function, SkillCall
-from ..scoring import Condition, condition_holds, containment
+from ..scoring import Condition
 from ..skills import SkillSet
 from .constraints.format import MAX_SUBTASKS
 from .constraints.world_check import WorldCheck
@@ -65,13 +64,14 @@ def check_decomposition(plan: Plan, scene: SceneObjects, skills: SkillSet, condi
     (a dry run more per sub-task)."""
     world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site)
     start = world.run.snapshot()
-    calls, failed, objects = _run(world, plan, skip=None)
-    met = _met(conditions, objects)
+    calls, failed = _run(world, plan, skip=None)
+    met = world.met(conditions)
     lazy = 0
     if idle and conditions:
         for k in range(len(plan.functions)):
             world.run.restore(start)
-            lazy += _met(conditions, _run(world, plan, skip=k)[2]) >= met
+            _run(world, plan, skip=k)
+            lazy += world.met(conditions) >= met
     return Check(calls=calls, failed=failed, goals=len(conditions), met=met, subtasks=len(plan.functions), idle=lazy)
 
 
@@ -88,8 +88,8 @@ def choose(scores: Sequence[float]) -> int:
     return max(range(len(scores)), key=lambda k: (scores[k], -k))
 
 
-def _run(world: WorldCheck, plan: Plan, skip: int | None) -> tuple[int, int, list[Mapping[str, Any]]]:
-    """Each sub-task's calls by a robot of its own, in order (all but ``skip``): calls, failures, final objects."""
+def _run(world: WorldCheck, plan: Plan, skip: int | None) -> tuple[int, int]:
+    """Each sub-task's calls by a robot of its own, in order (all but ``skip``): calls and failures."""
     by_name = plan.by_name
     calls = failed = 0
     for k, function in enumerate(plan.functions):
@@ -98,9 +98,7 @@ def _run(world: WorldCheck, plan: Plan, skip: int | None) -> tuple[int, int, lis
         for step in _steps(function, by_name, set()):
             calls += 1
             failed += not world.perform([(None, step.skill, step.objects)], [k])
-    run = world.run
-    objects = run.objects if hasattr(run, "objects") else run.world.objects  # type: ignore[union-attr]
-    return calls, failed, list(objects)
+    return calls, failed
 
 
 def _steps(function: Function, by_name: Mapping[str, Function], seen: set[str]) -> list[SkillCall]:
@@ -113,7 +111,3 @@ def _steps(function: Function, by_name: Mapping[str, Function], seen: set[str]) 
             steps.extend(_steps(by_name[step.function], by_name, seen | {function.name}))
     return steps
 
-
-def _met(conditions: Sequence[Condition], objects: Sequence[Mapping[str, Any]]) -> int:
-    inside = containment(objects)
-    return sum(condition_holds(c, objects, inside) for c in conditions)

@@ -36,6 +36,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from ...robots import Robot
+from ...scoring import Condition
 from ...skills import Skill, SkillSet
 from ..decoding.grammar import Node, Ref, alt, chars, rep, seq
 from ..decoding.line_ends import COMMENT_NEXT, INDENTED_NEXT
@@ -143,10 +144,12 @@ class PlanConstraint(Constraint):
         team: Sequence[Robot] | None = None,
         world: WorldCheck | None = None,
         for_team: Sequence[Robot] | None = None,
+        goals: Sequence[Condition] = (),
     ):
         """``team`` (or ``team_size``) makes it an allocation; ``for_team`` is the team a decomposition is
         written for: it offers only the calls that team can make (see :class:`.feasibility.WholeTeam`), and
-        a refusal only for a reason the catalogue gives (:meth:`_reasons`)."""
+        a refusal only for a reason the catalogue gives (:meth:`_reasons`). ``goals`` (the goal stage's, with a
+        world check): once they all hold in the dry run, no further sub-task is begun."""
         super().__init__()
         if team is not None:
             team_size = len(team)
@@ -161,6 +164,8 @@ class PlanConstraint(Constraint):
         self.allow_refusal = allow_refusal
         self.scene = scene
         self.world = world
+        self.goals = list(goals) if world is not None else []
+        self.ended_at_goals = False  # a sub-task was withheld: the goals held
         self.phase = "start"
         usable = [s for s in skills.values() if all(scene.types_for(a) for a in s.arguments[: s.required])]
         if not _acts(usable):
@@ -327,7 +332,7 @@ class PlanConstraint(Constraint):
         if self.fixed_names:
             return Forced(f"def {self.fixed_names[k - 1]}(robot_list):\n")
         options: dict[str, Node] = {}
-        if self.owed or k <= self.max_subtasks:
+        if self.owed or (k <= self.max_subtasks and not self._goals_held()):
             header = self._header(k, remaining)
             if header is None:
                 self._cap(f"sub-task {k}")
@@ -336,6 +341,12 @@ class PlanConstraint(Constraint):
         if not self.owed:
             options.update(self._orch_options(remaining))
         return self._choose({**self.rules, **self._orch_rules(remaining)}, options)
+
+    def _goals_held(self) -> bool:
+        """Whether every stated goal holds in the dry run (a sub-task begun now would be one nobody asked for)."""
+        held = bool(self.goals) and self.world is not None and self.world.met(self.goals) == len(self.goals)
+        self.ended_at_goals = self.ended_at_goals or held
+        return held
 
     def _body(self, remaining: int) -> Forced | Choose:
         """A body line. The budget is kept on the unchecked choices (the world check's preferences give

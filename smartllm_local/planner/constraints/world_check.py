@@ -15,12 +15,14 @@ docs/planner.md, "The world check"). A site domain's plan is tried on its site s
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 from ...domain import Domain
 from ...executor.dry_run import DryRun, notional_robot
 from ...executor.site import SiteDryRun, notional_site_robot
 from ...robots import Robot
+from ...scoring import Condition, condition_holds, containment
 from ...skills import SkillSet
 
 #: One step of a function: its robot_list slot (None: the whole list), skill and objects.
@@ -49,6 +51,17 @@ class WorldCheck:
 
     def apply(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> None:
         self.run.apply(members, skill, objects)
+
+    def objects(self) -> list[Mapping[str, Any]]:
+        """The dry run's objects now, as the scorer reads a final state."""
+        run = self.run
+        return list(run.objects if isinstance(run, DryRun) else run.world.objects)
+
+    def met(self, conditions: Sequence[Condition]) -> int:
+        """How many of ``conditions`` hold in the dry run now."""
+        objects = self.objects()
+        inside = containment(objects)
+        return sum(condition_holds(c, objects, inside) for c in conditions)
 
     def leads_somewhere(self, members: Sequence[int], goto: str, target: str,
                         then: Sequence[tuple[str, Sequence[str]]]) -> bool:
