@@ -140,9 +140,20 @@ def summary_table(lines: Sequence[Line]) -> str:
                         if counts[f"by {k}"] or k in ("model", "grammar"))
         rows.append(f"{'infeasible':<14}{counts['tasks']:>6}{counts['errors']:>7}"
                     f"   correctly refused {counts['refused']}/{counts['tasks']} ({who})")
-    bent = bending_line(lines)
-    ceiling = candidates_line(lines)
-    return "\n".join(rows + ([bent] if bent else []) + ([ceiling] if ceiling else []))
+    extra = [line for line in (bending_line(lines), repairs_line(lines), candidates_line(lines)) if line]
+    return "\n".join(rows + extra)
+
+
+def repairs_line(lines: Sequence[Line]) -> str:
+    """What the planner wrote into the decompositions: repairs (its steps before a model's call, and the calls it
+    could not enable) and plans ended at the stated goals ("" where it did nothing)."""
+    ran = [line["tokens"]["decomposition"] for line in lines if "decomposition" in line.get("tokens", {})]
+    repairs, tasks = sum(r.get("repairs", 0) for r in ran), sum(bool(r.get("repairs")) for r in ran)
+    missed, ended = sum(r.get("unrepaired", 0) for r in ran), sum(bool(r.get("ended_at_goals")) for r in ran)
+    if not (repairs or missed or ended):
+        return ""
+    return (f"planner in the decomposition: {repairs} repair(s) in {tasks} task(s), {missed} call(s) it could not "
+            f"enable taken back; {ended} plan(s) ended at the stated goals")
 
 
 def candidates_line(lines: Sequence[Line]) -> str:

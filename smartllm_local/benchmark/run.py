@@ -71,7 +71,10 @@ class TaskOutcome:
                                         "generated": r.generated_tokens, "seconds": round(r.seconds, 2),
                                         "prompt_seconds": round(r.prompt_seconds, 2),
                                         "choices": r.choices, "refused": r.refused, "logprob": round(r.logprob, 3),
-                                        "completed_lines": r.completed_lines}
+                                        "completed_lines": r.completed_lines,
+                                        **({"repairs": len(r.repairs), "unrepaired": r.unrepaired,
+                                            "ended_at_goals": r.ended_at_goals}
+                                           if r.stage == "decomposition" else {})}
                               for r in self.result.stages}
             if self.result.notices:
                 data["notices"] = self.result.notices

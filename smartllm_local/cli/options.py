@@ -57,7 +57,8 @@ class ModelOptions:
                  endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None,
                  no_loop_guard: bool = False, no_token_alignment: bool = False,
                  candidates: int = DEFAULT_CANDIDATES, candidate_temperature: float = CANDIDATE_TEMPERATURE,
-                 select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False):
+                 select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
+                 no_repair: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -106,6 +107,7 @@ class ModelOptions:
             candidates=Candidates(candidates, candidate_temperature, select),
             goal_check=goal_check,
             stop_at_goals=not no_stop_at_goals,
+            repair=not no_repair,
         )
         self.seed = seed
 
@@ -210,6 +212,10 @@ _NO_STOP_AT_GOALS = typer.Option(False, "--no-stop-at-goals", help=(
     "Let the decomposition begin another sub-task after the goals the goal stage stated all hold in the dry "
     "run, rather than end the plan there (for measuring what that changes; see docs/planner.md, \"Stopping at "
     "the stated goals\")."))
+_NO_REPAIR = typer.Option(False, "--no-repair", help=(
+    "Offer the decomposition only the calls that succeed where a sub-task stands, rather than also those that "
+    "fail there and write them after the steps Fast Downward finds to enable them (a knife fetched before a "
+    "slice; see docs/planner.md, \"Repair\")."))
 
 #: Every model option: its parameter name, type and typer option, in the order --help lists them.
 MODEL_PARAMETERS = [
@@ -227,6 +233,7 @@ MODEL_PARAMETERS = [
         ("server_timeout", float | None, _SERVER_TIMEOUT), ("candidates", int, _CANDIDATES),
         ("candidate_temperature", float, _CANDIDATE_TEMPERATURE), ("select", str, _SELECT),
         ("goal_check", bool, _GOAL_CHECK), ("no_stop_at_goals", bool, _NO_STOP_AT_GOALS),
+        ("no_repair", bool, _NO_REPAIR),
     )
 ]
 

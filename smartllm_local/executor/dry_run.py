@@ -183,6 +183,14 @@ class DryRun:
         """The scene's objects now, as the executor sees them (read-only: they are shared with snapshots)."""
         return self._world.objects
 
+    def holding(self, member: int) -> dict[str, Any] | None:
+        """What the member holds now (None: its hand is empty)."""
+        return self._world.holding(member)
+
+    def sees(self, member: int, object_id: str) -> bool:
+        """Whether the object is within the member's reach now (where it went, it sees)."""
+        return self._world.sees(member, object_id)
+
     def fits(self, obj: dict[str, Any], receptacle: dict[str, Any]) -> str | None:
         """Why the world would not let ``obj`` go into ``receptacle``, or None if it would."""
         return self._thor.sim.fits(obj, receptacle)

@@ -33,6 +33,7 @@ from .constraints.coalition import CoalitionConstraint
 from .constraints.feasibility import function_needs
 from .constraints.format import MAX_SUBTASKS
 from .constraints.plan import PlanConstraint
+from .constraints.repair import Repairer
 from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
@@ -93,6 +94,7 @@ class PlannerConfig:
     candidates: Candidates = Candidates()
     goal_check: bool = False
     stop_at_goals: bool = True
+    repair: bool = True
 
 
 @dataclass
@@ -198,14 +200,18 @@ class Planner:
         skills = self.catalogue.skills
         world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site) if self.config.world_check else None
         goals = stated_conditions(result, scene) if self.config.stop_at_goals else []
+        repairer = Repairer(world, skills) if world is not None and self.config.repair and scene.site is None \
+            else None
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
-                                    for_team=team, goals=goals) if self.config.grammar else None
+                                    for_team=team, goals=goals, repairer=repairer) if self.config.grammar else None
         rng = self.stage_rng(result, record.stage if k == 0 else f"{record.stage} candidate {k}")
         run_stage(record, backend, prompt, constraint, output_budget=self.config.budgets["decomposition"],
                   sampling=self.config.candidates.sampling(self.config.sampling, k), rng=rng, progress=progress)
         self._finish_plan_stage(record, PlanResult(result.instruction, result.floor_plan, result.robots),
                                 form="decomposed", scene=scene)
-        record.ended_at_goals = constraint is not None and constraint.ended_at_goals
+        if constraint is not None:
+            record.ended_at_goals, record.repairs = constraint.ended_at_goals, constraint.repairs
+            record.unrepaired = len(constraint.unrepaired)
         if record.refusal is not None and constraint is not None and constraint.must_refuse:
             record.refused_by = "grammar"  # the team can make no call in this scene
         return record

@@ -62,6 +62,8 @@ class StageRecord:
     world_tries: int = 0  # calls the world check tried
     dead_ends: int = 0  # lines for which it found nothing that succeeds
     ended_at_goals: bool = False  # a decomposition's next sub-task was withheld: the stated goals all held
+    repairs: list[dict[str, Any]] = field(default_factory=list)  # the planner's lines before a model's (repair)
+    unrepaired: int = 0  # lines the model wrote that the planner could not enable (taken back)
     loops_ended: int = 0  # loops the loop guard ended: in free text, and of whole lines (see backends.repetition)
     choices: int = 0  # tokens the model chose (not forced), where the backend measures them
     refused: int = 0  # of those, where the model's likeliest token was one the grammar refused
@@ -237,7 +239,7 @@ class _StageWriter(TokenWriter):
         self.record, self.backend, self.context, self.sampling, self.rng = record, backend, context, sampling, rng
         self.progress = progress
         self.raw = ""  # what was written, as it was written (the output is that, normalized)
-        self._last = 0  # tokens of the last line written
+        self._last = 0  # tokens of the last line written, and of text forced after it
 
     def write(self, line: Line, remaining: int) -> Written:
         record = self.record
@@ -261,14 +263,16 @@ class _StageWriter(TokenWriter):
         return Written(result.text, len(result.tokens) + ended, ended=ended and result.text.count("\n") < line.lines)
 
     def take_back(self, written: Written) -> None:
-        """The line just written began a loop of lines: out of the context (the backend evaluates the context
-        it is next given), and out of ``raw``, which stays the text the model was given."""
+        """The line just written (and what was forced after it) is not kept (it began a loop of lines, or the
+        constraint writes another in its place): out of the context (the backend evaluates the context it is
+        next given), and out of ``raw``, which stays the text the model was given."""
         del self.context[len(self.context) - self._last:]
         self.raw = self.raw[: len(self.raw) - len(written.text)]
 
     def force(self, text: str) -> int:
         tokens = self.backend.tokenize_continuation(text)  # one batch, whatever the tokenizer family
         self.context.extend(tokens)
+        self._last += len(tokens)
         self.raw += text
         self.record.forced_tokens += len(tokens)
         self.progress.tokens_written(self.record.stage, self.record.generated_tokens, self.record.forced_tokens)

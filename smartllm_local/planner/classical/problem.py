@@ -125,8 +125,10 @@ def relevant(objects: Sequence[Mapping[str, Any]], conditions: Sequence[Conditio
 
 
 def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditions: Sequence[Condition],
-                  name: str = "task") -> PlanningTask:
-    """The problem of reaching ``conditions`` with ``team`` from the dry run's current state.
+                  name: str = "task", members: Sequence[int] | None = None) -> PlanningTask:
+    """The problem of reaching ``conditions`` with ``team`` from the dry run's current state. ``members``: the
+    dry run's robots the team's are, each starting as that one stands (by what it sees, holding what it holds);
+    none given, the team starts with empty hands, by nothing.
 
     Raises:
         Unreachable: a condition that no object of the scene can meet (naming it).
@@ -140,7 +142,10 @@ def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditio
             problem.add_action(action)
             skill_of[action.name] = skill.name
     table, future = with_future_pieces(dry.objects)
-    chosen = relevant(table, conditions)
+    held = [dry.holding(m) for m in members or ()]
+    kept = {h["objectId"] for h in held if h is not None}
+    kept |= {o["objectId"] for o in relevant(table, conditions)}
+    chosen = [o for o in table if o["objectId"] in kept]
     taken: set[str] = set()
     things = {o["objectId"]: Object(_name(o["objectType"] + str(k), taken),
                                     ITEM if o.get("pickupable") else FIXTURE)
@@ -148,6 +153,8 @@ def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditio
     robots = [Object(_name(f"robot{i}", taken), ROBOT) for i in range(len(team))]  # robots[i] of a plan
     problem.add_objects([*things.values(), *robots])
     _initial_state(problem, v, dry, chosen, things, future, team)
+    for robot, member in zip(robots, members or ()):
+        _stands(problem, v, dry, member, robot, things)
     problem.add_goal(And(*(_condition(v, c, chosen, things, future) for c in conditions)))
     return PlanningTask(problem, {o.name: oid for oid, o in things.items()},
                         {o.name: i for i, o in enumerate(robots)}, {s.name: s.action for s in skills.values()},
@@ -223,6 +230,18 @@ def _robots(problem: Problem, v: Vocabulary, dry: DryRun, by_id: Mapping[str, Ma
             for j, helper in enumerate(robots):
                 if j != i and team[i].mass_capacity + team[j].mass_capacity + _MASS_TOLERANCE >= mass:
                     problem.set_initial_value(v.lifts_together(robot, helper, things[oid]), True)
+
+
+def _stands(problem: Problem, v: Vocabulary, dry: DryRun, member: int, robot: Object,
+            things: Mapping[str, Object]) -> None:
+    """A robot that has acted already: by what its dry-run member sees, holding what it holds."""
+    for oid, thing in things.items():
+        if dry.sees(member, oid):
+            problem.set_initial_value(v.at(robot, thing), True)
+    held = dry.holding(member)
+    if held is not None and held["objectId"] in things:
+        problem.set_initial_value(v.holding(robot, things[held["objectId"]]), True)
+        problem.set_initial_value(v.free(robot), False)
 
 
 def _carried_mass(table: Mapping[str, Mapping[str, Any]], obj: Mapping[str, Any]) -> float:

@@ -62,7 +62,8 @@ class Candidates:
         # On a site, a move is an end in itself (back to base): a function may end with one, or make two.
         self.goto_acts = scene.site is not None
         self._cache: dict[tuple, list[Candidate]] = {}
-        self.action_max = max(self.line_len(c) for c in self._filtered(None))
+        self._every = list(self._filtered(None))
+        self.action_max = max(self.line_len(c) for c in self._every)
         releases = [c for c in self._filtered(None) if c[0].action == "DropHandObject"] or \
             [c for c in self._filtered(None) if c[0].action in RELEASE]
         self.release_max = max((self.line_len(c) for c in releases), default=self.action_max)
@@ -127,6 +128,14 @@ class Candidates:
                     yield skill, (first,)
                 for second in types[1]:
                     yield skill, (first, second)
+
+    def every(self) -> list[Candidate]:
+        """Every action call the plan may make, whatever a function has done."""
+        return self._every
+
+    def line(self, candidate: Candidate) -> str:
+        """A decomposition's line for the call."""
+        return f"{INDENT}{candidate[0].name}({args_text(candidate[1])})\n"
 
     def node(self, candidates: Sequence[Candidate]) -> Node | None:
         """Call lines for candidates, grouped by skill; None for none."""

@@ -40,10 +40,10 @@ from ...scoring import Condition
 from ...skills import Skill, SkillSet
 from ..decoding.grammar import Node, Ref, alt, chars, rep, seq
 from ..decoding.line_ends import COMMENT_NEXT, INDENTED_NEXT
-from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, longest
+from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, Rewrite, longest
 from ..prompting.scene_context import SceneObjects
 from .budget import Budget
-from .candidates import RELEASE, STATE_ACTIONS, Candidates
+from .candidates import RELEASE, STATE_ACTIONS, Candidate, Candidates
 from .feasibility import Step, WholeTeam, call_demand, feasible_lists, minimal_lists, shortest_list
 from .format import (
     COMMENT_LEN,
@@ -65,6 +65,7 @@ from .format import (
     robot_list,
     text_run,
 )
+from .repair import MOST_STEPS, Repairer, repairable
 from .world_check import Call, WorldCheck
 
 _CALL = re.compile(r"^\s+(\w+)\((?:robot_list(?:\[(\d+)\])?, )?'([^']+)'(?:, '([^']+)')?\)$")
@@ -145,11 +146,14 @@ class PlanConstraint(Constraint):
         world: WorldCheck | None = None,
         for_team: Sequence[Robot] | None = None,
         goals: Sequence[Condition] = (),
+        repairer: Repairer | None = None,
     ):
         """``team`` (or ``team_size``) makes it an allocation; ``for_team`` is the team a decomposition is
         written for: it offers only the calls that team can make (see :class:`.feasibility.WholeTeam`), and
         a refusal only for a reason the catalogue gives (:meth:`_reasons`). ``goals`` (the goal stage's, with a
-        world check): once they all hold in the dry run, no further sub-task is begun."""
+        world check): once they all hold in the dry run, no further sub-task is begun. ``repairer`` (a
+        decomposition's, with a world check): a call that fails where the function stands is offered too, and
+        written after the planner's steps that enable it (see :mod:`.repair`)."""
         super().__init__()
         if team is not None:
             team_size = len(team)
@@ -166,6 +170,11 @@ class PlanConstraint(Constraint):
         self.world = world
         self.goals = list(goals) if world is not None else []
         self.ended_at_goals = False  # a sub-task was withheld: the goals held
+        self.repairer = repairer if world is not None and team is None and team_size is None else None
+        self.repairs: list[dict[str, object]] = []  # each repair: the model's line and the planner's before it
+        self.unrepaired: set[tuple[int, int, str]] = set()  # (function, step, line) the planner could not enable
+        self.rewrite: str | None = None  # the text that replaces the line just written
+        self.rewriting = False  # that text is being fed
         self.phase = "start"
         usable = [s for s in skills.values() if all(scene.types_for(a) for a in s.arguments[: s.required])]
         if not _acts(usable):
@@ -258,7 +267,11 @@ class PlanConstraint(Constraint):
 
     # ------------------------------------------------------------- choices
 
-    def next(self, remaining: int) -> Forced | Choose | None:
+    def next(self, remaining: int) -> Forced | Choose | Rewrite | None:
+        if self.rewrite is not None:
+            rewrite, self.rewrite = self.rewrite, None
+            self.rewriting = bool(rewrite)
+            return Rewrite(rewrite)
         if self.must_refuse:
             return self._choose({}, {"refusal": self.refusal_line}) if self.phase == "start" else None  # type: ignore[dict-item]
         if self.pending:
@@ -378,6 +391,9 @@ class PlanConstraint(Constraint):
                                  if calls.line_len(c) + calls.hold_after(fn, c) <= remaining - closing])
             if action is not None:
                 options["action"] = action
+            repair = calls.node(self._repairable(fn, actions, remaining - closing))
+            if repair is not None:
+                options["repair"] = repair
         # With a world check a function puts down what it holds before it ends, if there is room to.
         must_release = self.world is not None and not self.allocated and fn.held and "action" in options
         step_follows = self.world is None or bool({"goto", "action"} & set(options))
@@ -395,6 +411,35 @@ class PlanConstraint(Constraint):
             if cap >= 1:
                 options["comment"] = seq(INDENT, "# ", comment_text(cap), "\n")
         return self._choose(self.rules, options)
+
+    def _repairable(self, fn: WrittenFunction, succeeding: Sequence[Candidate], room: int) -> list[Candidate]:
+        """The calls that fail now and that the planner may enable in the room there is: a repair's steps, the
+        call, and putting down what is held after it (each at its longest line)."""
+        if self.repairer is None or fn.steps + MOST_STEPS + 2 > self.max_steps:
+            return []
+        calls = self.candidates
+        room -= MOST_STEPS * max(calls.goto_max, calls.action_max) + calls.release_max
+        done = set(succeeding)
+        k = len(self.functions) - 1
+        return [c for c in calls.every() if c not in done and repairable(c[0]) and calls.line_len(c) <= room
+                and (k, fn.steps, calls.line(c)) not in self.unrepaired]
+
+    def _repair(self, piece: str) -> None:
+        """The model wrote a call that fails now: the planner's steps before it, or the line taken back."""
+        fn = self.functions[-1]
+        self.text = self.text[: len(self.text) - len(piece)]
+        match = _CALL.match(piece.rstrip("\n"))
+        assert match is not None and self.repairer is not None  # a repair line is a call line
+        objects = tuple(o for o in match.group(3, 4) if o is not None)
+        found = self.repairer.enable(self._members(fn, None)[0], self.candidates.place(fn),
+                                     self.by_name[match.group(1)], objects)
+        if found is None:
+            self.unrepaired.add((len(self.functions) - 1, fn.steps, piece))
+            self.rewrite = ""
+            return
+        lines = [self.candidates.line((self.by_name[name], objs)) for name, objs in found.calls]
+        self.repairs.append({"line": piece, "before": lines, "seconds": found.seconds})
+        self.rewrite = "".join(lines) + piece
 
     def _members(self, fn: WrittenFunction, slot: int | None) -> list[int]:
         """The dry run's robots for a call: the function's own (decomposition), or its robot_list slot
@@ -531,7 +576,14 @@ class PlanConstraint(Constraint):
     def _advance(self, kind: str, piece: str) -> None:
         if kind == "forced":
             kind = self._forced_kind(piece)
-        if kind == "refusal":
+        if kind == "repair":
+            self._repair(piece)
+        elif kind == "rewrite":
+            self.rewriting = False
+            gotos = {s.name for s in self.candidates.gotos}
+            for line in piece.splitlines(keepends=True):
+                self._step_written("goto" if line.strip().split("(")[0] in gotos else "action", line)
+        elif kind == "refusal":
             self.phase = "done"
         elif kind == "summary":
             self.summary_lines += 1
@@ -572,6 +624,8 @@ class PlanConstraint(Constraint):
 
     def _forced_kind(self, piece: str) -> str:
         """What a piece of forced text was, from where the plan stands."""
+        if self.rewriting:
+            return "rewrite"
         if self.pending:
             return "pending"
         if self.phase == "order-blank":

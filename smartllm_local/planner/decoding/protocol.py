@@ -34,6 +34,14 @@ class Forced:
 
 
 @dataclass(frozen=True)
+class Rewrite:
+    """The line the model just wrote is taken back, and ``text`` written in its place (empty: the model writes
+    another line instead)."""
+
+    text: str
+
+
+@dataclass(frozen=True)
 class Choose:
     """The model writes the next line; ``grammar`` admits exactly the allowed lines. ``follows`` says, for a
     kind of line, what may start the text after it in the same token (blank lines where it says nothing; see
@@ -59,8 +67,9 @@ class Constraint(ABC):
         self._offered: Choose | None = None
 
     @abstractmethod
-    def next(self, remaining: int) -> Forced | Choose | None:
-        """What comes next, given ``remaining`` tokens of budget; None when the output is complete."""
+    def next(self, remaining: int) -> Forced | Choose | Rewrite | None:
+        """What comes next, given ``remaining`` tokens of budget; None when the output is complete. A
+        :class:`Rewrite` comes only right after a line the model wrote."""
 
     def feed(self, piece: str) -> None:
         """Record what was written (forced text, or the model's line; "" means it ended the output)."""

@@ -32,8 +32,11 @@ from ...errors import SmartLLMError
 from .grammar import Grammar, alt, seq
 from .line_ends import MOST_ADDED, opened, split_spill
 from .matcher import Matcher
-from .protocol import Choose, Constraint, Forced
+from .protocol import Choose, Constraint, Forced, Rewrite
 
+#: The kind of line a constraint may take back after it is written (see :class:`~.protocol.Rewrite`): offered only
+#: where all of the line can be taken back (no forced text before it, nothing but spaces of it already written).
+REWRITTEN = "repair"
 #: Tokens held back from the constraint for what opened line ends add (see above).
 SLACK = 64
 
@@ -96,6 +99,7 @@ class Report:
     spilled: int = 0
     ignored_blank_lines: int = 0
     cycles_ended: int = 0  # lines taken back because they began a third copy of a block of lines
+    rewritten: int = 0  # lines the constraint took back to write something else in their place (a repair)
     notes: list[str] = field(default_factory=list)
 
 
@@ -158,6 +162,7 @@ class _Driver:
         self.ended = False  # the model ended the sequence: the planner completes the output
         self.cutting = False  # a loop of lines was found: the planner writes the way out of its block
         self.slack = max(0, min(SLACK, budget - constraint.minimum_budget())) if opens else 0
+        self.last: tuple[Written, str, str] | None = None  # the last line written, its carry and the text ahead
 
     def held(self) -> int:
         """The slack left: what is held back, less the tokens spent beyond the characters fed (a carry counted
@@ -166,7 +171,9 @@ class _Driver:
 
     def run(self) -> str:
         while (step := self.constraint.next(self.budget - self.used - len(self.carry) - self.held())) is not None:
-            if self.ended:
+            if isinstance(step, Rewrite):
+                self._rewrite(step)
+            elif self.ended:
                 self._complete(step)
             elif isinstance(step, Forced):
                 self._forced(step.text)
@@ -194,6 +201,7 @@ class _Driver:
 
     def _forced(self, text: str) -> None:
         """Forced text: fed now, written with the next line (or matched against what is already written)."""
+        self.last = None
         while self.pending.startswith("\n") and not text.startswith("\n"):
             self._ignore_blank()
         if text.startswith("\n") and not self.pending.strip(" "):
@@ -225,8 +233,10 @@ class _Driver:
         return False
 
     def _write(self, step: Choose) -> None:
+        self.last = None
         ahead, self.pending = self.pending, ""
-        kinds = {k: g.rules["root"] for k, g in step.options.items()}
+        kinds = {k: g.rules["root"] for k, g in step.options.items()
+                 if k != REWRITTEN or not (self.carry or ahead.strip())}  # else not all of it could be taken back
         if self.opens and self.held() >= MOST_ADDED:
             kinds = opened(kinds, step.grammar.rules, step.follows)
         elif ahead and step.kind_of("\n") and not Matcher(step.grammar).advance(ahead):
@@ -241,11 +251,14 @@ class _Driver:
         written = self.writer.write(line, self.budget - self.used)
         self._spend(written.cost)
         text = written.text
+        self.last = (written, self.carry, ahead)
         if written.ended:
             rest = _rest_of_line({k: Grammar({**rules, "root": seq(self.carry, v)}) for k, v in kinds.items()},
                                  ahead, text)
-            self._spend(self.writer.force(rest) if rest else 0)
+            cost = self.writer.force(rest) if rest else 0
+            self._spend(cost)
             text += rest
+            self.last = (Written(text, written.cost + cost, ended=True), self.carry, ahead)
             self.ended = True
             self.report.completed_lines += 1
             self.report.notes.append(f"the model ended the sequence after {self.constraint.text + ahead + text!r}")
@@ -273,6 +286,26 @@ class _Driver:
             blanks, rest = split_spill(spill)
             self.pending = "\n" * blanks + rest
 
+    def _rewrite(self, step: Rewrite) -> None:
+        """The constraint takes back the line just written (and what ran past its end) and writes ``step.text``
+        in its place, or has the model write another line where the text is empty."""
+        if self.last is None:
+            raise GuaranteeError(f"a rewrite with no line written before it: {self.constraint.text!r}")
+        written, carry, ahead = self.last
+        self.last = None
+        self.writer.take_back(written)
+        self.used -= written.cost
+        self.carry, self.pending = carry, ahead
+        self.report.rewritten += 1
+        if not step.text:
+            return
+        if self.ended:  # the planner writes on: the text goes into the context now
+            self.constraint.feed(step.text)
+            self._spend(self.writer.force(self.carry + step.text[len(ahead):]))
+            self.carry = self.pending = ""
+        else:
+            self._forced(step.text)
+
     def _loops(self, line: str) -> bool:
         """Whether ``line``, written next, would begin a loop of lines (see :class:`CycleGuard`)."""
         return self.guard is not None and self.guard.cycles(self.constraint.text.split("\n")[:-1] + [line[:-1]])
@@ -280,11 +313,12 @@ class _Driver:
     def _way_out(self, step: Choose) -> None:
         """Write the constraint's shortest line for ``step`` that begins no loop (after what is already written
         of it: a carry to write, or text ahead in the context; spaces ahead stay before a blank line's newline)."""
+        self.last = None
         ahead, self.pending = self.pending, ""
         blank = not ahead.strip(" ") and bool(step.kind_of("\n"))
         ways = [(False, "\n")] if blank else []
         for kind, grammar in step.options.items():
-            if Matcher(grammar).advance(ahead):
+            if kind != REWRITTEN and Matcher(grammar).advance(ahead):
                 ways.append((kind in _ASIDES, ahead + grammar.after(ahead).sample(_PLAIN, "shortest")))  # type: ignore[arg-type]
         lines = [line for _, line in sorted(ways, key=lambda way: (way[0], len(way[1])))]
         line = next((t for t in lines if not self._loops(t)), lines[0])
@@ -294,6 +328,7 @@ class _Driver:
 
     def _complete(self, step: Forced | Choose) -> None:
         """The model ended the sequence: the output goes on by its shortest way (see :func:`shortest_line`)."""
+        self.last = None
         text = step.text if isinstance(step, Forced) else shortest_line(step)
         self.constraint.feed(text)
         self._spend(self.writer.force(text))
@@ -322,7 +357,8 @@ def shortest_line(step: Choose) -> str:
     """The line a completion writes: a blank line where one ends something, else the shortest line of a kind
     that takes the output on (no comment, no sleep, no refusal), spelled plainly (letters where it may
     choose), the same every time."""
-    kinds = [k for k in step.options if k not in _ASIDES] or list(step.options)
+    kinds = [k for k in step.options if k not in _ASIDES and k != REWRITTEN] or \
+        [k for k in step.options if k != REWRITTEN]
     if step.kind_of("\n") in kinds:
         return "\n"
     lines = [step.options[k].sample(_PLAIN, "shortest") for k in kinds]  # type: ignore[arg-type]

@@ -1,0 +1,121 @@
+"""Repair inside the SMART-LLM method: the steps that enable a call the model wrote, found by the planner.
+
+With a world check, a decomposition's body offers the calls that succeed where the function stands. A model
+that means to slice the bread with no knife in hand would then write something else (it picks the bread up, and
+nothing is sliced). So the body also offers the calls that fail now, and when the model writes one, the planner
+looks for the shortest steps that make it succeed: the call's effect is stated as the scorer's condition (slice
+X: X sliced; put X in R: R holds X), Fast Downward (through Unified Planning, :mod:`..classical`) plans for the
+function's robot from the dry run's state now, standing where it stands and holding what it holds. The plan is
+a repair when its last step is the model's call, it has at most :data:`MOST_STEPS` steps before it, and every
+step succeeds in the dry run as written. The steps are written before the model's line (the planner's lines,
+recorded as such); where there is no repair, the line is taken back and the model writes another.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+
+from ...errors import UserError
+from ...executor.dry_run import DryRun
+from ...scoring import Condition
+from ...skills import Skill, SkillSet
+from .candidates import acts_on
+from .world_check import WorldCheck
+
+#: The most steps a repair writes before the model's call (a hand freed and a knife fetched take five).
+MOST_STEPS = 5
+#: Fast Downward's time for one repair (a repair's problem is small: it finds one in well under a second).
+TIME_LIMIT = 5.0
+#: A call as a plan writes it: the skill's name and the object types.
+Written = tuple[str, tuple[str, ...]]
+#: The state each action's effect is, as the scorer names it.
+EFFECTS = {"SliceObject": "SLICED", "ToggleObjectOn": "ON", "ToggleObjectOff": "OFF", "OpenObject": "OPENED",
+           "CloseObject": "CLOSED", "BreakObject": "BROKEN", "CleanObject": "CLEAN", "PickupObject": "PICKED"}
+
+
+def effect(skill: Skill, objects: Sequence[str]) -> Condition | None:
+    """What holds once the call succeeds, as a goal condition; None where no condition says it (a drop)."""
+    if skill.action == "PutObject" and len(objects) == 2:
+        return Condition(objects[1], item=objects[0])
+    state = EFFECTS.get(skill.action)
+    return Condition(objects[0], state=state) if state and objects else None
+
+
+def repairable(skill: Skill) -> bool:
+    """Whether a call of the skill can be repaired (its effect is a condition the planner can aim at)."""
+    return skill.action == "PutObject" or skill.action in EFFECTS
+
+
+@dataclass(frozen=True)
+class Repair:
+    """The planner's calls written before the model's (each a skill and its object types), and the search's time."""
+
+    calls: tuple[Written, ...]
+    seconds: float
+
+    def as_dict(self) -> dict[str, object]:
+        return asdict(self)
+
+
+class Repairer:
+    """Finds repairs for the calls of one decomposition (a dry run of the household world)."""
+
+    def __init__(self, world: WorldCheck, skills: SkillSet, time_limit: float = TIME_LIMIT):
+        if not isinstance(world.run, DryRun):
+            raise ValueError("repair plans in the household world's dry run")
+        try:
+            from ..classical import problem, search
+        except ImportError as exc:  # Unified Planning and Fast Downward are the goal-planner extra's
+            raise UserError(f"repair needs Unified Planning and Fast Downward ({exc}): install them with pip install "
+                            "'smartllm-local[goal-planner]', or plan without repair (--no-repair)") from exc
+        self.problem, self.search = problem, search
+        self.world, self.run, self.skills, self.time_limit = world, world.run, skills, time_limit
+
+    def enable(self, member: int, place: str | None, skill: Skill, objects: Sequence[str]) -> Repair | None:
+        """The steps after which ``member``, which last went to ``place``, can make the call, or None (no plan,
+        too long, or not as written)."""
+        goal = effect(skill, objects)
+        if goal is None:
+            return None
+        started = time.perf_counter()
+        robot = self.run.team[member]
+        try:
+            task = self.problem.planning_task(self.run, [robot], self.skills, [goal], name="repair", members=[member])
+        except self.problem.Unreachable:
+            return None
+        found = self.search.search(task, self.time_limit)
+        seconds = time.perf_counter() - started
+        if not found.found or not found.steps:
+            return None
+        types = {o["objectId"]: o["objectType"] for o in self.run.objects}
+        calls = self._gone_first([(s.skill, tuple(types.get(o, o) for o in s.objects)) for s in found.steps], place)
+        if calls[-1] != (skill.name, tuple(objects)) or not 1 < len(calls) <= MOST_STEPS + 1 \
+                or not self._succeeds(member, calls):
+            return None
+        return Repair(tuple(calls[:-1]), round(seconds, 3))
+
+    def _gone_first(self, calls: Sequence[Written], place: str | None) -> list[Written]:
+        """The calls as a decomposition writes them: each action where the function last went (a GoToObject
+        before one that acts elsewhere: the planner's robot stands by all it sees, a plan's robot surely only
+        by what it went to), and no GoToObject to where it already is."""
+        goto = next(s.name for s in self.skills.values() if s.action == "")
+        written: list[Written] = []
+        for name, objects in calls:
+            skill = self.skills[name]
+            target = objects[0] if skill.action == "" else acts_on((skill, objects))
+            if target is not None and target != place:
+                written.append((goto, (target,)))
+                place = target
+            if skill.action != "":
+                written.append((name, objects))
+        return written
+
+    def _succeeds(self, member: int, calls: Sequence[Written]) -> bool:
+        """Whether the calls, as written (object types, resolved as the executor resolves them), all succeed."""
+        saved = self.run.snapshot()
+        try:
+            return all(self.run.apply([member], name, objects).success for name, objects in calls)
+        finally:
+            self.run.restore(saved)

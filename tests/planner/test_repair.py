@@ -1,0 +1,129 @@
+"""Repair inside the SMART-LLM method: a call the model writes that fails where the function stands is written
+after the planner's steps that enable it, or taken back; and a decomposition stops at the goals it was given."""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+
+from smartllm_local.benchmark.tasks import load_tasks
+from smartllm_local.domain import load_domain
+from smartllm_local.executor.dry_run import DryRun, notional_robot
+from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.constraints.format import MAX_SUBTASKS
+from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.constraints.repair import Repairer, effect
+from smartllm_local.planner.constraints.world_check import WorldCheck
+from smartllm_local.planner.decoding.writer import run_constraint, run_tokens, shortest_line
+from smartllm_local.planner.prompting.scene_context import scene_objects
+from smartllm_local.scoring import Condition
+
+from .writers import TokenAdversary
+
+pytest.importorskip("up_fast_downward")
+
+CATALOGUE = load_domain().catalogue
+SKILLS = CATALOGUE.skills
+
+
+def _scripted(lines: list[str]):
+    """A writer that writes ``lines`` in order, each where it is offered, and the shortest line elsewhere."""
+    todo = list(lines)
+
+    def write(choose, remaining):
+        text = todo.pop(0) if todo and choose.grammar.matches(todo[0]) else shortest_line(choose)
+        return text, len(text)
+
+    return write
+
+
+def _decomposer(floor_plan: int, *, repair: bool = True, goals=()) -> PlanConstraint:
+    world = WorldCheck(floor_plan, SKILLS, MAX_SUBTASKS)
+    return PlanConstraint(scene_objects(floor_plan), SKILLS, world=world, summary=False, comments=False,
+                          repairer=Repairer(world, SKILLS) if repair else None, goals=goals)
+
+
+def _body(text: str, name: str) -> list[str]:
+    lines = text.split(f"def {name}():\n", 1)[1].split("\n\n", 1)[0].splitlines()
+    return [line.strip() for line in lines]
+
+
+def _all_succeed(text: str, floor_plan: int) -> list[tuple[str, tuple[str, ...]]]:
+    """The calls of a decomposition that fail when each sub-task's robot runs them in order (none, if sound)."""
+    plan = parse_plan(text, form="decomposed", skills=SKILLS, scene_types=scene_objects(floor_plan).types)
+    dry = DryRun(floor_plan, [notional_robot(SKILLS)] * MAX_SUBTASKS, SKILLS)
+    return [(step.skill, tuple(step.objects)) for k, fn in enumerate(plan.functions) for step in fn.body
+            if hasattr(step, "skill") and not dry.apply([k], step.skill, step.objects).success]
+
+
+def test_a_slice_without_a_knife_is_written_after_the_knife_is_fetched():
+    """The model goes to the bread and slices it with empty hands: the planner's steps fetch the knife first,
+    as the decomposition writes steps (each action where the function last went), and every step succeeds."""
+    decomposer = _decomposer(6)
+    text = run_constraint(decomposer, _scripted(["def subtask1_slice_bread():\n", "    GoToObject('Bread')\n",
+                                                 "    SliceObject('Bread')\n"]), len, 3000)
+    body = _body(text, "subtask1_slice_bread")
+    assert body[:5] == ["GoToObject('Bread')", "GoToObject('Knife')", "PickupObject('Knife')", "GoToObject('Bread')",
+                        "SliceObject('Bread')"], text
+    assert decomposer.repairs[0]["line"] == "    SliceObject('Bread')\n"
+    assert decomposer.repairs[0]["before"] == ["    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
+                                               "    GoToObject('Bread')\n"]
+    assert not _all_succeed(text, 6)
+
+
+def test_without_a_repairer_the_failing_call_is_not_offered():
+    """Off (--no-repair), the slice with empty hands is not a line the grammar admits, as before."""
+    decomposer = _decomposer(6, repair=False)
+    text = run_constraint(decomposer, _scripted(["def subtask1_slice_bread():\n", "    GoToObject('Bread')\n",
+                                                 "    SliceObject('Bread')\n"]), len, 3000)
+    assert "SliceObject" not in text and not decomposer.repairs
+
+
+def test_a_call_the_planner_cannot_enable_is_taken_back_and_not_offered_again():
+    """A laptop does not go into a mug in this world: no plan enables the put, so the line is taken back, the
+    writer writes another line there, and the refused line is remembered for that step."""
+    decomposer = _decomposer(301)
+    line = "    PutObject('Laptop', 'Mug')\n"
+    text = run_constraint(decomposer, _scripted(["def subtask1_a():\n", "    GoToObject('Laptop')\n",
+                                                 "    PickupObject('Laptop')\n", line, line]), len, 3000)
+    assert "PutObject('Laptop', 'Mug')" not in text
+    assert (0, 2, line) in decomposer.unrepaired and not decomposer.repairs
+    assert not _all_succeed(text, 301)
+
+
+def test_an_effect_is_the_scorers_condition():
+    assert effect(SKILLS["SliceObject"], ["Bread"]) == Condition("Bread", state="SLICED")
+    assert effect(SKILLS["PutObject"], ["Apple", "Fridge"]) == Condition("Fridge", item="Apple")
+    assert effect(SKILLS["GoToObject"], ["Apple"]) is None
+
+
+def test_no_sub_task_is_begun_once_the_stated_goals_hold():
+    """Given the goal "Bread sliced", a plan that has sliced the bread is ended: no second sub-task is offered;
+    without goals the same writer goes on to write one."""
+    script = ["def subtask1_slice_bread():\n", "    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
+              "    GoToObject('Bread')\n", "    SliceObject('Bread')\n", "    GoToObject('CounterTop')\n",
+              "    PutObject('Knife', 'CounterTop')\n", "\n", "def subtask2_more():\n"]
+    goal = _decomposer(6, repair=False, goals=[Condition("Bread", state="SLICED")])
+    text = run_constraint(goal, _scripted(script), len, 3000)
+    assert "subtask2" not in text and goal.ended_at_goals
+    free = _decomposer(6, repair=False)
+    assert "def subtask2_more():" in run_constraint(free, _scripted(script), len, 3000)
+    assert not free.ended_at_goals
+
+
+@pytest.mark.parametrize("kind, tasks", [("random", 2), pytest.param("longest", 6, marks=pytest.mark.heavy)])
+def test_writers_that_write_as_models_do_keep_every_guarantee_with_repair(kind, tasks):
+    """Adversarial writers (ending mid-line, running past line ends, taking repairable lines where they are
+    offered) in kitchens: the output parses and keeps its budget, and every call succeeds where no dead end was
+    reported; repairs were made."""
+    rng = random.Random(11)
+    repairs = 0
+    for task in [t for t in load_tasks() if t.id.startswith("kitchen")][:tasks]:
+        decomposer = _decomposer(task.floor_plan)
+        text = run_tokens(decomposer, TokenAdversary(kind, rng), 900)
+        parse_plan(text, form="decomposed", skills=SKILLS, scene_types=scene_objects(task.floor_plan).types)
+        if decomposer.world_counts()[1] == 0:
+            assert not _all_succeed(text, task.floor_plan), (task.id, text)
+        repairs += len(decomposer.repairs)
+    assert repairs > 0
