@@ -5,18 +5,22 @@ from __future__ import annotations
 
 import random
 
+import numpy as np
 import pytest
 
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.executor.dry_run import DryRun, notional_robot
 from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.constraints.format import MAX_SUBTASKS
 from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.repair import Repairer, effect
 from smartllm_local.planner.constraints.world_check import WorldCheck
-from smartllm_local.planner.decoding.writer import run_constraint, run_tokens, shortest_line
+from smartllm_local.planner.decoding.protocol import Constraint, Rewrite
+from smartllm_local.planner.decoding.writer import REWRITTEN, run_constraint, run_tokens, shortest_line
 from smartllm_local.planner.prompting.scene_context import scene_objects
+from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
 from smartllm_local.scoring import Condition
 
 from .writers import TokenAdversary
@@ -127,3 +131,41 @@ def test_writers_that_write_as_models_do_keep_every_guarantee_with_repair(kind, 
             assert not _all_succeed(text, task.floor_plan), (task.id, text)
         repairs += len(decomposer.repairs)
     assert repairs > 0
+
+
+class _RewritesItsLine(Constraint):
+    """Offers one line, of the kind a writer may have taken back, and writes the planner's line before it."""
+
+    def __init__(self, line: str, before: str):
+        super().__init__()
+        self.line, self.before, self.phase = line, before, "line"
+
+    def next(self, remaining):
+        if self.phase == "line":
+            return self._choose({}, {REWRITTEN: self.line})
+        if self.phase == "rewrite":
+            self.phase = "rewriting"
+            return Rewrite(self.before + self.line)
+        return None
+
+    def _advance(self, kind, piece):
+        if kind == REWRITTEN:
+            self.text = self.text[: len(self.text) - len(piece)]
+            self.phase = "rewrite"
+        else:
+            self.phase = "done"
+
+    def minimum_budget(self):
+        return len(self.before + self.line)
+
+
+def test_a_rewritten_line_leaves_the_models_context_as_the_output_says(smollm2):
+    """On llama.cpp, the line the model wrote is taken out of its context and the rewrite written in its place:
+    the stage's context is the prompt and the output, token for token as the backend spells them."""
+    prompt = smollm2.tokenize("def subtask1_slice_bread():\n    GoToObject('Bread')\n", bos=True)
+    record = StageRecord("decomposition")
+    line, before = "    SliceObject('Bread')\n", "    PickupObject('Knife')\n"
+    run_stage(record, smollm2, Fitted("", prompt), _RewritesItsLine(line, before), output_budget=200,
+              sampling=Sampling(), rng=np.random.default_rng(0))
+    assert record.output == before + line
+    assert smollm2.detokenize(record.context[len(prompt):]) == record.raw == before + line
