@@ -30,16 +30,6 @@ from .tasks import Task
 DEFAULT_TIME_LIMIT = 60.0  # seconds of search per task for the goal-planner (the household tasks need far less)
 
 
-def require_goal_planner() -> None:
-    """The goal-planner's tools are an extra: say how to get them, where they are missing."""
-    try:
-        import unified_planning  # noqa: F401
-        import up_fast_downward  # noqa: F401
-    except ImportError as exc:
-        raise UserError(f"the goal-planner needs Unified Planning and Fast Downward ({exc.name} is not installed): "
-                        "pip install 'smartllm-local[goal-planner]'") from None
-
-
 @dataclass(frozen=True)
 class Stage:
     """One step of a method: it adds the record named ``name`` to the task's result. A stage that
@@ -204,7 +194,6 @@ def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_
     if name not in METHODS:
         raise UserError(f"--method must be one of {', '.join(METHODS)}, not {name!r}")
     if name.startswith("goal-planner"):
-        require_goal_planner()
         if not planner_time_limit > 0:
             raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
         return GoalPlanner(planner, catalogue, time_limit=planner_time_limit, oracle=name == "goal-planner-oracle")

@@ -177,7 +177,7 @@ def run(
     method: str = typer.Option("smartllm", help=(
         f"{', '.join(METHODS)}: SMART-LLM's stages; the model's decomposition with robots at random (seeded) "
         "or by a rule (a capable robot, else the smallest capable team); the model states the goal and Fast "
-        "Downward finds the steps (needs the goal-planner extra); the same with the task's own goal conditions "
+        "Downward finds the steps; the same with the task's own goal conditions "
         "as the goal (an oracle: no model); the reference plans (no model).")),
     planner_time_limit: float = typer.Option(DEFAULT_TIME_LIMIT, "--planner-time-limit", metavar="SECONDS", help=(
         "The goal-planner's search time per task; a task whose search runs out of it fails with an error.")),

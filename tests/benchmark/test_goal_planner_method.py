@@ -7,18 +7,13 @@ import json
 import subprocess
 import sys
 
-import pytest
+from smartllm_local.benchmark.methods import GoalPlanner, make_method
+from smartllm_local.benchmark.tasks import load_tasks
+from smartllm_local.domain import load_domain
+from smartllm_local.planner.pipeline import Planner, PlanResult
+from smartllm_local.planner.stages import StageRecord
 
-pytest.importorskip("unified_planning")
-pytest.importorskip("up_fast_downward")
-
-from smartllm_local.benchmark.methods import GoalPlanner, make_method  # noqa: E402
-from smartllm_local.benchmark.tasks import load_tasks  # noqa: E402
-from smartllm_local.domain import load_domain  # noqa: E402
-from smartllm_local.planner.pipeline import Planner, PlanResult  # noqa: E402
-from smartllm_local.planner.stages import StageRecord  # noqa: E402
-
-from .conftest import benchmark_run  # noqa: E402
+from .conftest import benchmark_run
 
 HOUSEHOLD = load_domain("household")
 CATALOGUE = HOUSEHOLD.catalogue

@@ -8,27 +8,23 @@ import functools
 import itertools
 
 import pytest
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
+from unified_planning.io import PDDLReader
+from unified_planning.shortcuts import SequentialSimulator
 
-pytest.importorskip("unified_planning")
-pytest.importorskip("up_fast_downward")
-
-from hypothesis import HealthCheck, Phase, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-from unified_planning.io import PDDLReader  # noqa: E402
-from unified_planning.shortcuts import SequentialSimulator  # noqa: E402
-
-from smartllm_local.benchmark.tasks import load_tasks  # noqa: E402
-from smartllm_local.domain import load_domain  # noqa: E402
-from smartllm_local.executor.dry_run import DryRun  # noqa: E402
-from smartllm_local.goal_language import parse_goal_statement, statement_of  # noqa: E402
-from smartllm_local.plan_language import parse_plan  # noqa: E402
-from smartllm_local.planner.classical.planning import plan_to_goal  # noqa: E402
-from smartllm_local.planner.classical.problem import Unreachable, planning_task, with_future_pieces  # noqa: E402
-from smartllm_local.planner.classical.search import pddl, search  # noqa: E402
-from smartllm_local.planner.classical.threads import parts  # noqa: E402
-from smartllm_local.scoring import condition_holds  # noqa: E402
-from smartllm_local.world.object_types import SLICE_RESULTS  # noqa: E402
-from smartllm_local.world.rules import is_heating  # noqa: E402
+from smartllm_local.benchmark.tasks import load_tasks
+from smartllm_local.domain import load_domain
+from smartllm_local.executor.dry_run import DryRun
+from smartllm_local.goal_language import parse_goal_statement, statement_of
+from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.classical.planning import plan_to_goal
+from smartllm_local.planner.classical.problem import Unreachable, planning_task, with_future_pieces
+from smartllm_local.planner.classical.search import pddl, search
+from smartllm_local.planner.classical.threads import parts
+from smartllm_local.scoring import condition_holds
+from smartllm_local.world.object_types import SLICE_RESULTS
+from smartllm_local.world.rules import is_heating
 
 HOUSEHOLD = load_domain("household")
 CATALOGUE = HOUSEHOLD.catalogue

@@ -25,8 +25,6 @@ from smartllm_local.scoring import Condition
 
 from .writers import TokenAdversary
 
-pytest.importorskip("up_fast_downward")
-
 CATALOGUE = load_domain().catalogue
 SKILLS = CATALOGUE.skills
 
@@ -94,6 +92,20 @@ def test_a_call_the_planner_cannot_enable_is_taken_back_and_not_offered_again():
     assert "PutObject('Laptop', 'Mug')" not in text
     assert (0, 2, line) in decomposer.unrepaired and not decomposer.repairs
     assert not _all_succeed(text, 301)
+
+
+def test_a_repair_uses_only_what_the_team_can_do():
+    """A robot that can only go, pick up and put cannot open the cabinet a put into it needs: the planner's steps
+    never call a skill the team lacks (the coalition would refuse the plan), so the put is taken back."""
+    team = CATALOGUE.team([25])
+    world = WorldCheck("FloorPlan402", SKILLS, MAX_SUBTASKS)
+    decomposer = PlanConstraint(scene_objects("FloorPlan402"), SKILLS, world=world, summary=False, comments=False,
+                                repairer=Repairer(world, SKILLS), for_team=team)
+    put = "    PutObject('Cloth', 'Cabinet')\n"
+    text = run_constraint(decomposer, _scripted(["def subtask1_a():\n", "    GoToObject('Cloth')\n",
+                                                 "    PickupObject('Cloth')\n", put]), len, 3000)
+    assert "OpenObject" not in text and put not in text
+    assert all(line.split("(")[0].strip() in team[0].skills for r in decomposer.repairs for line in r["before"])
 
 
 def test_an_effect_is_the_scorers_condition():

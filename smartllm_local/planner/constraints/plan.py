@@ -431,8 +431,10 @@ class PlanConstraint(Constraint):
         match = _CALL.match(piece.rstrip("\n"))
         assert match is not None and self.repairer is not None  # a repair line is a call line
         objects = tuple(o for o in match.group(3, 4) if o is not None)
+        whole = self.whole
         found = self.repairer.enable(self._members(fn, None)[0], self.candidates.place(fn),
-                                     self.by_name[match.group(1)], objects)
+                                     self.by_name[match.group(1)], objects, allows=whole.can if whole else None,
+                                     skills=whole.skills if whole else None)
         if found is None:
             self.unrepaired.add((len(self.functions) - 1, fn.steps, piece))
             self.rewrite = ""

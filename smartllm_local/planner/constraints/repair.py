@@ -14,13 +14,14 @@ recorded as such); where there is no repair, the line is taken back and the mode
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, replace
 
-from ...errors import UserError
 from ...executor.dry_run import DryRun
 from ...scoring import Condition
 from ...skills import Skill, SkillSet
+from ..classical.problem import Unreachable, planning_task
+from ..classical.search import search
 from .candidates import acts_on
 from .world_check import WorldCheck
 
@@ -65,33 +66,33 @@ class Repairer:
     def __init__(self, world: WorldCheck, skills: SkillSet, time_limit: float = TIME_LIMIT):
         if not isinstance(world.run, DryRun):
             raise ValueError("repair plans in the household world's dry run")
-        try:
-            from ..classical import problem, search
-        except ImportError as exc:  # Unified Planning and Fast Downward are the goal-planner extra's
-            raise UserError(f"repair needs Unified Planning and Fast Downward ({exc}): install them with pip install "
-                            "'smartllm-local[goal-planner]', or plan without repair (--no-repair)") from exc
-        self.problem, self.search = problem, search
         self.world, self.run, self.skills, self.time_limit = world, world.run, skills, time_limit
 
-    def enable(self, member: int, place: str | None, skill: Skill, objects: Sequence[str]) -> Repair | None:
+    def enable(self, member: int, place: str | None, skill: Skill, objects: Sequence[str],
+               allows: Callable[[str, Sequence[str]], bool] | None = None,
+               skills: frozenset[str] | None = None) -> Repair | None:
         """The steps after which ``member``, which last went to ``place``, can make the call, or None (no plan,
-        too long, or not as written)."""
+        too long, or not as written). ``skills``: what the planner's robot may do (a plan for a team: the team's
+        skills); ``allows``: whether the plan may make a call at all (the team's reach and strength)."""
         goal = effect(skill, objects)
         if goal is None:
             return None
         started = time.perf_counter()
         robot = self.run.team[member]
+        if skills is not None:
+            robot = replace(robot, skills=robot.skills & skills)
         try:
-            task = self.problem.planning_task(self.run, [robot], self.skills, [goal], name="repair", members=[member])
-        except self.problem.Unreachable:
+            task = planning_task(self.run, [robot], self.skills, [goal], name="repair", members=[member])
+        except Unreachable:
             return None
-        found = self.search.search(task, self.time_limit)
+        found = search(task, self.time_limit)
         seconds = time.perf_counter() - started
         if not found.found or not found.steps:
             return None
         types = {o["objectId"]: o["objectType"] for o in self.run.objects}
         calls = self._gone_first([(s.skill, tuple(types.get(o, o) for o in s.objects)) for s in found.steps], place)
         if calls[-1] != (skill.name, tuple(objects)) or not 1 < len(calls) <= MOST_STEPS + 1 \
+                or (allows is not None and not all(allows(name, objs) for name, objs in calls)) \
                 or not self._succeeds(member, calls):
             return None
         return Repair(tuple(calls[:-1]), round(seconds, 3))

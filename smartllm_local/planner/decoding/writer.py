@@ -336,9 +336,10 @@ class _Driver:
             self.report.completed_lines += 1
 
 
-#: Kinds of line a completion does not write where it has another: asides (they take an output nowhere), and
-#: a refusal (the model did not refuse; it ended).
-_ASIDES = ("comment", "sleep", "refusal")
+#: Kinds of line a completion does not write where it has another: asides (they take an output nowhere), a
+#: refusal (the model did not refuse; it ended), and a new sub-task's header (it ended: the plan ends where it may,
+#: rather than grow by the shortest sub-tasks the grammar offers).
+_ASIDES = ("comment", "sleep", "refusal", "header")
 
 
 def _rest_of_line(kinds: dict[str, Grammar], ahead: str, text: str) -> str:
