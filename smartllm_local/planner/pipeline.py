@@ -210,8 +210,9 @@ class Planner:
         self._finish_plan_stage(record, PlanResult(result.instruction, result.floor_plan, result.robots),
                                 form="decomposed", scene=scene)
         if constraint is not None:
-            record.ended_at_goals, record.repairs = constraint.ended_at_goals, constraint.repairs
-            record.unrepaired = len(constraint.unrepaired)
+            record.ended_at_goals = constraint.ended_at_goals
+            if constraint.repairs is not None:
+                record.repairs, record.unrepaired = constraint.repairs.made, len(constraint.repairs.missed)
         if record.refusal is not None and constraint is not None and constraint.must_refuse:
             record.refused_by = "grammar"  # the team can make no call in this scene
         return record

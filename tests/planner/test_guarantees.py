@@ -26,9 +26,10 @@ from smartllm_local.planner.backends.repetition import LoopGuard
 from smartllm_local.planner.constraints.coalition import CoalitionConstraint
 from smartllm_local.planner.constraints.feasibility import function_needs
 from smartllm_local.planner.constraints.format import MAX_SUBTASKS
-from smartllm_local.planner.constraints.plan import PlanConstraint, robots_named
+from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.constraints.world_check import WorldCheck
+from smartllm_local.planner.constraints.written import robots_named
 from smartllm_local.planner.decoding.protocol import Constraint, Forced
 from smartllm_local.planner.decoding.writer import (
     BudgetError,

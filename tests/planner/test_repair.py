@@ -68,8 +68,8 @@ def test_a_slice_without_a_knife_is_written_after_the_knife_is_fetched():
     body = _body(text, "subtask1_slice_bread")
     assert body[:5] == ["GoToObject('Bread')", "GoToObject('Knife')", "PickupObject('Knife')", "GoToObject('Bread')",
                         "SliceObject('Bread')"], text
-    assert decomposer.repairs[0]["line"] == "    SliceObject('Bread')\n"
-    assert decomposer.repairs[0]["before"] == ["    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
+    assert decomposer.repairs.made[0]["line"] == "    SliceObject('Bread')\n"
+    assert decomposer.repairs.made[0]["before"] == ["    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
                                                "    GoToObject('Bread')\n"]
     assert not _all_succeed(text, 6)
 
@@ -79,7 +79,7 @@ def test_without_a_repairer_the_failing_call_is_not_offered():
     decomposer = _decomposer(6, repair=False)
     text = run_constraint(decomposer, _scripted(["def subtask1_slice_bread():\n", "    GoToObject('Bread')\n",
                                                  "    SliceObject('Bread')\n"]), len, 3000)
-    assert "SliceObject" not in text and not decomposer.repairs
+    assert "SliceObject" not in text and decomposer.repairs is None
 
 
 def test_a_call_the_planner_cannot_enable_is_taken_back_and_not_offered_again():
@@ -90,7 +90,7 @@ def test_a_call_the_planner_cannot_enable_is_taken_back_and_not_offered_again():
     text = run_constraint(decomposer, _scripted(["def subtask1_a():\n", "    GoToObject('Laptop')\n",
                                                  "    PickupObject('Laptop')\n", line, line]), len, 3000)
     assert "PutObject('Laptop', 'Mug')" not in text
-    assert (0, 2, line) in decomposer.unrepaired and not decomposer.repairs
+    assert (0, 2, line) in decomposer.repairs.missed and not decomposer.repairs.made
     assert not _all_succeed(text, 301)
 
 
@@ -105,7 +105,7 @@ def test_a_repair_uses_only_what_the_team_can_do():
     text = run_constraint(decomposer, _scripted(["def subtask1_a():\n", "    GoToObject('Cloth')\n",
                                                  "    PickupObject('Cloth')\n", put]), len, 3000)
     assert "OpenObject" not in text and put not in text
-    assert all(line.split("(")[0].strip() in team[0].skills for r in decomposer.repairs for line in r["before"])
+    assert all(line.split("(")[0].strip() in team[0].skills for r in decomposer.repairs.made for line in r["before"])
 
 
 def test_an_effect_is_the_scorers_condition():
@@ -141,7 +141,7 @@ def test_writers_that_write_as_models_do_keep_every_guarantee_with_repair(kind, 
         parse_plan(text, form="decomposed", skills=SKILLS, scene_types=scene_objects(task.floor_plan).types)
         if decomposer.world_counts()[1] == 0:
             assert not _all_succeed(text, task.floor_plan), (task.id, text)
-        repairs += len(decomposer.repairs)
+        repairs += len(decomposer.repairs.made)
     assert repairs > 0
 
 

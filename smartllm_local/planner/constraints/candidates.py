@@ -19,7 +19,7 @@ from .format import INDENT
 from .world_check import WorldCheck
 
 if TYPE_CHECKING:
-    from .plan import WrittenFunction
+    from .written import WrittenFunction
 
 Candidate = tuple[Skill, tuple[str, ...]]
 #: Whether a plan may make a call at all (a skill's name and its objects); see feasibility.WholeTeam.

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 
 from ...robots import Robot
 from ...scoring import Condition
@@ -43,7 +42,7 @@ from ..decoding.line_ends import COMMENT_NEXT, INDENTED_NEXT
 from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, Rewrite, longest
 from ..prompting.scene_context import SceneObjects
 from .budget import Budget
-from .candidates import RELEASE, STATE_ACTIONS, Candidate, Candidates
+from .candidates import Candidates
 from .feasibility import Step, WholeTeam, call_demand, feasible_lists, minimal_lists, shortest_list
 from .format import (
     COMMENT_LEN,
@@ -65,12 +64,11 @@ from .format import (
     robot_list,
     text_run,
 )
-from .repair import MOST_STEPS, Repairer, repairable
-from .world_check import Call, WorldCheck
+from .repair import Repairer, Repairs
+from .world_check import WorldCheck
+from .written import CALL_LINE, WrittenFunction, robots_named
 
-_CALL = re.compile(r"^\s+(\w+)\((?:robot_list(?:\[(\d+)\])?, )?'([^']+)'(?:, '([^']+)')?\)$")
 STEP_LINE = re.compile(r"^    (\w+)\((.*)\)\n$")
-_ROBOT = re.compile(r"robots\[(\d+)\]")
 
 #: What may start the text after a line of each kind, in its last token (see :mod:`..decoding.line_ends`): a summary
 #: line is followed by another or by the order line, a header and a body line by an indented line (or a blank
@@ -82,49 +80,6 @@ FOLLOWS: dict[str, Node] = {"summary": COMMENT_NEXT, "header": INDENTED_NEXT, "g
 def _acts(skills: Sequence[Skill]) -> bool:
     """Whether the skills make a plan: a move, and an action to take where it leads."""
     return any(s.action == "" for s in skills) and any(s.action != "" for s in skills)
-
-
-def robots_named(piece: str) -> list[int]:
-    """The team indices a launch line gives its function, in order (``[robots[2], robots[0]]``: 2, 0)."""
-    return [int(i) for i in _ROBOT.findall(piece)]
-
-
-@dataclass
-class WrittenFunction:
-    """What the constraint knows of a function written so far."""
-
-    name: str
-    steps: int = 0
-    max_index: int = -1  # the highest robot_list[i] used; -1: none (robot_list alone counts as 0)
-    last: str = ""  # the kind of the last line: "action", "goto", "sleep" or "comment"
-    last_step: str = ""  # the same, comments aside
-    comments: int = 0
-    held: set[str] = field(default_factory=set)  # object types picked up and not yet put down
-    states: dict[str, str] = field(default_factory=dict)  # type -> the last state action on it
-    last_call: tuple[str, str] = ("", "")  # (AI2-THOR action, object) of the last step
-    calls: list[Call] = field(default_factory=list)  # (robot_list slot, skill, objects)
-    written: int = 0  # lines of a restated body written so far
-    went: bool = False  # whether it has gone somewhere (with a world check, it acts only after that)
-    slots_went: set[int] = field(default_factory=set)  # robot_list slots that went somewhere in it
-    together: bool = False  # the last GoToObject took the whole robot_list
-    whole: bool = False  # a step named the whole robot_list (see feasibility.shortest_list)
-
-    def track(self, line: str, actions: dict[str, str]) -> None:
-        match = _CALL.match(line.rstrip("\n"))
-        if not match:
-            self.last_call = ("", "")
-            return
-        skill, first = match.group(1), match.group(3)
-        slot = int(match.group(2)) if match.group(2) is not None else None
-        self.calls.append((slot, skill, tuple(o for o in match.group(3, 4) if o is not None)))
-        action = actions.get(skill, "")
-        self.last_call = (action, first) if action else ("", "")
-        if action == "PickupObject":
-            self.held.add(first)
-        elif action in RELEASE:
-            self.held.discard(first)
-        elif action in STATE_ACTIONS:
-            self.states[first] = action
 
 
 class PlanConstraint(Constraint):
@@ -170,9 +125,7 @@ class PlanConstraint(Constraint):
         self.world = world
         self.goals = list(goals) if world is not None else []
         self.ended_at_goals = False  # a sub-task was withheld: the goals held
-        self.repairer = repairer if world is not None and team is None and team_size is None else None
-        self.repairs: list[dict[str, object]] = []  # each repair: the model's line and the planner's before it
-        self.unrepaired: set[tuple[int, int, str]] = set()  # (function, step, line) the planner could not enable
+        self.repairs: Repairs | None = None  # with a repairer, once the candidate calls are known
         self.rewrite: str | None = None  # the text that replaces the line just written
         self.rewriting = False  # that text is being fed
         self.phase = "start"
@@ -202,6 +155,8 @@ class PlanConstraint(Constraint):
                                      world=world, max_steps=self.max_steps,
                                      allows=self.whole.can if self.whole is not None else None)
         self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
+        if repairer is not None and world is not None and not self.allocated:
+            self.repairs = Repairs(repairer, self.candidates, self.whole, self.max_steps, self.by_name)
         self.budget = Budget(allocated=self.allocated, team_size=self.team_size, fixed_names=self.fixed_names,
                              fresh_action=self.fresh_action, body_cost=self._body_cost)
         self.skills_len = longest(Ref("skills"), self.rules)
@@ -391,7 +346,8 @@ class PlanConstraint(Constraint):
                                  if calls.line_len(c) + calls.hold_after(fn, c) <= remaining - closing])
             if action is not None:
                 options["action"] = action
-            repair = calls.node(self._repairable(fn, actions, remaining - closing))
+            repair = calls.node(self.repairs.offered(len(self.functions) - 1, fn, actions, remaining - closing)) \
+                if self.repairs is not None else None
             if repair is not None:
                 options["repair"] = repair
         # With a world check a function puts down what it holds before it ends, if there is room to.
@@ -412,36 +368,12 @@ class PlanConstraint(Constraint):
                 options["comment"] = seq(INDENT, "# ", comment_text(cap), "\n")
         return self._choose(self.rules, options)
 
-    def _repairable(self, fn: WrittenFunction, succeeding: Sequence[Candidate], room: int) -> list[Candidate]:
-        """The calls that fail now and that the planner may enable in the room there is: a repair's steps, the
-        call, and putting down what is held after it (each at its longest line)."""
-        if self.repairer is None or fn.steps + MOST_STEPS + 2 > self.max_steps:
-            return []
-        calls = self.candidates
-        room -= MOST_STEPS * max(calls.goto_max, calls.action_max) + calls.release_max
-        done = set(succeeding)
-        k = len(self.functions) - 1
-        return [c for c in calls.every() if c not in done and repairable(c[0]) and calls.line_len(c) <= room
-                and (k, fn.steps, calls.line(c)) not in self.unrepaired]
-
     def _repair(self, piece: str) -> None:
-        """The model wrote a call that fails now: the planner's steps before it, or the line taken back."""
+        """The model wrote a call that fails now: the planner's steps and the call, or the line taken back."""
         fn = self.functions[-1]
         self.text = self.text[: len(self.text) - len(piece)]
-        match = _CALL.match(piece.rstrip("\n"))
-        assert match is not None and self.repairer is not None  # a repair line is a call line
-        objects = tuple(o for o in match.group(3, 4) if o is not None)
-        whole = self.whole
-        found = self.repairer.enable(self._members(fn, None)[0], self.candidates.place(fn),
-                                     self.by_name[match.group(1)], objects, allows=whole.can if whole else None,
-                                     skills=whole.skills if whole else None)
-        if found is None:
-            self.unrepaired.add((len(self.functions) - 1, fn.steps, piece))
-            self.rewrite = ""
-            return
-        lines = [self.candidates.line((self.by_name[name], objs)) for name, objs in found.calls]
-        self.repairs.append({"line": piece, "before": lines, "seconds": found.seconds})
-        self.rewrite = "".join(lines) + piece
+        assert self.repairs is not None  # a repair line is offered only with them
+        self.rewrite = self.repairs.rewrite(len(self.functions) - 1, fn, self._members(fn, None)[0], piece)
 
     def _members(self, fn: WrittenFunction, slot: int | None) -> list[int]:
         """The dry run's robots for a call: the function's own (decomposition), or its robot_list slot
@@ -649,7 +581,7 @@ class PlanConstraint(Constraint):
             fn.comments += 1
             return
         fn.steps += 1
-        match = _CALL.match(piece.rstrip("\n"))
+        match = CALL_LINE.match(piece.rstrip("\n"))
         if match and self.world is not None:
             slot = int(match.group(2)) if match.group(2) is not None else None
             fn.whole = fn.whole or (self.allocated and slot is None)

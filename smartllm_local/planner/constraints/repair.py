@@ -22,8 +22,10 @@ from ...scoring import Condition
 from ...skills import Skill, SkillSet
 from ..classical.problem import Unreachable, planning_task
 from ..classical.search import search
-from .candidates import acts_on
+from .candidates import Candidate, Candidates, acts_on
+from .feasibility import WholeTeam
 from .world_check import WorldCheck
+from .written import CALL_LINE, WrittenFunction
 
 #: The most steps a repair writes before the model's call (a hand freed and a knife fetched take five).
 MOST_STEPS = 5
@@ -120,3 +122,43 @@ class Repairer:
             return all(self.run.apply([member], name, objects).success for name, objects in calls)
         finally:
             self.run.restore(saved)
+
+
+class Repairs:
+    """A decomposition's repairs: the failing calls its body offers, and what is written for the one the model
+    chose (``made``: each repair, the model's line and the planner's before it; ``missed``: the lines, by
+    function and step, the planner could not enable, not offered there again)."""
+
+    def __init__(self, repairer: Repairer, candidates: Candidates, whole: WholeTeam | None, max_steps: int,
+                 skills: dict[str, Skill]):
+        self.repairer, self.candidates, self.whole, self.max_steps, self.skills = \
+            repairer, candidates, whole, max_steps, skills
+        self.made: list[dict[str, object]] = []
+        self.missed: set[tuple[int, int, str]] = set()
+
+    def offered(self, k: int, fn: WrittenFunction, succeeding: Sequence[Candidate], room: int) -> list[Candidate]:
+        """The calls that fail where function ``k`` stands and that a repair may enable in the room there is: its
+        steps, the call, and putting down what is held after it (each at its longest line)."""
+        if fn.steps + MOST_STEPS + 2 > self.max_steps:
+            return []
+        calls = self.candidates
+        room -= MOST_STEPS * max(calls.goto_max, calls.action_max) + calls.release_max
+        done = set(succeeding)
+        return [c for c in calls.every() if c not in done and repairable(c[0]) and calls.line_len(c) <= room
+                and (k, fn.steps, calls.line(c)) not in self.missed]
+
+    def rewrite(self, k: int, fn: WrittenFunction, member: int, line: str) -> str:
+        """What is written for the model's ``line`` in function ``k`` (its dry run's robot ``member``): the
+        planner's steps and the line, or nothing (the line is taken back)."""
+        match = CALL_LINE.match(line.rstrip("\n"))
+        assert match is not None  # a repairable line is a call line
+        objects = tuple(o for o in match.group(3, 4) if o is not None)
+        whole = self.whole
+        found = self.repairer.enable(member, self.candidates.place(fn), self.skills[match.group(1)], objects,
+                                     allows=whole.can if whole else None, skills=whole.skills if whole else None)
+        if found is None:
+            self.missed.add((k, fn.steps, line))
+            return ""
+        lines = [self.candidates.line((self.skills[name], objs)) for name, objs in found.calls]
+        self.made.append({"line": line, "before": lines, "seconds": found.seconds})
+        return "".join(lines) + line

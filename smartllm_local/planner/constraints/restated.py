@@ -31,8 +31,9 @@ from ..prompting.scene_context import SceneObjects
 from .candidates import acts_on
 from .feasibility import Step, call_demand, feasible_lists
 from .format import INDENT
-from .plan import STEP_LINE, PlanConstraint, WrittenFunction, robots_named
+from .plan import STEP_LINE, PlanConstraint
 from .world_check import Call, Thread, WorldCheck
+from .written import WrittenFunction, robots_named
 
 #: Robot arguments a search for the rest of a body may try before it gives up (and offers the step).
 COMPLETION_TRIES = 400
