@@ -76,6 +76,9 @@ def load_backends(
                         timeout=server_timeout or DEFAULT_TIMEOUT))
 
 
+MAX_LANES = 256  # llama.cpp's LLAMA_MAX_SEQ: the sequences one context holds (a lane is one)
+
+
 def check_server_options(name: str, endpoints: Sequence[str], workers: int) -> None:
     """Endpoints belong to the server backend, which needs at least one; tasks planned at once (``--parallel``,
     ``workers`` here) need a backend that decodes several sequences together: llama.cpp's lanes or a server."""
@@ -85,6 +88,9 @@ def check_server_options(name: str, endpoints: Sequence[str], workers: int) -> N
         raise UserError("--endpoint is for --backend server; an in-process model needs none")
     if workers < 1:
         raise UserError(f"--parallel must be 1 or more (the tasks planned at once), not {workers}")
+    if name == "llamacpp" and workers > MAX_LANES:
+        raise UserError(f"--parallel {workers}: llama.cpp holds at most {MAX_LANES} sequences in a context; give "
+                        f"{MAX_LANES} or fewer")
     if workers > 1 and name not in ("llamacpp", "server"):
         raise UserError(f"--parallel {workers}: the {name} backend decodes one sequence at a time; use --backend "
                         "llamacpp (a GGUF model, its K tasks' tokens evaluated in shared batches) or --backend server "
