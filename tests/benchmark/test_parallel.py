@@ -12,6 +12,12 @@ from pathlib import Path
 import pytest
 
 from smartllm_local.benchmark.parallel import plan_and_execute
+from smartllm_local.benchmark.run import run_benchmark
+from smartllm_local.benchmark.run_store import RunStore
+from smartllm_local.benchmark.tasks import find_task, load_tasks
+from smartllm_local.domain import load_domain
+from smartllm_local.planner.stages import StageRecord
+from tests.benchmark.test_resume import _Recorded
 from tests.test_cli_errors import cli, one_line_error
 
 TIMEOUT = 60  # seconds a scheduler test may take before it is called hung
@@ -108,6 +114,48 @@ def test_a_failing_worker_stops_the_run_with_its_error():
     done = schedule([[0], [0], [0]], ["a", "b"], plan)
     assert isinstance(done["raised"], RuntimeError) and 2 not in done["executed"]
     assert not any(thread.is_alive() for thread in threads)
+
+
+class _Overlapping(_Recorded):
+    """A fake method whose kitchen-05 coalition waits until a task has been scored (``waited``: it was)."""
+
+    def __init__(self, scored: threading.Event):
+        super().__init__()
+        self.scored, self.waited = scored, False
+
+    def _run(self, stage):
+        noted = super()._run(stage)
+
+        def run(task, result):
+            if (stage, task.id) == ("coalition", "kitchen-05"):
+                self.waited = self.scored.wait(TIMEOUT)
+            noted(task, result)
+        return run
+
+
+def test_a_run_on_two_workers_resumes_keeps_each_pass_on_one_worker_and_scores_in_task_order(tmp_path):
+    """run_benchmark with two workers (fake methods noting what they run): the first tasks are executed and
+    scored while the last is planned, the stages a store holds are not run again, a task's coalition and the
+    allocation that goes on in its context run on one worker, one after the other, and the results lines are in
+    the tasks' order."""
+    catalogue = load_domain().catalogue
+    ids = ("kitchen-01", "kitchen-02", "kitchen-03", "kitchen-04", "kitchen-05")
+    tasks = [find_task(load_tasks(), t) for t in ids]
+    store = RunStore(tmp_path, {"identity": {}, "started": "now"})
+    store.save_stage("kitchen-02", StageRecord("coalition", output="saved\n"))
+    store.save_stage("kitchen-02", StageRecord("allocation", output="# INFEASIBLE: saved\n", refusal="saved"))
+    scored = threading.Event()
+    store.append_result = lambda line, append=store.append_result: (append(line), scored.set())
+    workers = [_Overlapping(scored), _Overlapping(scored)]
+    run_benchmark(tasks, workers, catalogue, store=store)
+    assert workers[0].waited or workers[1].waited, "kitchen-05 was planned before any task was scored"
+    calls = [call for worker in workers for call in worker.calls]
+    assert sorted(calls) == sorted((stage, t) for t in ids if t != "kitchen-02"
+                                   for stage in ("coalition", "allocation"))
+    for worker in workers:  # each coalition followed at once by its allocation, on its worker
+        assert all(worker.calls[i + 1] == ("allocation", task) for i, (stage, task) in enumerate(worker.calls)
+                   if stage == "coalition")
+    assert list(store.results()) == list(ids)
 
 
 @pytest.mark.parametrize(("args", "parts"), [
