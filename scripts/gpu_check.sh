@@ -7,14 +7,18 @@
 #                                      on 16 cores) while random-weight Llama-2-7B and -70B shapes are written
 #                                      (scripts/random_gguf.py); then, on each shape with every layer on the GPU,
 #                                      plan kitchen-01 and run `bench` (the prompt path against llama.cpp alone,
-#                                      decoding, prefix reuse), and print one table (scripts/gpu_table.py)
-#   scripts/gpu_check.sh run --cpu     the same on this machine's CPU with a tiny shape and the installed
-#                                      llama-cpp-python: how the script itself is tested where no GPU is lent
+#                                      decoding, prefix reuse); on the first shape, run the whole household
+#                                      benchmark with K tasks planned at once (`benchmark run --parallel K`, K in
+#                                      GPU_CHECK_PARALLEL, default "1 4 16 47"); print the tables (scripts/gpu_table.py)
+#   scripts/gpu_check.sh run --cpu     the same on this machine's CPU with a tiny shape, two tasks and K 1 and 2, and
+#                                      the installed llama-cpp-python: how the script itself is tested where no GPU is
+#                                      lent
 #
 # Each run first loads a model in processes that import numpy before llama_cpp (the order that crashed a CUDA
 # build), in variants that tell its causes apart, with a native backtrace (cuda-gdb) where one crashes.
 # GPU_CHECK_SHAPES (default "7b 70b") names the shapes, in order; GPU_CHECK_SECONDS (default 480) bounds the run:
-# a shape's bench is left out when it would not fit.
+# a shape's bench, or a K's benchmark run, is left out when it would not fit. GPU_CHECK_TASKS (default: every task;
+# with --cpu "kitchen-01 kitchen-02") names the tasks of the benchmark runs.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -115,13 +119,40 @@ wait_for() {  # a model file the writer in the background is writing
     done
 }
 
+# Tasks per minute with K tasks planned at once: the benchmark run on one shape for each K, each from a new
+# process and the same prefix store (the shape's plan of kitchen-01 filled it), its wall time in parallel-K.wall.
+parallel_runs() {
+    local model=$1 layers=$2 work=$3 states=$4 deadline=$5 k began
+    local -a tasks=()
+    for k in ${GPU_CHECK_TASKS:-}; do tasks+=(--task "$k"); done
+    for k in $PARALLEL; do
+        if [[ $SECONDS -gt $((deadline - 60)) ]]; then
+            echo "the benchmark run with --parallel $k left out: $SECONDS s of $deadline gone"
+            continue
+        fi
+        began=$SECONDS
+        if "$PY" -m smartllm_local benchmark run --model "$model" --n-ctx 4096 --n-gpu-layers "$layers" \
+            --prefix-cache "$states" --parallel "$k" "${tasks[@]}" --out "$work/parallel-$k" \
+            >"$work/parallel-$k.log" 2>&1; then
+            echo "$((SECONDS - began))" >"$work/parallel-$k.wall"
+        else
+            echo "the benchmark run with --parallel $k failed:"; tail -5 "$work/parallel-$k.log"
+        fi
+    done
+}
+
 run() {
     local cpu=0 layers=-1 work site deadline=${GPU_CHECK_SECONDS:-480}
     local -a shapes
     read -r -a shapes <<<"${GPU_CHECK_SHAPES:-7b 70b}"
-    [[ ${1:-} == --cpu ]] && { cpu=1; layers=0; shapes=(tiny); }
+    PARALLEL=${GPU_CHECK_PARALLEL:-1 4 16 47}
+    if [[ ${1:-} == --cpu ]]; then
+        cpu=1; layers=0; shapes=(tiny); PARALLEL=${GPU_CHECK_PARALLEL:-1 2}
+        GPU_CHECK_TASKS=${GPU_CHECK_TASKS:-kitchen-01 kitchen-02}
+    fi
     work=${OUT:-$(mktemp -d)}
-    local gguf=${GGUF_DIR:-/tmp}
+    local gguf=${GGUF_DIR:-/tmp} kept
+    kept=$(mktemp -d)
     site=$GPU/site
     grep -m1 'model name' /proc/cpuinfo || true
     echo "CPU AMX flags: $(grep -o -w 'amx[a-z_0-9]*' /proc/cpuinfo | sort -u | tr '\n' ' ')"
@@ -150,20 +181,24 @@ run() {
         local model=$gguf/random-llama-2-$shape.gguf
         wait_for "$model" "$writer"
         local began=$SECONDS
-        local states
-        states=$(mktemp -d)  # a first process's empty prefix store
+        local states=$kept  # a first process's empty prefix store; the first shape's is kept for the runs
+        [[ $shape == "${shapes[0]}" ]] || states=$(mktemp -d)
         "$PY" -X faulthandler -m smartllm_local plan --task kitchen-01 --model "$model" --n-ctx 4096 \
             --n-gpu-layers "$layers" --prefix-cache "$states" --out "$work/$shape" \
             >"$work/$shape.log" 2>&1 || { echo "plan on the $shape shape failed:"; tail -20 "$work/$shape.log"; exit 1; }
         echo "$((SECONDS - began))" >"$work/$shape.wall"
-        rm -rf "$states"
+        [[ $states == "$kept" ]] || rm -rf "$states"
         if [[ $SECONDS -gt $((deadline - 150)) ]]; then
             echo "the $shape shape's bench left out: $SECONDS s of $deadline gone"
-            continue
+        else
+            "$PY" -m smartllm_local bench --models "$model" --n-gpu-layers "$layers" --n-ctx 4096 --sample 2 \
+                --no-benchmark --no-executor --out "$work/bench-$shape.json" >>"$work/$shape.log" 2>&1 \
+                || { echo "bench on the $shape shape failed:"; tail -20 "$work/$shape.log"; exit 1; }
         fi
-        "$PY" -m smartllm_local bench --models "$model" --n-gpu-layers "$layers" --n-ctx 4096 --sample 2 \
-            --no-benchmark --no-executor --out "$work/bench-$shape.json" >>"$work/$shape.log" 2>&1 \
-            || { echo "bench on the $shape shape failed:"; tail -20 "$work/$shape.log"; exit 1; }
+        if [[ $shape == "${shapes[0]}" ]]; then
+            parallel_runs "$model" "$layers" "$work" "$kept" "$deadline"
+            rm -rf "$kept"
+        fi
     done
     wait "$writer" || true
     "$PY" "$ROOT/scripts/gpu_table.py" "$work" "${shapes[@]}"

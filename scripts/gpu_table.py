@@ -1,6 +1,8 @@
-"""The table scripts/gpu_check.sh prints: per shape, the plan's stages and bench's prompt path and decoding.
+"""The tables scripts/gpu_check.sh prints: per shape, the plan's stages and bench's prompt path and decoding; and
+the benchmark runs with K tasks planned at once, in tasks per minute.
 
-    python scripts/gpu_table.py WORK SHAPE...   (WORK holds SHAPE/<stage>/timings.json and bench-SHAPE.json)
+    python scripts/gpu_table.py WORK SHAPE...   (WORK holds SHAPE/<stage>/timings.json, bench-SHAPE.json, and
+                                                 parallel-K/results.jsonl with parallel-K.wall for each K run)
 """
 
 from __future__ import annotations
@@ -39,6 +41,21 @@ def bench_cells(bench: Path) -> list[str]:
             f"{decode['free']['tokens_per_s']:.0f}, {decode['constrained']['tokens_per_s']:.0f}"]
 
 
+def parallel_rows(work: Path) -> list[str]:
+    """A row per ``benchmark run --parallel K`` (the first shape's), in K's order: tasks scored, wall time, tasks
+    per minute, and the tasks that ended in an error (a random model's plans fail often: they are still tasks)."""
+    rows = []
+    runs = sorted(work.glob("parallel-*.wall"), key=lambda path: int(path.stem.split("-")[1]))
+    for wall_file in runs:
+        k = wall_file.stem.split("-")[1]
+        lines = [json.loads(line) for line in (work / f"parallel-{k}" / "results.jsonl").read_text().splitlines()]
+        wall = int(wall_file.read_text().strip())
+        rate = 60 * len(lines) / wall if wall else float("inf")
+        errors = sum("error" in line for line in lines)
+        rows.append(f"| {k} | {len(lines)} | {wall} | {rate:.1f} | {errors} |")
+    return rows
+
+
 def main(argv: list[str]) -> int:
     work, shapes = Path(argv[0]), argv[1:]
     print(HEADER)
@@ -47,6 +64,12 @@ def main(argv: list[str]) -> int:
         wall = (work / f"{shape}.wall").read_text().strip()
         cells = stage_cells(work / shape) + bench_cells(work / f"bench-{shape}.json")
         print(f"| {shape} | {wall} | " + " | ".join(cells) + " |")
+    rows = parallel_rows(work)
+    if rows:
+        print(f"\nbenchmark run --parallel K on the {shapes[0]} shape (a new process each, the prefix store warm):\n")
+        print("| K | tasks | wall s | tasks/min | tasks with an error |")
+        print("|---:|---:|---:|---:|---:|")
+        print("\n".join(rows))
     return 0
 
 

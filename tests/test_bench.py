@@ -87,7 +87,7 @@ def test_every_model_option_is_declared_once_and_reaches_model_options():
     wanted = set(inspect.signature(ModelOptions).parameters)
     assert {p.name for p in MODEL_PARAMETERS} == wanted
     assert wanted <= set(inspect.signature(run).parameters)
-    assert wanted - {"workers"} <= set(inspect.signature(plan_command).parameters)
+    assert wanted - {"parallel"} <= set(inspect.signature(plan_command).parameters)
     bench = set(inspect.signature(bench_command).parameters)
     assert {"backend", "endpoint", "n_gpu_layers", "chat_template"} <= bench and "model_settings" not in bench
     with pytest.raises(ValueError, match="no model option modle"):

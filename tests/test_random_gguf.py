@@ -67,7 +67,7 @@ def test_the_gpu_check_runs_on_the_cpu_with_a_tiny_shape(tmp_path):
     env = {**os.environ, "PYTHON": sys.executable, "OUT": str(tmp_path), "GGUF_DIR": str(tmp_path),
            "GPU_CHECK_SECONDS": "100000"}
     done = subprocess.run(["bash", str(SCRIPTS / "gpu_check.sh"), "run", "--cpu"], env=env, capture_output=True,
-                          text=True, timeout=600)
+                          text=True, timeout=1200)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     row = next(line for line in done.stdout.splitlines() if line.startswith("| tiny |"))
     assert re.match(r"\| tiny \| \d+ \| \d+\.\d \(\d+\.\d, [\d,]+\) \|", row), row
@@ -81,6 +81,13 @@ def test_the_gpu_check_runs_on_the_cpu_with_a_tiny_shape(tmp_path):
     assert prefill["engine_s"] > 0 and prefill["first"]["seconds"] > 0 and prefill["prompt_tokens"] > 1000
     assert prefill["prefill_over_engine"] == round(prefill["first"]["seconds"] / prefill["engine_s"], 3)
     assert f"({prefill['prefill_over_engine']:.2f})" in row
+    # the benchmark runs with K tasks at once: K = 1 and 2 on two tasks, tasks per minute from their wall time
+    rates = re.findall(r"^\| (\d+) \| (\d+) \| (\d+) \| (\d+\.\d|inf) \| \d+ \|$", done.stdout, re.M)
+    assert [(k, tasks) for k, tasks, _, _ in rates] == [("1", "2"), ("2", "2")], done.stdout[-2000:]
+    for k, _, wall, rate in rates:
+        lines = (tmp_path / f"parallel-{k}" / "results.jsonl").read_text().splitlines()
+        assert [json.loads(line)["id"] for line in lines] == ["kitchen-01", "kitchen-02"]
+        assert rate == "inf" if wall == "0" else float(rate) == round(60 * 2 / int(wall), 1)
 
 
 @pytest.mark.heavy

@@ -10,12 +10,12 @@ refusing a feasible task is a failure.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import json
 import threading
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -31,6 +31,7 @@ from ..scoring import Goal, Scores, score_execution
 from ..world.controller import open_controller
 from .candidates import candidate_measures
 from .methods import Method, SmartLLM, Stage
+from .parallel import plan_and_execute
 from .reference_plans import reference_ticks
 from .results import metric_mean, summary_table
 from .run_store import RunStore
@@ -142,6 +143,7 @@ def run_benchmark(
     build: str | None = None,
     progress: Callable[[Progress], None] = lambda step: None,
     domain: Domain | None = None,
+    interrupt: Callable[[], None] = lambda: None,
 ) -> list[TaskOutcome]:
     """Plan (with ``method``; a Planner is SMART-LLM's), execute (in AI2-THOR, or on a site ``domain``'s
     site) and score every task; write per-task artifacts and results.jsonl under ``out``.
@@ -149,9 +151,10 @@ def run_benchmark(
     With a ``store`` (the run folder), each finished stage is saved at once and each scored task's
     line appended at once; tasks and stages the store already holds are not run again. Any
     exception inside a task becomes that task's error and the run goes on; Ctrl-C stops it, and
-    the same run started again resumes it. Several methods (the same method on several workers,
-    such as a server's slots) plan that many tasks of a stage at once, each task on one worker.
-    Returns the outcomes of the tasks run this time.
+    the same run started again resumes it. Several methods (the same method on several workers: lanes
+    of one model, a server's slots) plan that many tasks at once, each task on one worker at a time, while
+    the tasks planned are executed (:mod:`.parallel`); ``interrupt`` then ends the workers' calls in flight
+    when the run stops. Returns the outcomes of the tasks run this time.
     """
     site = domain.as_site if domain is not None else None
     methods = [SmartLLM(m, catalogue) if isinstance(m, Planner) else m
@@ -167,8 +170,11 @@ def run_benchmark(
         if _goes_on(outcome):
             live.append(outcome)
     counts = _Counts(len(methods[0].stages()), len(outcomes), progress)
-    _plan_all(outcomes, live, methods, store, counts)
-    _execute_all(outcomes, catalogue, site, build, out, store, counts)
+    if len(methods) == 1:
+        _plan_all(outcomes, live, methods[0], store, counts)
+        _execute_all(outcomes, catalogue, site, build, out, store, counts)
+    else:
+        _plan_and_execute(outcomes, live, methods, catalogue, site, build, out, store, counts, interrupt)
     if out is not None:
         lines = store.results() if store is not None else {o.task.id: o.as_json() for o in outcomes}
         if store is None:
@@ -194,38 +200,79 @@ class _Counts:
         self.report(Progress(stage, task_id, done, self.total, self.scored))
 
 
-def _plan_all(outcomes: list[TaskOutcome], live: list[TaskOutcome], methods: Sequence[Method],
-              store: RunStore | None, counts: _Counts) -> None:
-    """Take the live tasks through the method's stages, a pass of stages at a time, spread over the workers;
-    a failure costs its task (recorded as its error), and each finished stage is saved at once."""
-    lock = threading.Lock()
-    for group in _passes(methods[0].stages()):
+def _plan_all(outcomes: list[TaskOutcome], live: list[TaskOutcome], method: Method, store: RunStore | None,
+              counts: _Counts) -> None:
+    """Take the live tasks through the method's stages, a pass of stages at a time; a failure costs its task
+    (recorded as its error), and each finished stage is saved at once."""
+    for group in _passes(method.stages()):
         # Where each stage's progress count starts: after the tasks done before, or out of the run.
         order = {number: itertools.count(len(outcomes) - sum(not _has(o, stage.name) for o in live))
                  for number, stage in group}
 
-        def run(worker: Method, outcome: TaskOutcome) -> None:
-            result = outcome.result
-            assert result is not None
-            for number, stage in group:
-                if _has(outcome, stage.name):
-                    continue
-                if not _goes_on(outcome):
-                    return
-                with lock:
-                    counts.step(stage.name, outcome.task.id, number * len(outcomes) + next(order[number]))
-                try:
-                    worker.stages()[number].run(outcome.task, result)
-                except SmartLLMError as exc:
-                    outcome.error = f"{stage.name}: {exc}"
-                except Exception as exc:  # a bug or a backend failure costs this task, not the run
-                    outcome.error = f"{stage.name}: {type(exc).__name__}: {exc}"
-                if store is not None and not outcome.error and result.stages and result.stages[-1].stage == stage.name:
-                    with lock:
-                        store.save_stage(outcome.task.id, result.stages[-1])
+        def report(number: int, stage: Stage, outcome: TaskOutcome) -> None:
+            counts.step(stage.name, outcome.task.id, number * len(outcomes) + next(order[number]))
 
-        _spread([o for o in live if not all(_has(o, stage.name) for _, stage in group)], methods, run)
+        for outcome in live:
+            if not all(_has(outcome, stage.name) for _, stage in group):
+                _plan_pass(method, outcome, group, store, report)
         live = [o for o in live if _goes_on(o)]
+
+
+def _plan_pass(method: Method, outcome: TaskOutcome, group: Sequence[tuple[int, Stage]], store: RunStore | None,
+               report: Callable[[int, Stage, TaskOutcome], None], lock: threading.Lock | None = None) -> None:
+    """Run one task's pass of stages (those not done yet) on ``method``; a failure becomes the task's error, and
+    each finished stage is saved at once (``lock``: what the run's threads share, the store and the progress)."""
+    result = outcome.result
+    assert result is not None
+    shared = lock or contextlib.nullcontext()
+    for number, stage in group:
+        if _has(outcome, stage.name):
+            continue
+        if not _goes_on(outcome):
+            return
+        with shared:
+            report(number, stage, outcome)
+        try:
+            method.stages()[number].run(outcome.task, result)
+        except SmartLLMError as exc:
+            outcome.error = f"{stage.name}: {exc}"
+        except Exception as exc:  # a bug or a backend failure costs this task, not the run
+            outcome.error = f"{stage.name}: {type(exc).__name__}: {exc}"
+        if store is not None and not outcome.error and result.stages and result.stages[-1].stage == stage.name:
+            with shared:
+                store.save_stage(outcome.task.id, result.stages[-1])
+
+
+def _plan_and_execute(outcomes: list[TaskOutcome], live: list[TaskOutcome], methods: Sequence[Method],
+                      catalogue: Catalogue, site: Domain | None, build: str | None, out: Path | None,
+                      store: RunStore | None, counts: _Counts, interrupt: Callable[[], None]) -> None:
+    """Plan the live tasks on every worker at once and execute each, in the run's order, once it is planned
+    (:func:`.parallel.plan_and_execute`); progress counts each stage and execution as it starts."""
+    groups = _passes(methods[0].stages())
+    going = {id(o) for o in live}
+    todo = [[n for n, group in enumerate(groups) if not all(_has(o, stage.name) for _, stage in group)]
+            if id(o) in going else [] for o in outcomes]
+    left = sum(not _has(o, stage.name) for o in live for stage in methods[0].stages()) + len(outcomes)
+    done = itertools.count(counts.total - left)
+    lock = threading.Lock()
+    controller: list[Any] = [None]  # the one Controller of the executions, replaced after a failure
+
+    def plan(method: Method, outcome: TaskOutcome, number: int) -> None:
+        _plan_pass(method, outcome, groups[number], store,
+                   lambda _, stage, o: counts.step(stage.name, o.task.id, next(done)), lock)
+
+    def execute(_: int, outcome: TaskOutcome) -> None:
+        with lock:
+            counts.step("execution", outcome.task.id, next(done))
+        controller[0] = _execute_one(outcome, catalogue, site, build, out, store, counts, controller[0], lock)
+
+    try:
+        plan_and_execute(outcomes, todo, methods, plan, _goes_on, execute, interrupt)
+        if outcomes:
+            counts.step("done", "", counts.total)
+    finally:
+        if controller[0] is not None:
+            controller[0].stop()
 
 
 def _execute_all(outcomes: list[TaskOutcome], catalogue: Catalogue, site: Domain | None, build: str | None,
@@ -235,29 +282,39 @@ def _execute_all(outcomes: list[TaskOutcome], catalogue: Catalogue, site: Domain
     controller = None
     try:
         for k, outcome in enumerate(outcomes):
-            result = outcome.result
-            assert result is not None
             counts.step("execution", outcome.task.id, counts.stages * len(outcomes) + k)
-            Planner.conclude(result)
-            if not outcome.error and result.error:
-                outcome.error = result.error
-            started = time.perf_counter()
-            if outcome.task.feasible and result.plan is not None and not outcome.error:
-                controller = _execute(outcome, catalogue, site, build, controller)
-            scene = site_objects(site) if site is not None else scene_objects(outcome.task.floor_plan)
-            outcome.extra.update(candidate_measures(result, outcome.task, catalogue.skills, scene))
-            outcome.seconds = time.perf_counter() - started + sum(r.seconds for r in result.stages)
-            if out is not None:
-                write_artifacts(result, out / outcome.task.id, {"outcome": outcome.as_json()})
-                _write_trace(out / outcome.task.id, outcome)
-            if store is not None:
-                store.append_result(outcome.as_json())
-            counts.scored.append(outcome)
+            controller = _execute_one(outcome, catalogue, site, build, out, store, counts, controller)
         if outcomes:
             counts.step("done", "", counts.total)
     finally:
         if controller is not None:
             controller.stop()
+
+
+def _execute_one(outcome: TaskOutcome, catalogue: Catalogue, site: Domain | None, build: str | None,
+                 out: Path | None, store: RunStore | None, counts: _Counts, controller: Any,
+                 lock: threading.Lock | None = None) -> Any:
+    """Conclude a planned task, execute and score its plan, write its artifacts and results line; the
+    Controller to go on with."""
+    result = outcome.result
+    assert result is not None
+    Planner.conclude(result)
+    if not outcome.error and result.error:
+        outcome.error = result.error
+    started = time.perf_counter()
+    if outcome.task.feasible and result.plan is not None and not outcome.error:
+        controller = _execute(outcome, catalogue, site, build, controller)
+    scene = site_objects(site) if site is not None else scene_objects(outcome.task.floor_plan)
+    outcome.extra.update(candidate_measures(result, outcome.task, catalogue.skills, scene))
+    outcome.seconds = time.perf_counter() - started + sum(r.seconds for r in result.stages)
+    if out is not None:
+        write_artifacts(result, out / outcome.task.id, {"outcome": outcome.as_json()})
+        _write_trace(out / outcome.task.id, outcome)
+    with lock or contextlib.nullcontext():
+        if store is not None:
+            store.append_result(outcome.as_json())
+        counts.scored.append(outcome)
+    return controller
 
 
 def _execute(outcome: TaskOutcome, catalogue: Catalogue, site: Domain | None, build: str | None,
@@ -286,36 +343,6 @@ def _write_trace(folder: Path, outcome: TaskOutcome) -> None:
         write_trace(folder, outcome.execution, outcome.scores, outcome.task.floor_plan, outcome.task.robots)
     else:
         (folder / TRACE).unlink(missing_ok=True)
-
-
-def _spread(batch: Sequence[TaskOutcome], workers: Sequence[Method],
-            run: Callable[[Method, TaskOutcome], None]) -> None:
-    """Run ``batch`` in order on one worker, or on all of them at once (each takes the next task when free)."""
-    if len(workers) == 1 or len(batch) < 2:
-        for outcome in batch:
-            run(workers[0], outcome)
-        return
-    queue = iter(batch)
-    lock = threading.Lock()
-
-    def work(worker: Method) -> None:
-        while True:
-            with lock:
-                outcome = next(queue, None)
-            if outcome is None:
-                return
-            run(worker, outcome)
-
-    pool = ThreadPoolExecutor(max_workers=len(workers), thread_name_prefix="planner")
-    futures = [pool.submit(work, w) for w in workers]
-    try:
-        for future in futures:
-            future.result()
-    except BaseException:  # Ctrl-C: no new task starts; closing the backends ends those in flight
-        queue = iter(())
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    pool.shutdown()
 
 
 def _passes(stages: Sequence[Stage]) -> list[list[tuple[int, Stage]]]:

@@ -211,7 +211,7 @@ def run(
     if len(chosen_seeds) > 1 and options.config.sampling.temperature == 0 and method != "decomp-random":
         raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
     arguments = {k: v for k, v in ctx.params.items()
-                 if k not in ("out", "restart", "seeds", "prefix_cache", "workers", "server_timeout")}
+                 if k not in ("out", "restart", "seeds", "prefix_cache", "parallel", "server_timeout")}
     arguments["n_ctx"] = options.n_ctx  # the context asked for, given or not, as run.json has always named it
     if method.startswith("goal-planner") and not dom.is_ai2thor:
         raise UserError(f"--method {method} plans in AI2-THOR domains; the {dom.name} domain's site world has no "
@@ -281,7 +281,8 @@ def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: Mo
                dom: Domain, thor_build: Path | None, *, labelled: bool, planner_time_limit: float) -> None:
     """Plan, execute and score the tasks once per seed, resuming each run; Ctrl-C says how far it got."""
     cat = dom.catalogue
-    planners = [] if method in MODEL_FREE else options.planners(cat, dom)
+    planner_set = None if method in MODEL_FREE else options.open_planners(cat, dom, len(chosen))
+    planners = planner_set.planners if planner_set is not None else []
     try:
         for s, store in runs:
             done = store.results()
@@ -294,15 +295,16 @@ def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: Mo
                            for p in seeded]
                 run_benchmark(chosen, methods, cat,
                               out=store.out, store=store, build=str(thor_build) if thor_build else None,
-                              progress=progress, domain=dom)
+                              progress=progress, domain=dom,
+                              interrupt=planner_set.interrupt if planner_set is not None else lambda: None)
     except KeyboardInterrupt:
         scored = sum(t.id in store.results() for _, store in runs for t in chosen)
         print(f"interrupted: {scored} of {len(chosen) * len(runs)} tasks scored; the same command resumes the run",
               file=sys.stderr)
         raise typer.Exit(130) from None
     finally:
-        for planner in planners:
-            planner.backend.close()
+        if planner_set is not None:
+            planner_set.close()
 
 
 def parse_seeds(seeds: str | None, seed: int) -> list[int]:

@@ -28,6 +28,7 @@ from ..planner.backends import (
 from ..planner.backends.prefix_cache import open_store
 from ..planner.candidates import CANDIDATE_TEMPERATURE, Candidates
 from ..planner.models import DEFAULT_MODEL, EMBEDDED, WITHOUT_SUMMARY, default_model, summary_for
+from ..planner.parallel import PlannerSet
 from ..planner.pipeline import Planner, PlannerConfig
 from ..planner.prompting.chat import CHAT_TEMPLATE_MODES, mode_for
 from ..planner.prompting.prompts import PromptOptions
@@ -54,7 +55,7 @@ class ModelOptions:
                  no_comments: bool = False, summary: bool | None = None, no_coalition: bool = False,
                  no_grammar: bool = False, free_teams: bool = False, chat_template: str = "auto",
                  free_allocation: bool = False, no_world_check: bool = False, prefix_cache: str | None = None,
-                 endpoint: str | None = None, workers: int = 1, server_timeout: float | None = None,
+                 endpoint: str | None = None, parallel: int = 1, server_timeout: float | None = None,
                  no_loop_guard: bool = False, no_token_alignment: bool = False,
                  candidates: int = DEFAULT_CANDIDATES, candidate_temperature: float = CANDIDATE_TEMPERATURE,
                  select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
@@ -82,10 +83,10 @@ class ModelOptions:
             _check_context(backend, model, n_ctx)
         chat_template = mode_for(known, chat_template)
         self.endpoints = [e.strip() for e in endpoint.split(",") if e.strip()] if endpoint else []
-        check_server_options(backend, self.endpoints, workers)
+        check_server_options(backend, self.endpoints, parallel)
         if server_timeout is not None and not (math.isfinite(server_timeout) and server_timeout > 0):
             raise UserError(f"--server-timeout must be a number of seconds above 0, not {server_timeout}")
-        self.workers, self.server_timeout = workers, server_timeout
+        self.parallel, self.server_timeout = parallel, server_timeout
         self.model, self.backend, self.threads = model, backend, threads
         self.n_ctx, self.n_ctx_given = (n_ctx if n_ctx is not None else DEFAULT_N_CTX), n_ctx is not None
         self.n_gpu_layers = n_gpu_layers
@@ -134,10 +135,18 @@ class ModelOptions:
                 *(["--threads", str(self.threads)] if self.threads else [])]
 
     def planners(self, catalogue, domain: Domain | None = None) -> list[Planner]:
-        """One planner per worker (one, but for a server backend with --workers), for ``domain``'s tasks."""
+        """One planner (a server backend's first slot), for ``domain``'s tasks."""
         site = domain.as_site if domain is not None else None
-        return [Planner(backend, catalogue, self.config, site=site)
-                for backend in self._backends(self.workers, self.prefix_cache)]
+        return [Planner(backend, catalogue, self.config, site=site) for backend in self._backends(1, self.prefix_cache)]
+
+    def open_planners(self, catalogue, domain: Domain | None = None, tasks: int | None = None) -> PlannerSet:
+        """A planner per task planned at once (``--parallel``, at most ``tasks``): on lanes of one in-process
+        llama.cpp model, or on a server's slots; one elsewhere. Close the set when done (it closes the backends)."""
+        site = domain.as_site if domain is not None else None
+        parallel = min(self.parallel, tasks or self.parallel)  # a lane is a task's key/value cache: none idle
+        backends = self._backends(parallel if self.backend == "server" else 1, self.prefix_cache)
+        return PlannerSet(backends, parallel if self.backend == "llamacpp" else 1,
+                          lambda backend: Planner(backend, catalogue, self.config, site=site))
 
 
 _MODEL = typer.Option(None, help=MODEL_HELP)
@@ -190,10 +199,11 @@ _PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
     "Where the examples' key/value states are kept between runs, so a later run on the same model starts "
     "from them (default: the user's cache, $XDG_CACHE_HOME/smartllm-local/prefix-states, at most 4 GiB); "
     "off keeps them for this run only. llama.cpp only."))
-_WORKERS = typer.Option(1, "--workers", help=(
-    "--backend server: plan this many tasks at once, spread over the endpoints and their slots "
-    "(llama-server -np N has N; vLLM batches them all). Through a server, plans can differ with it: see "
-    "docs/servers-and-gpus.md."))
+_PARALLEL = typer.Option(1, "--parallel", "--workers", metavar="K", help=(
+    "Plan K tasks at once (default 1). --backend llamacpp: on one model in this process, their tokens "
+    "evaluated in shared batches (worth it on a GPU; greedy plans as with 1); --backend server: K requests "
+    "at once, spread over the endpoints and their slots (llama-server -np K has K; vLLM batches them all). "
+    "--workers is its former name. See docs/servers-and-gpus.md."))
 
 _CANDIDATES = typer.Option(DEFAULT_CANDIDATES, "--candidates", envvar="SMARTLLM_CANDIDATES", help=(
     "Write the decomposition this many times (the first as --temperature says, greedy by default; the others "
@@ -229,7 +239,7 @@ MODEL_PARAMETERS = [
         ("chat_template", str, _CHAT_TEMPLATE), ("free_allocation", bool, _FREE_ALLOCATION),
         ("no_world_check", bool, _NO_WORLD_CHECK), ("no_loop_guard", bool, _NO_LOOP_GUARD),
         ("no_token_alignment", bool, _NO_TOKEN_ALIGNMENT), ("prefix_cache", str | None, _PREFIX_CACHE),
-        ("endpoint", str | None, _ENDPOINT), ("workers", int, _WORKERS),
+        ("endpoint", str | None, _ENDPOINT), ("parallel", int, _PARALLEL),
         ("server_timeout", float | None, _SERVER_TIMEOUT), ("candidates", int, _CANDIDATES),
         ("candidate_temperature", float, _CANDIDATE_TEMPERATURE), ("select", str, _SELECT),
         ("goal_check", bool, _GOAL_CHECK), ("no_stop_at_goals", bool, _NO_STOP_AT_GOALS),

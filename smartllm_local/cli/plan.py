@@ -42,7 +42,7 @@ from .options import (
 from .progress import PlanProgress
 
 
-@model_options(without=("workers",))  # one task: nothing to spread over workers
+@model_options(without=("parallel",))  # one task: nothing to plan at once with it
 def plan_command(
     instruction: str | None = typer.Argument(None, help="What the robots should do (or use --task)."),
     floor_plan: str | None = typer.Option(None, help="Floor plan, e.g. 15 or FloorPlan15."),

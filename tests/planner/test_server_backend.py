@@ -194,7 +194,8 @@ def test_server_options_are_checked_before_anything_runs(tmp_path):
     one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--backend", "server"), "--endpoint")
     one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--endpoint", "http://127.0.0.1:1"),
                    "--backend server")
-    one_line_error(cli("benchmark", "run", "--out", tmp_path / "r", "--workers", "2"), "--backend server")
+    one_line_error(cli("benchmark", "run", "--out", tmp_path / "r", "--backend", "transformers", "--workers", "2"),
+                   "--backend server")
     one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--backend", "server", "--endpoint",
                        "ftp://host"), "not an http(s) URL")
     one_line_error(cli("plan", "x", "--floor-plan", "1", "--robots", "1", "--backend", "server", "--endpoint",

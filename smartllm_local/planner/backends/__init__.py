@@ -76,15 +76,25 @@ def load_backends(
                         timeout=server_timeout or DEFAULT_TIMEOUT))
 
 
+MAX_LANES = 256  # llama.cpp's LLAMA_MAX_SEQ: the sequences one context holds (a lane is one)
+
+
 def check_server_options(name: str, endpoints: Sequence[str], workers: int) -> None:
-    """Endpoints and workers belong to the server backend, which needs at least one endpoint."""
+    """Endpoints belong to the server backend, which needs at least one; tasks planned at once (``--parallel``,
+    ``workers`` here) need a backend that decodes several sequences together: llama.cpp's lanes or a server."""
     if name == "server" and not endpoints:
         raise UserError("--backend server needs --endpoint URL[,URL...] (a llama-server, llama_cpp.server or vLLM)")
-    if name != "server" and (endpoints or workers != 1):
-        raise UserError("--endpoint and --workers are for --backend server; an in-process model plans one task "
-                        "at a time")
+    if name != "server" and endpoints:
+        raise UserError("--endpoint is for --backend server; an in-process model needs none")
     if workers < 1:
-        raise UserError(f"--workers must be 1 or more, not {workers}")
+        raise UserError(f"--parallel must be 1 or more (the tasks planned at once), not {workers}")
+    if name == "llamacpp" and workers > MAX_LANES:
+        raise UserError(f"--parallel {workers}: llama.cpp holds at most {MAX_LANES} sequences in a context; give "
+                        f"{MAX_LANES} or fewer")
+    if workers > 1 and name not in ("llamacpp", "server"):
+        raise UserError(f"--parallel {workers}: the {name} backend decodes one sequence at a time; use --backend "
+                        "llamacpp (a GGUF model, its K tasks' tokens evaluated in shared batches) or --backend server "
+                        "(llama-server -np K), or leave out --parallel")
 
 
 def model_location(name: str, model: str | None) -> Path | None:
