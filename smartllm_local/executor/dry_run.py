@@ -183,6 +183,11 @@ class DryRun:
         """The scene's objects now, as the executor sees them (read-only: they are shared with snapshots)."""
         return self._world.objects
 
+    @property
+    def controller(self) -> Any:
+        """This world with the Controller's face, for the executor to run a whole plan in process."""
+        return self._thor
+
     def fits(self, obj: dict[str, Any], receptacle: dict[str, Any]) -> str | None:
         """Why the world would not let ``obj`` go into ``receptacle``, or None if it would."""
         return self._thor.sim.fits(obj, receptacle)
