@@ -38,6 +38,8 @@ KINDS = (GOAL_NOT_INSTRUCTION, WRONG_GOAL, REFUSED, NO_PLAN, EXECUTION, SHORT, E
 #: The order a report shows them in: the task's way through a method.
 SHOWN = (REFUSED, WRONG_GOAL, NO_PLAN, EXECUTION, GOAL_NOT_INSTRUCTION, SHORT, EXTRA_WORK)
 _EXECUTION_ERROR = "execution:"  # how the benchmark's results line starts an error its plan's run raised
+_REACH_CHECKS = ("planner", "goal check")  # who refuses a stated goal as out of the team's reach
+_TIME_LIMIT = "the planner's time limit ran out"  # the goal-planner's error when its search ran out of time
 
 
 @dataclass(frozen=True)
@@ -76,10 +78,15 @@ def classify(ev: Evidence) -> tuple[str, str] | None:
         extra, missing = unmatched(ev.stated, ev.truth)
         if ev.ran and line.get("Exe") == 1.0 and all(map(ev.holds_at_end, ev.stated)) and (line.get("GCR") or 0) < 1:
             return GOAL_NOT_INSTRUCTION, f"stated goals all met; the benchmark's {_lines(missing)} not stated"
-        false_extra = [c for c in extra if not ev.holds_at_end(c)]
+        # The task's own conditions are within the team's reach (the oracle reaches every feasible task), so
+        # where the stated goal was found out of reach or its search ran out of time, what was added stood in
+        # the way, whether or not the scene began with it.
+        blocked = not ev.ran and (line.get("refused_by") in _REACH_CHECKS or _TIME_LIMIT in error)
+        false_extra = [c for c in extra if blocked or not ev.holds_at_end(c)]
         if missing or false_extra:
             said = ([f"missed {_lines(missing)}"] if missing else []) + (
-                [f"added {_lines(false_extra)}, false at the end"] if false_extra else [])
+                [f"added {_lines(false_extra)}" + (", out of reach" if blocked else ", false at the end")]
+            if false_extra else [])
             after = f" (refused by the {line.get('refused_by') or 'model'})" if line.get("refused") else ""
             return WRONG_GOAL, "; ".join(said) + after
     if line.get("refused") and line.get("refused_by") != "planner":

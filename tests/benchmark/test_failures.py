@@ -47,9 +47,16 @@ REFUSED_LINE = {"refused": True, "SR": 0.0, "GCR": 0.0, "RU": 1.0, "Exe": 0.0}
     (_ev({**REFUSED_LINE, "refused_by": "planner"}, "Apple in Fridge\nTomato in Fridge", ran=False), F.NO_PLAN),
     (_ev({"error": "allocation: the planner's time limit ran out: 1 s"}, "Apple in Fridge\nTomato in Fridge",
          ran=False), F.NO_PLAN),
-    # an added condition already true where no plan ran is no wrong goal
-    (_ev({**REFUSED_LINE, "refused_by": "planner"}, "Apple in Fridge\nTomato in Fridge\nFridge closed", ran=False,
-         true_at_end="Fridge closed"), F.NO_PLAN),
+    # where the stated goal was out of reach, what was added is wrong even if the scene began with it
+    (_ev({**REFUSED_LINE, "refused_by": "planner"}, "Apple in Fridge\nTomato in Fridge\nFridge empty", ran=False,
+         true_at_end="Fridge empty"), F.WRONG_GOAL),
+    (_ev({"error": "allocation: the planner's time limit ran out: 60 s"}, "Apple in Fridge\nTomato in Fridge\n"
+         "Fridge empty", ran=False, true_at_end="Fridge empty"), F.WRONG_GOAL),
+    # elsewhere an added condition the scene began with and nothing undid is no wrong goal
+    (_ev({**REFUSED_LINE, "refused_by": "grammar"}, "Apple in Fridge\nTomato in Fridge\nFridge closed", ran=False,
+         true_at_end="Fridge closed"), F.REFUSED),
+    (_ev({**REFUSED_LINE, "refused_by": "grammar"}, "Apple in Fridge\nTomato in Fridge\nFridge opened", ran=False,
+         true_at_end="Fridge closed"), F.WRONG_GOAL),
     (_ev({**RAN, "Exe": 0.8}, "Apple in Fridge\nTomato in Fridge"), F.EXECUTION),
     (_ev({"error": "execution: WorldError: the Controller stopped"}, "Apple in Fridge\nTomato in Fridge",
          ran=False), F.EXECUTION),
@@ -131,7 +138,8 @@ def test_the_report_counts_each_kind_per_category(tmp_path):
     folder = _run_folder(tmp_path / "run", {
         "kitchen-05": ("Apple in Fridge\n", APPLE_IN_FRIDGE.format(close=""), APPLE_ONLY),
         "kitchen-06": ("# INFEASIBLE: no such thing\n", "", {"refused": True, "refused_by": "model", "SR": 0.0}),
-        "bathroom-01": ("Candle in GarbageCan\n", "", {"category": "elemental", "SR": 1.0, "TCR": 1.0, "GCR": 1.0, "RU": 1.0, "Exe": 1.0})})
+        "bathroom-01": ("Candle in GarbageCan\n", "", {"category": "elemental", "SR": 1.0, "TCR": 1.0, "GCR": 1.0,
+                                                       "RU": 1.0, "Exe": 1.0})})
     write_report([folder], tmp_path / "report")
     with open(tmp_path / "report" / "failures.csv", newline="") as handle:
         rows = {row["Category"]: row for row in csv.DictReader(handle)}
