@@ -10,9 +10,8 @@ scene as it began where no plan ran), so a run folder is all it needs, and it re
 from __future__ import annotations
 
 import json
-from collections import Counter
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +25,7 @@ from ..goal_language import condition_line, parse_goal_statement
 from ..plan_language import read_plan
 from ..scoring import Condition, condition_holds, containment
 from .goal_accuracy import unmatched
-from .results import Line
+from .results import Line, read_results
 from .run_store import RESULTS, RUN_FILE
 from .tasks import Task, load_tasks
 
@@ -104,18 +103,7 @@ def _lines(conditions: Sequence[Condition]) -> str:
     return ", ".join(f"`{condition_line(c)}`" for c in conditions)
 
 
-@dataclass
-class RunFailures:
-    """A run's failures, one per feasible task it did not succeed on."""
-
-    failures: list[Failure] = field(default_factory=list)
-
-    def counts(self, category: str | None = None) -> Counter[str]:
-        """How many of each kind (refusals by who refused: ``refused by model``), in ``category`` or all."""
-        return Counter(f.counted for f in self.failures if category in (None, f.category))
-
-
-def run_failures(folder: str | Path) -> RunFailures:
+def run_failures(folder: str | Path) -> list[Failure]:
     """Classify every failed feasible task of the run in ``folder`` (one run, not a ``--seeds`` folder).
 
     Raises:
@@ -124,7 +112,7 @@ def run_failures(folder: str | Path) -> RunFailures:
     folder = Path(folder)
     try:
         manifest = json.loads((folder / RUN_FILE).read_text(encoding="utf-8"))
-        lines = [json.loads(text) for text in (folder / RESULTS).read_text(encoding="utf-8").splitlines() if text]
+        lines = list(read_results(folder / RESULTS).values())
     except (OSError, ValueError) as exc:
         raise UserError(f"cannot read the run in {folder}: {exc}") from exc
     arguments = manifest.get("identity", {}).get("arguments", {})
@@ -135,7 +123,7 @@ def run_failures(folder: str | Path) -> RunFailures:
     except SmartLLMError as exc:
         raise UserError(f"the tasks of the run in {folder} cannot be read ({exc}): a failure is judged against "
                         "them") from exc
-    found = RunFailures()
+    found: list[Failure] = []
     for line in lines:
         task = tasks.get(line["id"])
         if task is None or not task.feasible:
@@ -145,7 +133,7 @@ def run_failures(folder: str | Path) -> RunFailures:
                       _lazy(lambda task=task, ran=ran: _end(folder / task.id, task, ran, domain)))
         kind = classify(ev)
         if kind is not None:
-            found.failures.append(Failure(task.id, task.category, *kind))
+            found.append(Failure(task.id, task.category, *kind))
     return found
 
 
@@ -181,11 +169,15 @@ def _end(task_folder: Path, task: Task, ran: bool, domain: Domain) -> list[dict[
     skills, site = domain.catalogue.skills, domain.as_site
     if not ran:
         return SiteWorld(site, team).objects if site else DryRun(task.floor_plan, team, skills).objects
-    plan = read_plan(task_folder / "allocated.py", form="allocated", skills=skills, team_size=len(team),
-                     scene_types=set(site.places) if site else None)
-    if site is not None:
-        return run_site_plan(plan, site, team).final_objects
-    return execute(plan, DryRun(task.floor_plan, team, skills).controller, team, skills=skills).final_objects
+    try:
+        plan = read_plan(task_folder / "allocated.py", form="allocated", skills=skills, team_size=len(team),
+                         scene_types=set(site.places) if site else None)
+        if site is not None:
+            return run_site_plan(plan, site, team).final_objects
+        return execute(plan, DryRun(task.floor_plan, team, skills).controller, team, skills=skills).final_objects
+    except SmartLLMError as exc:
+        raise UserError(f"{task.id}: its plan ran in the benchmark but cannot be replayed to judge its failure "
+                        f"({exc}): is {task_folder} the run's own?") from exc
 
 
-__all__ = ["KINDS", "SHOWN", "Evidence", "Failure", "RunFailures", "classify", "run_failures"]
+__all__ = ["KINDS", "SHOWN", "Evidence", "Failure", "classify", "run_failures"]

@@ -184,6 +184,11 @@ class DryRun:
         return self._world.objects
 
     @property
+    def world(self) -> TeamWorld:
+        """The executor's view of the team here: where each member stands, what it holds or helps carry."""
+        return self._world
+
+    @property
     def controller(self) -> Any:
         """This world with the Controller's face, for the executor to run a whole plan in process."""
         return self._thor

@@ -254,7 +254,7 @@ def failure_table(runs: Sequence[Run]) -> Table:
     table = Table("failures", "Where each method fails: the feasible tasks not succeeded on, by kind of failure",
                   ["Method", "Model", "Variant", "Tasks", "Category", "Feasible", "Failed", *kinds])
     for run in runs:
-        found = [f for folder in run.run_folders for f in run_failures(folder).failures]
+        found = [f for folder in run.run_folders for f in run_failures(folder)]
         for tasks, part in run.parts():
             ids = {line["id"] for line in part.lines}
             for category, group in category_groups(part.lines):

@@ -130,7 +130,7 @@ APPLE_ONLY = {"SR": 0.0, "TCR": 0.0, "GCR": 1 / 3, "RU": 1.0, "Exe": 1.0, "trans
 ])
 def test_the_plan_is_replayed_to_judge_the_stated_goals_at_the_end(tmp_path, goals, close, kind):
     folder = _run_folder(tmp_path / "run", {"kitchen-05": (goals, APPLE_IN_FRIDGE.format(close=close), APPLE_ONLY)})
-    [failure] = F.run_failures(folder).failures
+    [failure] = F.run_failures(folder)
     assert (failure.id, failure.category, failure.kind) == ("kitchen-05", "simple", kind)
 
 
