@@ -34,6 +34,14 @@ def matches(stated: Sequence[Condition], truth: Sequence[Condition]) -> tuple[in
     return sum(_key(c) in wanted for c in stated), len(wanted & said)
 
 
+def unmatched(stated: Sequence[Condition], truth: Sequence[Condition]) -> tuple[list[Condition], list[Condition]]:
+    """The stated conditions that are none of the task's, and the task's conditions none stated recalls."""
+    wanted = {_key(c) for c in truth}
+    said = {_key(c) for c in stated}
+    missing = list({_key(c): c for c in truth if _key(c) not in said}.values())
+    return [c for c in stated if _key(c) not in wanted], missing
+
+
 @dataclass
 class Tally:
     """One row's counts."""

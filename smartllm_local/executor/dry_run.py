@@ -183,13 +183,15 @@ class DryRun:
         """The scene's objects now, as the executor sees them (read-only: they are shared with snapshots)."""
         return self._world.objects
 
-    def holding(self, member: int) -> dict[str, Any] | None:
-        """What the member holds now (None: its hand is empty)."""
-        return self._world.holding(member)
+    @property
+    def world(self) -> TeamWorld:
+        """The executor's view of the team here: where each member stands, what it holds or helps carry."""
+        return self._world
 
-    def sees(self, member: int, object_id: str) -> bool:
-        """Whether the object is within the member's reach now (where it went, it sees)."""
-        return self._world.sees(member, object_id)
+    @property
+    def controller(self) -> Any:
+        """This world with the Controller's face, for the executor to run a whole plan in process."""
+        return self._thor
 
     def fits(self, obj: dict[str, Any], receptacle: dict[str, Any]) -> str | None:
         """Why the world would not let ``obj`` go into ``receptacle``, or None if it would."""

@@ -2,9 +2,10 @@
 
 The report is computed from ``results.jsonl`` and ``run.json`` (see
 :mod:`smartllm_local.benchmark.results` for how a mean treats errors, refusals and
-metrics a task cannot be judged on), so it can be made again, on any machine,
-long after the run: report.md (every table, and what each run was), one CSV per
-table, and PNG figures.
+metrics a task cannot be judged on), and the failures table from the tasks' folders
+too (:mod:`smartllm_local.benchmark.failures`), so it can be made again, on any
+machine, long after the run: report.md (every table, and what each run was), one
+CSV per table, and PNG figures.
 """
 
 from __future__ import annotations
@@ -12,7 +13,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..benchmark.run_store import RUN_FILE
 from ..errors import UserError
 from ..files import check_output_folder, write_atomic
 from .runs import Run, load_run
@@ -48,9 +48,7 @@ def _viewers(runs: Sequence[Run], out: Path) -> list[tuple[str, Path]]:
 
     pages = []
     for k, run in enumerate(runs, 1):
-        parts = [run.folder] if (run.folder / RUN_FILE).is_file() else sorted(
-            (p for p in run.folder.glob("seed-*") if (p / RUN_FILE).is_file()), key=lambda p: (len(p.name), p.name))
-        for part in parts:
+        for part in run.run_folders:
             label = run.label if part == run.folder else f"{run.label}, {part.name}"
             name = f"viewer-{k}" + ("" if part == run.folder else f"-{part.name}") + ".html"
             pages.append((label, write_viewer(part, out / name)))

@@ -90,6 +90,14 @@ class Run:
     def task_ids(self) -> frozenset[str]:
         return frozenset(line["id"] for line in self.seeds[0]) if self.seeds else frozenset()
 
+    @property
+    def run_folders(self) -> list[Path]:
+        """The folders of its runs: the folder itself, or one per seed."""
+        if (self.folder / RUN_FILE).is_file():
+            return [self.folder]
+        return sorted((p for p in self.folder.glob("seed-*") if (p / RUN_FILE).is_file()),
+                      key=lambda p: (len(p.name), p.name))
+
     def restricted(self, ids: frozenset[str]) -> Run:
         """The same run with only the lines of tasks ``ids``."""
         return replace(self, seeds=[[line for line in lines if line["id"] in ids] for lines in self.seeds])

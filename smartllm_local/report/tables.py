@@ -6,10 +6,12 @@ from __future__ import annotations
 
 import csv
 import io
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..benchmark.failures import REFUSED, SHOWN, run_failures
 from ..benchmark.results import (
     PAPER_METRICS,
     REFUSERS,
@@ -245,11 +247,36 @@ def bending_table(runs: Sequence[Run]) -> Table:
     return table
 
 
+def failure_table(runs: Sequence[Run]) -> Table:
+    """Where each run's feasible tasks failed, by category: one kind each (benchmark.failures)."""
+    refusers = [k for k in REFUSERS if k != "planner"]
+    kinds = [f"{REFUSED} by {k}" for k in refusers] + [k for k in SHOWN if k != REFUSED]
+    table = Table("failures", "Where each method fails: the feasible tasks not succeeded on, by kind of failure",
+                  ["Method", "Model", "Variant", "Tasks", "Category", "Feasible", "Failed", *kinds])
+    for run in runs:
+        found = [f for folder in run.run_folders for f in run_failures(folder)]
+        for tasks, part in run.parts():
+            ids = {line["id"] for line in part.lines}
+            for category, group in category_groups(part.lines):
+                counts = Counter(f.counted for f in found
+                                 if f.id in ids and category in ("all feasible", f.category))
+                table.rows.append(_who(run) + [tasks, category, len(group), sum(counts.values()),
+                                               *(counts[k] for k in kinds)])
+    table.notes += [
+        "Each failed task counts once, as the first of these that applies (docs/metrics.md defines them): a goal "
+        "stated and met that is not the instruction's, a wrong goal stated (a condition of the task's missed, or "
+        "one added that is false at the end), refused (and by whom), no plan found (refused by the planner, its "
+        "time limit, an error), an action failed in execution, every action succeeded but the plan fell short of "
+        "the goal, or the goal met with extra work (RU < 1).",
+        "Counts are summed over seeds."]
+    return table
+
+
 def _whole(value: float | None) -> int | None:
     return None if value is None else round(value)
 
 
 def all_tables(runs: Sequence[Run]) -> list[Table]:
     tables = [table_one(runs), table_two(runs), table_three(runs), refusal_table(runs), efficiency_table(runs),
-              stage_table(runs), bending_table(runs)]
+              failure_table(runs), stage_table(runs), bending_table(runs)]
     return [table for table in tables if table is not None]

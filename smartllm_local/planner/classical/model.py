@@ -189,10 +189,20 @@ def pick_up(skill: Skill, v: Vocabulary, together: bool) -> InstantaneousAction:
         action.add_precondition(v.lifts(r, t))
     c = Variable("c", THING)
     action.add_effect(v.inside(t, c), False, forall=[c])
+    # What is lifted leaves where it lay: a robot that went to the place would act on it wherever it is taken.
+    moved(action, v, t)
     action.add_effect(v.holding(r, t), True)
     action.add_effect(v.held(t), True)
     action.add_effect(v.free(r), False)
     return action
+
+
+def moved(action: InstantaneousAction, v: Vocabulary, t: FNode) -> None:
+    """``t`` and what it holds (two levels deep) move: no robot is by any of them any more."""
+    x, y, z = Variable("x", ROBOT), Variable("y", THING), Variable("z", THING)
+    action.add_effect(v.at(x, t), False, forall=[x])
+    action.add_effect(v.at(x, y), False, v.inside(y, t), forall=[x, y])
+    action.add_effect(v.at(x, y), False, And(v.inside(y, z), v.inside(z, t)), forall=[x, y, z])
 
 
 def put(skill: Skill, v: Vocabulary) -> InstantaneousAction:
@@ -208,6 +218,8 @@ def put(skill: Skill, v: Vocabulary) -> InstantaneousAction:
     action.add_effect(v.held(t), False)
     action.add_effect(v.free(r), True)
     action.add_effect(v.inside(t, c), True)
+    # Put down where its holder stands, not where a robot that went to it while it was carried stood.
+    moved(action, v, t)
     action.add_effect(v.free(h), True, v.helping(h, t), forall=[h])
     action.add_effect(v.helping(h, t), False, forall=[h])
     settle(action, v, t, c, TRUE())

@@ -142,7 +142,7 @@ def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditio
             problem.add_action(action)
             skill_of[action.name] = skill.name
     table, future = with_future_pieces(dry.objects)
-    held = [dry.holding(m) for m in members or ()]
+    held = [dry.world.holding(m) for m in members or ()]
     kept = {h["objectId"] for h in held if h is not None}
     kept |= {o["objectId"] for o in relevant(table, conditions)}
     chosen = [o for o in table if o["objectId"] in kept]
@@ -236,9 +236,9 @@ def _stands(problem: Problem, v: Vocabulary, dry: DryRun, member: int, robot: Ob
             things: Mapping[str, Object]) -> None:
     """A robot that has acted already: by what its dry-run member sees, holding what it holds."""
     for oid, thing in things.items():
-        if dry.sees(member, oid):
+        if dry.world.sees(member, oid):
             problem.set_initial_value(v.at(robot, thing), True)
-    held = dry.holding(member)
+    held = dry.world.holding(member)
     if held is not None and held["objectId"] in things:
         problem.set_initial_value(v.holding(robot, things[held["objectId"]]), True)
         problem.set_initial_value(v.free(robot), False)
