@@ -16,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from ...decoding.grammar import Grammar
+from ...decoding.loop import forced_tokens
 from ...decoding.matcher import Matcher
 from ..base import Generated, Sampling
 from ..repetition import TRIES, current_line
@@ -77,12 +78,9 @@ class LineRequests:
                         return self._done("eos")
                     if self.guard is not None and self.guard.loops(current_line(self.text) + self.text_of(token)):
                         self.measured.loops += 1
-                        way = self.matcher.shortest_way()
-                        if way:
-                            written = self.spell(way)
-                            self.measured.forced += len(written)
-                        else:
-                            written = [self._instead(token)]
+                        written = forced_tokens(self.matcher.shortest_way(), self.spell, heal=self.heal, way=True)
+                        self.measured.forced += len(written)
+                        written = written or [self._instead(token)]
                         self._take(written)
                         break
                     self._measure(token, seen)
@@ -114,12 +112,7 @@ class LineRequests:
         self.measured.logprob += next((p for t, p in top if t == chosen), logprob)
 
     def _forced(self) -> list[int]:
-        """As in-process: the tokens of the text the grammar forces but the last, which the model writes
-        (unless decoding is not aligned); one character is left to the model altogether."""
-        forced = self.matcher.forced()
-        if len(forced) < 2:
-            return []
-        return self.spell(forced)[:-1] if self.heal else self.spell(forced)
+        return forced_tokens(self.matcher.forced(), self.spell, heal=self.heal)
 
     def _ask(self, max_tokens: int, banned: Sequence[int]) -> tuple[list[int], list[TokenProbs] | None]:
         return self.ask(self.context + self.out, self.grammar.after(self.text), max_tokens, banned)
