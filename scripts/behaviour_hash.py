@@ -29,7 +29,7 @@ import time
 import urllib.request
 from pathlib import Path
 
-#: (name, the run's own options, its tasks). Every run has a context of 2,048 tokens (fewer examples, smaller
+#: (name, the run's own options, its tasks). Every run has a context of 3,072 tokens (fewer examples, smaller
 #: output budgets), so that the 15 tasks plan in minutes on two busy cores.
 RUNS: list[tuple[str, list[str], list[str]]] = [
     ("smollm2", ["--model", "smollm2"], ["kitchen-01", "living-01"]),
@@ -105,7 +105,7 @@ class LlamaCppServer:
 def run(name: str, options: list[str], tasks: list[str], work: Path, env: dict[str, str]) -> list[str]:
     out = work / name
     args = [sys.executable, "-m", "smartllm_local", "benchmark", "run", "--out", str(out), "--restart",
-            "--prefix-cache", "off", "--n-ctx", "2048", *options, *(a for t in tasks for a in ("--task", t))]
+            "--prefix-cache", "off", "--n-ctx", "3072", *options, *(a for t in tasks for a in ("--task", t))]
     server = None
     if name == "server":
         model = subprocess.run([sys.executable, "-c", "from smartllm_local.planner.models import resolve_gguf; "

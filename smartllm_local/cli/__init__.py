@@ -14,13 +14,13 @@ import sys
 import typer
 
 from ..errors import SmartLLMError, UserError
-from . import speed as _speed
 from . import benchmark as _benchmark
 from . import dispatch as _dispatch
 from . import domains as _domains
 from . import execute as _execute
 from . import plan as _plan
 from . import scenes as _scenes
+from . import speed as _speed
 from . import validate as _validate
 from . import view as _view
 

@@ -1,8 +1,9 @@
 """How a server writes a line the way the in-process backend does, one request per stretch of model choices.
 
-In-process, the model chooses tokens one by one; where the grammar forces two or more characters the
-planner writes them itself, in one batch (its own tokens, evaluated together), and where a line starts
-to loop (:class:`LoopGuard`) it writes the grammar's shortest way out. A server asked for a whole line
+In-process (:mod:`...decoding.loop`), the model chooses tokens one by one; where the grammar forces two or
+more characters the planner writes them itself, in one batch (its own tokens, evaluated together: the
+loop's :func:`forced_tokens`, used here too), and where a line starts to loop (:class:`LoopGuard`) it
+writes the grammar's shortest way out. A server asked for a whole line
 would sample the forced text token by token instead, and may spell it with other tokens, after which
 the model sees another context. So each request here asks the server to go on with the line from where
 it stands (the line's grammar after the text so far, :meth:`Grammar.after`); of its answer, the tokens up
