@@ -79,10 +79,10 @@ def test_every_model_option_is_declared_once_and_reaches_model_options():
     parameter, and each ModelOptions parameter an option: a renamed one would fail here, not drop silently."""
     import inspect
 
-    from smartllm_local.cli.bench import bench_command
     from smartllm_local.cli.benchmark import run
     from smartllm_local.cli.options import MODEL_PARAMETERS, ModelOptions, model_options
     from smartllm_local.cli.plan import plan_command
+    from smartllm_local.cli.speed import bench_command
 
     wanted = set(inspect.signature(ModelOptions).parameters)
     assert {p.name for p in MODEL_PARAMETERS} == wanted

@@ -14,13 +14,13 @@ import sys
 import typer
 
 from ..errors import SmartLLMError, UserError
-from . import bench as _bench
 from . import benchmark as _benchmark
 from . import dispatch as _dispatch
 from . import domains as _domains
 from . import execute as _execute
 from . import plan as _plan
 from . import scenes as _scenes
+from . import speed as _speed
 from . import validate as _validate
 from . import view as _view
 
@@ -37,7 +37,7 @@ app.command("plan")(_plan.plan_command)
 app.command("validate")(_validate.validate)
 app.command("execute")(_execute.execute)
 app.command("dispatch")(_dispatch.dispatch)
-app.command("bench")(_bench.bench_command)
+app.command("bench")(_speed.bench_command)
 app.command("view")(_view.view)
 
 

@@ -124,4 +124,4 @@ def test_after_real_stage_lines_llama_cpp_reads_the_grammar_and_forces_the_same_
             whole = Matcher(grammar)
             assert whole.advance(line[:cut]) and after.matches(line[cut:])
             assert Matcher(after).forced() == whole.forced()
-        smollm2._lib.llama_sampler_free(smollm2._grammar_sampler(grammar.after(line[: len(line) // 2])))
+        smollm2.constrain(grammar.after(line[: len(line) // 2])).close()

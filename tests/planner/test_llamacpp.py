@@ -12,10 +12,18 @@ from smartllm_local.errors import ModelError
 from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.decoding.grammar import Grammar, GrammarError, alt, chars, rep, seq
+from smartllm_local.planner.decoding.loop import Choice
 
 from .test_repetition import check_loop_guard
 
 PROMPT = "The capital of France is"
+
+
+def ends(backend) -> np.ndarray:
+    """The backend's end-of-sequence tokens, marked over its vocabulary (aligned decoding: always the model's)."""
+    marked = np.zeros(backend.n_vocab, dtype=bool)
+    marked[list(backend.end_tokens)] = True
+    return marked
 
 
 def test_unconstrained_and_constrained_greedy_differ_and_the_grammar_wins(smollm2):
@@ -39,19 +47,20 @@ def test_greedy_under_a_grammar_picks_what_a_full_mask_picks(smollm2, choices):
     import numpy as np
 
     grammar = Grammar({"root": alt(*choices)})
-    smollm2._sync(smollm2.tokenize(PROMPT, bos=True))
-    logits = smollm2._logits()
+    smollm2.sync(smollm2.tokenize(PROMPT, bos=True))
+    logits = smollm2.next_logits()
     top = set(np.argsort(-logits)[:64].tolist())
-    sampler = smollm2._grammar_sampler(grammar)
+    constraint = smollm2.constrain(grammar)
     try:
-        full = smollm2._masked(sampler, logits)
+        choice = Choice(constraint, ends(smollm2), Sampling(), np.random.default_rng(0))
+        full = choice.masked(logits)
         allowed = set(np.flatnonzero(np.isfinite(full)).tolist())
         way = "first" if int(np.argmax(logits)) in allowed else "top" if allowed & top else "full"
         assert way == {" Paris.\n": "first", " London.\n": "top", "zqxj\n": "full"}[choices[0]]
-        picked = smollm2._pick(logits, sampler, Sampling(), np.random.default_rng(0))
+        picked = choice.choose(logits)
         assert picked == int(np.argmax(full))
     finally:
-        smollm2._lib.llama_sampler_free(sampler)
+        constraint.close()
 
 
 def test_sampling_is_reproducible_and_stays_in_the_grammar(smollm2):
@@ -173,19 +182,17 @@ def test_an_end_of_sequence_far_down_the_models_ranking_is_not_its_choice(smollm
     from smartllm_local.planner.backends.base import may_end
 
     grammar = Grammar({"root": alt("zqxj\n", "monary\n")})
-    smollm2._sync(smollm2.tokenize(PROMPT, bos=True))
-    logits = smollm2._logits()
+    smollm2.sync(smollm2.tokenize(PROMPT, bos=True))
+    logits = smollm2.next_logits()
     end = max(smollm2.end_tokens, key=lambda t: logits[t])
-    sampler = smollm2._grammar_sampler(grammar)
+    constraint = smollm2.constrain(grammar)
     try:
-        smollm2._ends = False
-        admitted = smollm2._masked(sampler, logits)
+        admitted = Choice(constraint, None, Sampling(), np.random.default_rng(0)).masked(logits)
         assert logits[end] > admitted.max() and not may_end(logits, end)  # what the case needs
-        smollm2._ends = True
-        picked = smollm2._pick(logits, sampler, Sampling(), np.random.default_rng(0))
+        picked = Choice(constraint, ends(smollm2), Sampling(), np.random.default_rng(0)).choose(logits)
         assert picked == int(np.argmax(admitted)) and picked not in smollm2.end_tokens
     finally:
-        smollm2._lib.llama_sampler_free(sampler)
+        constraint.close()
 
 
 def test_a_process_that_imports_numpy_before_llama_cpp_loads_and_runs_a_model():
@@ -206,7 +213,7 @@ def test_scores_that_are_not_numbers_are_a_clear_error_not_a_grammar_one(smollm2
     logits = np.zeros(smollm2.n_vocab, dtype=np.float32)
     logits[7] = np.nan
     with pytest.raises(ModelError, match="not numbers"):
-        smollm2._pick(logits, None, Sampling(), np.random.default_rng(0))
+        Choice(None, ends(smollm2), Sampling(), np.random.default_rng(0)).choose(logits)
 
 
 def test_flash_attention_is_off_on_the_cpu_and_llama_cpps_auto_where_layers_are_on_a_gpu(smollm2):

@@ -25,6 +25,7 @@ from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
 from smartllm_local.planner.backends.server.vocabulary import end_tokens_by_rule
 from smartllm_local.planner.decoding.grammar import Grammar, alt, seq
+from smartllm_local.planner.decoding.loop import forced_tokens
 from smartllm_local.planner.decoding.matcher import Matcher
 from smartllm_local.planner.models import embedded_model_path
 from smartllm_local.planner.prompting.chat import prompt_tokens
@@ -123,17 +124,14 @@ def test_the_grammars_forced_text_goes_in_one_batch_but_its_last_token(vocab):
     matcher = Matcher(grammar)
     whole = vocab.tokenize_continuation(forced)
     for heal, expected in ((True, whole[:-1]), (False, whole)):
-        sampler = vocab._grammar_sampler(grammar)
+        tokens = forced_tokens(matcher.forced(), vocab.tokenize_continuation, heal=heal)
+        constraint = vocab.constrain(grammar)
         try:
-            assert vocab._forced_tokens(matcher.forced(), sampler, heal=heal) == expected
+            assert tokens == expected and all(constraint.accept(t) for t in tokens)
         finally:
-            vocab._lib.llama_sampler_free(sampler)
+            constraint.close()
     assert matcher.advance(forced)
-    sampler = vocab._grammar_sampler(Grammar({"root": seq(alt("Apple", "Bread"), "')\n")}))
-    try:
-        assert vocab._forced_tokens(matcher.forced(), sampler) == []
-    finally:
-        vocab._lib.llama_sampler_free(sampler)
+    assert forced_tokens(matcher.forced(), vocab.tokenize_continuation, heal=True) == []
 
 
 class GrammarWriter:

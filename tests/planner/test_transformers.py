@@ -47,12 +47,13 @@ def test_an_end_of_sequence_far_down_the_models_ranking_is_not_its_choice(hf_smo
 
     chat, _ = chat_format(hf_smollm2, "auto")
     _, context, _ = prompt_tokens(hf_smollm2, "Answer with one word: is the sky blue?", chat)
-    hf_smollm2._sync(context)
-    raw = hf_smollm2._logits[: hf_smollm2.n_vocab]
+    hf_smollm2.sync(context)
+    raw = hf_smollm2.next_logits()
+    (eos,) = hf_smollm2.end_tokens
     choices = ("qqq\n", "}}}\n")
     starts = [t for t in range(hf_smollm2.n_vocab)
               if (text := hf_smollm2.detokenize([t])) and any(c.startswith(text) for c in choices)]
-    assert raw[hf_smollm2.eos] > raw[starts].max() and not may_end(raw, hf_smollm2.eos)  # what the case needs
+    assert raw[eos] > raw[starts].max() and not may_end(raw, eos)  # what the case needs
     out = hf_smollm2.generate(context, grammar=Grammar({"root": alt(*choices)}), max_tokens=8, sampling=Sampling())
     assert out.stop == "line" and out.text in choices
 

@@ -15,7 +15,7 @@ runs the n sequences one after another through itself. The llama.cpp backend's l
   and the order in which llama.cpp sums over them moves logits in their last bits (measured: on kitchen-01's
   decomposition SmolLM2 wrote `Put` where it writes `put` alone);
 - each view (:class:`LaneView`) is a whole backend, its ``generate`` the backend's own decoding loop
-  (:class:`.LlamaDecoding`: the same token choice, loop guard, end of sequence and grammar cross-check), driven
+  (:mod:`..decoding.loop`: the same token choice, loop guard, end of sequence and grammar cross-check), driven
   from a thread of its own; only evaluating tokens differs: it is a request to the engine;
 - the engine's thread evaluates, in ONE ``llama_decode``, what every lane that is inside a call (generate,
   prefill) has asked for, as soon as each of them has asked. A lane between calls (the stage code between
@@ -326,7 +326,7 @@ class LaneView(LlamaDecoding):
         self.chat_template, self.bos_token, self.eos_token = parent.chat_template, parent.bos_token, parent.eos_token
         self.trained_context, self.n_gpu_layers = parent.trained_context, parent.n_gpu_layers
         self._lib, self._vocab, self.n_vocab = parent._lib, parent._vocab, parent.n_vocab
-        self._init_decoding(parent._eog)
+        self._init_decoding(parent.end_tokens)
 
     @property
     def evaluated_tokens(self) -> int:
@@ -366,7 +366,7 @@ class LaneView(LlamaDecoding):
         with self._engine.inside():
             before = self._lane.evaluated
             kept = self._parent.kept_state(context, prefixes) if prefixes else None
-            self._sync(context, kept)
+            self.sync(context, kept)
             return len(context) - (self._lane.evaluated - before)
 
     def generate(self, context: Sequence[int], *, grammar: Grammar | None, max_tokens: int, sampling: Sampling,
@@ -375,7 +375,7 @@ class LaneView(LlamaDecoding):
             return super().generate(context, grammar=grammar, max_tokens=max_tokens, sampling=sampling, stop=stop,
                                     rng=rng, lines=lines)
 
-    def _sync(self, context: Sequence[int], state: tuple[list[int], bytes] | None = None) -> None:
+    def sync(self, context: Sequence[int], state: tuple[list[int], bytes] | None = None) -> None:
         if not context:
             raise ModelError("a lane was given an empty context: there is no token to go on from")
         if len(context) >= self.n_ctx:
@@ -384,11 +384,11 @@ class LaneView(LlamaDecoding):
         if lane.logits is None or len(lane.tokens) != len(context) or lane.tokens != list(context):
             self._engine.ask(lane, list(context), extend=False, state=state)
 
-    def _evaluate(self, tokens: list[int]) -> None:
+    def evaluate(self, tokens: list[int]) -> None:
         if tokens:
             self._engine.ask(self._lane, tokens, extend=True)
 
-    def _logits(self) -> np.ndarray:
+    def next_logits(self) -> np.ndarray:
         return self._lane.logits
 
     def close(self) -> None:

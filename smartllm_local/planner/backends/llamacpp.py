@@ -1,4 +1,4 @@
-"""The llama.cpp backend (llama-cpp-python), with a sampling loop of its own (:mod:`.llamacpp_decoding`).
+"""The llama.cpp backend (llama-cpp-python), decoding with the planner's loop (:mod:`..decoding.loop`).
 
 The key/value cache holds the last context; a new context that shares a
 prefix with it only evaluates the rest. A stage's prompt begins with its
@@ -129,8 +129,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
         self._pieces: dict[tuple[int, bool], bytes] = {}
-        self._init_decoding(np.array([bool(llama_cpp.llama_vocab_is_eog(self._vocab, t))
-                                      for t in range(self.n_vocab)]))
+        self._init_decoding(frozenset(t for t in range(self.n_vocab) if llama_cpp.llama_vocab_is_eog(self._vocab, t)))
         self.n_gpu_layers = n_gpu_layers
         self.chat_template = self.llm.metadata.get("tokenizer.chat_template")
         # Prompts are fitted within what the model was trained on: a Llama-2 keeps 4,096 tokens.
@@ -176,7 +175,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
             piece = self._pieces[key] = buffer.raw[:n]
         return piece
 
-    def _sync(self, context: Sequence[int]) -> None:
+    def sync(self, context: Sequence[int]) -> None:
         """Make the cache hold ``context`` and the logits be those of its last token."""
         context = list(context)
         if len(context) >= self.n_ctx:
@@ -186,7 +185,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
             return
         # Re-evaluate at least one token for its logits, and no part of a batch alone.
         self._truncate(keep_whole(self._alone, min(common, len(context) - 1)))
-        self._evaluate(context[len(self._tokens):])
+        self.evaluate(context[len(self._tokens):])
 
     def _truncate(self, size: int) -> None:
         """Keep the first ``size`` tokens of the cache; the logits are stale until the next evaluation."""
@@ -228,7 +227,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
     def _state_size(self, state: bytes) -> int:
         return len(state)
 
-    def _evaluate(self, tokens: list[int]) -> None:
+    def evaluate(self, tokens: list[int]) -> None:
         if not tokens:
             return
         self.llm.eval(tokens)
@@ -281,7 +280,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
             raise ModelError(f"llama.cpp could not make a second context for {purpose} (out of memory?)")
         return ctx
 
-    def _logits(self) -> np.ndarray:
+    def next_logits(self) -> np.ndarray:
         ptr = self._lib.llama_get_logits_ith(self._ctx, -1)
         return np.ctypeslib.as_array(ptr, shape=(self.n_vocab,)).copy()
 

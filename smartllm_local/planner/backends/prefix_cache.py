@@ -212,7 +212,7 @@ class PrefixReuse:
         ends = [end for end in prefixes if 0 < end < min(len(context), self.n_ctx)]
         evaluated = self.evaluated_tokens
         loaded = self._load_prefixes(context, ends) if ends and self.keeps_states is not False else None
-        self._sync(context)
+        self.sync(context)
         return loaded if loaded is not None else len(context) - (self.evaluated_tokens - evaluated)
 
     def _decide_keeping(self, tokens: int, seconds: float) -> None:
@@ -249,7 +249,7 @@ class PrefixReuse:
             prefix = list(context[:end])
             piece = prefix[len(self._tokens):]
             started = time.perf_counter()
-            self._evaluate(piece)
+            self.evaluate(piece)
             if self.keeps_states is None:
                 self._decide_keeping(len(piece), time.perf_counter() - started)
             if self.keeps_states is False:
@@ -291,13 +291,13 @@ class PrefixReuse:
                 store.touch(self._store_key(prefix))
 
     # hooks
-    def _sync(self, context: Sequence[int]) -> None:
+    def sync(self, context: Sequence[int]) -> None:
         raise NotImplementedError
 
     def _truncate(self, size: int) -> None:
         raise NotImplementedError
 
-    def _evaluate(self, tokens: list[int]) -> None:
+    def evaluate(self, tokens: list[int]) -> None:
         raise NotImplementedError
 
     def _snapshot(self) -> Any:

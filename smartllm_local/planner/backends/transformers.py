@@ -16,9 +16,9 @@ any other value (llama.cpp's -1 included) puts the whole model on the CUDA GPU
 (``cuda``, or ``cuda:$LOCAL_RANK``) in bfloat16, or float16 where the GPU has no
 bfloat16, and fails with a clear error when the installed torch has no CUDA.
 Every tensor given to the model (the input ids; the key/value cache the model
-makes) is on the model's device, and so are the logits and the grammar's mask
-applied to them; only llguidance's packed bitmask (which llguidance fills
-through a CPU pointer) and temperature sampling (numpy) live on the CPU.
+makes) is on the model's device; the last position's logits are copied to the
+CPU, where the decoding loop (:mod:`..decoding.loop`) chooses the token under
+llguidance's mask (which llguidance fills through a CPU pointer).
 Loading shows no progress bars; transformers' warnings still show.
 """
 
@@ -29,23 +29,22 @@ import copy
 import importlib
 import importlib.util
 import logging
-import math
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ...errors import BackendUnavailableError, GrammarMismatchError, ModelError
-from ..decoding.grammar import Grammar, GrammarError
-from ..decoding.matcher import Matcher
+from ...errors import BackendUnavailableError, ModelError
+from ..decoding import loop
+from ..decoding.grammar import Grammar
 from ..models import EMBEDDED, default_model, embedded_model_path, is_gguf
-from .base import Generated, Sampling, may_end, shared_prefix
+from .base import Generated, Sampling, shared_prefix
 from .hf_vocabulary import EXTRA as _EXTRA
 from .hf_vocabulary import HFVocabulary
+from .llguidance_grammar import LLGuidanceGrammar
 from .prefix_cache import MemoryStates, PrefixReuse
-from .repetition import TRIES, current_line, draw
 
 for _switch in ("HF_HUB_OFFLINE", "TRANSFORMERS_OFFLINE", "HF_DATASETS_OFFLINE"):
     os.environ[_switch] = "1"
@@ -144,7 +143,7 @@ class TransformersBackend(PrefixReuse):
         try:
             import llguidance
             import llguidance.hf
-            import llguidance.torch
+            import llguidance.torch  # noqa: F401  (the grammar's mask: fail here, with the fix)
             import torch
             import transformers
         except ImportError as exc:
@@ -192,7 +191,8 @@ class TransformersBackend(PrefixReuse):
         self.n_ctx = min(n_ctx, int(limit))
         self.ll_tokenizer = self.vocabulary.ll_tokenizer
         self.n_vocab = self.ll_tokenizer.vocab_size
-        self.eos = self.tokenizer.eos_token_id
+        self.end_tokens = self.vocabulary.end_tokens
+        self.token_bytes = self.vocabulary.piece
         self.chat_template = self.vocabulary.chat_template
         self.bos_token, self.eos_token = self.vocabulary.bos_token, self.vocabulary.eos_token
         self.tokenize, self.detokenize = self.vocabulary.tokenize, self.vocabulary.detokenize
@@ -201,27 +201,27 @@ class TransformersBackend(PrefixReuse):
         self._states = MemoryStates()
         self.evaluated_tokens = 0
         self._cache: Any = None
-        self._logits: Any = None
+        self._last: Any = None  # the last token's logits, on the model's device
 
-    def _evaluate(self, tokens: list[int]) -> None:
+    def evaluate(self, tokens: list[int]) -> None:
         torch = self._torch
         with torch.no_grad():
             ids = torch.tensor([tokens], dtype=torch.long, device=self.device)
             out = self.lm(input_ids=ids, past_key_values=self._cache, use_cache=True)
         self._cache = out.past_key_values
-        self._logits = out.logits[0, -1, :].float()  # on the model's device
+        self._last = out.logits[0, -1, :].float()
         self._tokens.extend(tokens)
         self.evaluated_tokens += len(tokens)
 
-    def _sync(self, context: Sequence[int]) -> None:
+    def sync(self, context: Sequence[int]) -> None:
         context = list(context)
         if len(context) >= self.n_ctx:
             raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
         common = shared_prefix(self._tokens, context)
-        if common == len(context) == len(self._tokens) and self._logits is not None:
+        if common == len(context) == len(self._tokens) and self._last is not None:
             return
         self._truncate(min(common, len(context) - 1))
-        self._evaluate(context[len(self._tokens):])
+        self.evaluate(context[len(self._tokens):])
 
     def _truncate(self, size: int) -> None:
         """Keep the first ``size`` tokens of the cache."""
@@ -232,7 +232,7 @@ class TransformersBackend(PrefixReuse):
         else:
             self._cache, size = None, 0
         self._tokens = self._tokens[:size]
-        self._logits = None
+        self._last = None
 
     # prefixes (see PrefixReuse): kept in memory for this process, copied on the model's device; the store on
     # disk is llama.cpp's
@@ -243,7 +243,7 @@ class TransformersBackend(PrefixReuse):
         return copy.deepcopy(self._cache)
 
     def _restore(self, prefix: list[int], state: Any) -> bool:
-        self._cache, self._tokens, self._logits = copy.deepcopy(state), list(prefix), None
+        self._cache, self._tokens, self._last = copy.deepcopy(state), list(prefix), None
         return True
 
     def _state_size(self, state: Any) -> int:
@@ -251,104 +251,18 @@ class TransformersBackend(PrefixReuse):
 
     def generate(self, context: Sequence[int], *, grammar: Grammar | None, max_tokens: int, sampling: Sampling,
                  stop: Sequence[str] = (), rng: np.random.Generator | None = None, lines: int = 1) -> Generated:
-        torch, llg = self._torch, self._llg
-        rng = rng or np.random.default_rng(sampling.seed)
-        max_tokens = min(max_tokens, self.n_ctx - len(context) - 1)
-        self._sync(context)
-        matcher = None
-        mask = None
-        if grammar is not None:
-            matcher = llg.LLMatcher(self.ll_tokenizer, llg.grammar_from("gbnf", grammar.to_gbnf()))
-            if matcher.is_error():
-                raise GrammarError(f"llguidance rejected a grammar: {matcher.get_error()}")
-            mask = llg.torch.allocate_token_bitmask(1, self.n_vocab)  # on the CPU: llguidance fills it there
-        guard = sampling.loop_guard
-        follow = Matcher(grammar) if grammar is not None else None  # the planner's own reading of the text
-        out = Generated([], "", "length")
-        while len(out.tokens) < max_tokens:
-            new = self._forced_tokens(follow, sampling) if follow is not None else []
-            out.forced += len(new)
-            if not new:
-                raw = self._logits[: self.n_vocab]
-                logits = raw.clone().unsqueeze(0)
-                if matcher is not None:
-                    # llguidance's own apply function goes through torch.compile (seconds per call): unpack here.
-                    llg.torch.fill_next_token_bitmask(matcher, mask, 0)
-                    bits = np.unpackbits(mask.numpy().view(np.uint8), bitorder="little")[: self.n_vocab]
-                    blocked = torch.from_numpy(bits == 0).to(logits.device)
-                    logits[0, blocked] = -float("inf")
-                    if sampling.aligned and may_end(raw, self.eos):
-                        logits[0, self.eos] = raw[self.eos]  # the end of sequence is the model's to choose
-                token = self._pick(logits[0], sampling, rng)
-                new = [token]
-                line = current_line(out.text)
-                if guard is not None and guard.loops(line + self.detokenize([token])):
-                    # A loop (see LoopGuard): end the free text it runs in, or else avoid the looping token.
-                    way = follow.shortest_way() if follow is not None else ""
-                    out.loops += 1
-                    if way:
-                        new = self.tokenize_continuation(way)
-                        out.forced += len(new)
-                    else:
-                        new = [self._pick(logits[0], sampling, rng,
-                                          lambda t: guard.loops(line + self.detokenize([t])))]
-                if len(new) == 1 and new[0] == token:
-                    self._measure(out, raw, token, logits[0])
-                if new[0] == self.eos or (matcher is not None and matcher.is_stopped()):
-                    out.text, out.stop = self.detokenize(out.tokens), "eos"
-                    return out
-            for t in new:
-                if matcher is not None and not matcher.consume_token(t):
-                    raise GrammarMismatchError(out.text + self.detokenize(new), "the planner's grammar forces it, "
-                                               f"llguidance refuses it: {matcher.get_error()}")
-            out.tokens.extend(new)
-            self._evaluate(new)
-            piece = self.detokenize(new)
-            if follow is not None and not follow.advance(piece):
-                raise GrammarMismatchError(out.text + piece, "llguidance let the model write it, the planner's "
-                                           "grammar does not allow it")
-            out.text = self.detokenize(out.tokens)
-            if matcher is not None and out.text.count("\n") >= lines:
-                out.stop = "line"
-                return out
-            for s in stop:
-                if s in out.text:
-                    out.text, out.stop = out.text[: out.text.index(s)], "stop"
-                    return out
-        out.text = self.detokenize(out.tokens)
-        return out
+        """See :meth:`.base.Backend.generate`."""
+        return loop.generate(self, context, grammar=grammar, max_tokens=max_tokens, sampling=sampling, stop=stop,
+                             rng=rng, lines=lines)
 
-    def _forced_tokens(self, follow: Matcher, sampling: Sampling) -> list[int]:
-        """As the llama.cpp backend does: the tokens of text the grammar forces, in one batch, but the last, which
-        the model writes (unless decoding is not aligned); one character is left to the model altogether."""
-        forced = follow.forced()
-        if len(forced) < 2:
-            return []
-        tokens = self.tokenize_continuation(forced)
-        return tokens[:-1] if sampling.aligned else tokens
+    def next_logits(self) -> np.ndarray:
+        return self._last[: self.n_vocab].cpu().numpy()
 
-    def _measure(self, out: Generated, raw: Any, token: int, masked: Any) -> None:
-        """Whether the model's likeliest token was refused, and the chosen one's log-probability (unconstrained)."""
-        best = int(self._torch.argmax(raw))
-        out.choices += 1
-        out.refused += best != token and not math.isfinite(float(masked[best]))
-        out.logprob += float(self._torch.log_softmax(raw.double(), dim=-1)[token])
-
-    def _pick(self, logits: Any, sampling: Sampling, rng: np.random.Generator,
-              avoid: Callable[[int], bool] | None = None) -> int:
-        """Greedy or sampled from the (grammar-masked) logits; ``avoid`` refuses tokens while others are left."""
-        if sampling.temperature <= 0:
-            if avoid is None:
-                return int(self._torch.argmax(logits))
-            order = self._torch.argsort(logits, descending=True, stable=True)[:TRIES].tolist()
-            finite = [t for t in order if math.isfinite(float(logits[t]))]
-            return next((t for t in finite if not avoid(t)), finite[0])
-        scores = (logits / sampling.temperature).double().cpu().numpy()
-        finite = np.isfinite(scores)
-        return draw(np.where(finite, np.exp(scores - scores[finite].max()), 0.0), rng, avoid, TRIES)
+    def constrain(self, grammar: Grammar) -> LLGuidanceGrammar:
+        return LLGuidanceGrammar(self._llg, self.ll_tokenizer, self.n_vocab, grammar)
 
     def close(self) -> None:
-        self._cache = self._logits = None
+        self._cache = self._last = None
         self.lm = None
         if getattr(self, "device", None) is not None and self.device.type == "cuda":
             self._torch.cuda.empty_cache()

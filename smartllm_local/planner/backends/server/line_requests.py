@@ -1,8 +1,9 @@
 """How a server writes a line the way the in-process backend does, one request per stretch of model choices.
 
-In-process, the model chooses tokens one by one; where the grammar forces two or more characters the
-planner writes them itself, in one batch (its own tokens, evaluated together), and where a line starts
-to loop (:class:`LoopGuard`) it writes the grammar's shortest way out. A server asked for a whole line
+In-process (:mod:`...decoding.loop`), the model chooses tokens one by one; where the grammar forces two or
+more characters the planner writes them itself, in one batch (its own tokens, evaluated together: the
+loop's :func:`forced_tokens`, used here too), and where a line starts to loop (:class:`LoopGuard`) it
+writes the grammar's shortest way out. A server asked for a whole line
 would sample the forced text token by token instead, and may spell it with other tokens, after which
 the model sees another context. So each request here asks the server to go on with the line from where
 it stands (the line's grammar after the text so far, :meth:`Grammar.after`); of its answer, the tokens up
@@ -16,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from ...decoding.grammar import Grammar
+from ...decoding.loop import forced_tokens
 from ...decoding.matcher import Matcher
 from ..base import Generated, Sampling
 from ..repetition import TRIES, current_line
@@ -77,12 +79,9 @@ class LineRequests:
                         return self._done("eos")
                     if self.guard is not None and self.guard.loops(current_line(self.text) + self.text_of(token)):
                         self.measured.loops += 1
-                        way = self.matcher.shortest_way()
-                        if way:
-                            written = self.spell(way)
-                            self.measured.forced += len(written)
-                        else:
-                            written = [self._instead(token)]
+                        written = forced_tokens(self.matcher.shortest_way(), self.spell, heal=self.heal, way=True)
+                        self.measured.forced += len(written)
+                        written = written or [self._instead(token)]
                         self._take(written)
                         break
                     self._measure(token, seen)
@@ -114,12 +113,7 @@ class LineRequests:
         self.measured.logprob += next((p for t, p in top if t == chosen), logprob)
 
     def _forced(self) -> list[int]:
-        """As in-process: the tokens of the text the grammar forces but the last, which the model writes
-        (unless decoding is not aligned); one character is left to the model altogether."""
-        forced = self.matcher.forced()
-        if len(forced) < 2:
-            return []
-        return self.spell(forced)[:-1] if self.heal else self.spell(forced)
+        return forced_tokens(self.matcher.forced(), self.spell, heal=self.heal)
 
     def _ask(self, max_tokens: int, banned: Sequence[int]) -> tuple[list[int], list[TokenProbs] | None]:
         return self.ask(self.context + self.out, self.grammar.after(self.text), max_tokens, banned)
