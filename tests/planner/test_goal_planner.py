@@ -339,3 +339,39 @@ def test_a_robot_is_no_longer_by_what_another_carried_away():
         pick = [objs[second], objs[apple]]
         assert not simulator.is_applicable(state, acts["PickupObject"], pick)
         assert not dry.succeeds([problem.robots[second]], "PickupObject", [problem.things[apple]]).success
+
+
+def test_an_interrupted_search_leaves_no_process_behind(monkeypatch):
+    """Ctrl-C while Fast Downward runs (in a session of its own, out of a terminal's reach) ends its processes
+    too. The search's command is a stand-in that would run for a minute; the interrupt comes as it runs."""
+    import signal
+    import subprocess
+    import sys
+
+    from smartllm_local.planner.classical import search as search_module
+
+    team = CATALOGUE.team([1])
+    task = planning_task(DryRun(1, team, CATALOGUE.skills), team, CATALOGUE.skills,
+                         parse_goal_statement("Apple in Fridge\n").conditions)
+    monkeypatch.setattr(search_module._FastDownward, "_base_cmd",
+                        lambda self, plan: [sys.executable, "-c", "import time; time.sleep(60)"])
+    started: list[subprocess.Popen] = []
+    popen = subprocess.Popen
+
+    def started_then_interrupted(*args, **kwargs):
+        started.append(popen(*args, **kwargs))
+        signal.setitimer(signal.ITIMER_REAL, 0.5)
+        return started[-1]
+
+    def interrupt(*_):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(subprocess, "Popen", started_then_interrupted)
+    previous = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            search(task, 60)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    assert started and started[0].poll() is not None

@@ -12,9 +12,11 @@ import io
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import unified_planning.shortcuts as up
 from unified_planning.engines import PlanGenerationResultStatus as Status
+from unified_planning.engines.pddl_planner import terminate_process
 from unified_planning.io import PDDLWriter
 from unified_planning.plans import ActionInstance
 from up_fast_downward import FastDownwardPDDLPlanner
@@ -36,6 +38,18 @@ class _FastDownward(FastDownwardPDDLPlanner):
     def _base_cmd(self, plan_filename: str) -> list[str]:
         interpreter, driver, *rest = super()._base_cmd(plan_filename)
         return [interpreter, driver, "--sas-file", str(self._sas_file), *rest]
+
+    def _solve(self, *args: Any, **kwargs: Any) -> Any:
+        """The search; where it is interrupted (Ctrl-C, a stopped run), its processes end with it: Unified
+        Planning starts Fast Downward in a session of its own, which a terminal's Ctrl-C does not reach."""
+        try:
+            return super()._solve(*args, **kwargs)
+        except BaseException:
+            process = getattr(self, "_process", None)
+            if process is not None:
+                terminate_process(process)
+                process.wait()
+            raise
 
 
 @dataclass(frozen=True)
