@@ -189,6 +189,7 @@ def _run(out: Path, states: Path, *extra: str) -> list[dict]:
     return [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
 
 
+@pytest.mark.heavy  # two SmolLM2 runs of four tasks: 117 s of the default suite
 def test_three_tasks_at_once_write_the_plans_of_one_at_a_time(tmp_path):
     """SmolLM2, greedy: with --parallel 3 (three lanes of one model, the four tasks' stages in shared batches)
     every stage writes what it writes one task at a time, and the results file lists the tasks in their order."""
