@@ -20,8 +20,6 @@ from dataclasses import asdict, dataclass, replace
 from ...executor.dry_run import DryRun
 from ...scoring import Condition
 from ...skills import Skill, SkillSet
-from ..classical.problem import Unreachable, planning_task
-from ..classical.search import search
 from .candidates import Candidate, Candidates, acts_on
 from .feasibility import WholeTeam
 from .world_check import WorldCheck
@@ -79,6 +77,10 @@ class Repairer:
         goal = effect(skill, objects)
         if goal is None:
             return None
+        # Unified Planning takes most of a second to import: it loads with the first repair sought, not every plan
+        from ..classical.problem import Unreachable, planning_task
+        from ..classical.search import search
+
         started = time.perf_counter()
         robot = self.run.team[member]
         if skills is not None:
