@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 
 from ...executor.dry_run import DryRun
 from ...scoring import Condition
@@ -56,9 +56,6 @@ class Repair:
     calls: tuple[Written, ...]
     seconds: float
 
-    def as_dict(self) -> dict[str, object]:
-        return asdict(self)
-
 
 class Repairer:
     """Finds repairs for the calls of one decomposition (a dry run of the household world)."""
@@ -66,7 +63,7 @@ class Repairer:
     def __init__(self, world: WorldCheck, skills: SkillSet, time_limit: float = TIME_LIMIT):
         if not isinstance(world.run, DryRun):
             raise ValueError("repair plans in the household world's dry run")
-        self.world, self.run, self.skills, self.time_limit = world, world.run, skills, time_limit
+        self.run, self.skills, self.time_limit = world.run, skills, time_limit
 
     def enable(self, member: int, place: str | None, skill: Skill, objects: Sequence[str],
                allows: Callable[[str, Sequence[str]], bool] | None = None,
