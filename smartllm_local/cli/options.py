@@ -59,7 +59,7 @@ class ModelOptions:
                  no_loop_guard: bool = False, no_token_alignment: bool = False,
                  candidates: int = DEFAULT_CANDIDATES, candidate_temperature: float = CANDIDATE_TEMPERATURE,
                  select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
-                 no_repair: bool = False):
+                 no_repair: bool = False, no_finish_goals: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -109,6 +109,7 @@ class ModelOptions:
             goal_check=goal_check,
             stop_at_goals=not no_stop_at_goals,
             repair=not no_repair,
+            finish_goals=not no_finish_goals,
         )
         self.seed = seed
 
@@ -226,6 +227,10 @@ _NO_REPAIR = typer.Option(False, "--no-repair", help=(
     "Offer the decomposition only the calls that succeed where a sub-task stands, rather than also those that "
     "fail there and write them after the steps Fast Downward finds to enable them (a knife fetched before a "
     "slice; see docs/planner.md, \"Repair\")."))
+_NO_FINISH_GOALS = typer.Option(False, "--no-finish-goals", help=(
+    "End the decomposition where the model ends it, rather than have Fast Downward write a last sub-task that "
+    "meets the stated goals the model's sub-tasks left unmet in the dry run (see docs/planner.md, \"The "
+    "planner's last sub-task\")."))
 
 #: Every model option: its parameter name, type and typer option, in the order --help lists them.
 MODEL_PARAMETERS = [
@@ -243,7 +248,7 @@ MODEL_PARAMETERS = [
         ("server_timeout", float | None, _SERVER_TIMEOUT), ("candidates", int, _CANDIDATES),
         ("candidate_temperature", float, _CANDIDATE_TEMPERATURE), ("select", str, _SELECT),
         ("goal_check", bool, _GOAL_CHECK), ("no_stop_at_goals", bool, _NO_STOP_AT_GOALS),
-        ("no_repair", bool, _NO_REPAIR),
+        ("no_repair", bool, _NO_REPAIR), ("no_finish_goals", bool, _NO_FINISH_GOALS),
     )
 ]
 

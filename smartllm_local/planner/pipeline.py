@@ -95,6 +95,7 @@ class PlannerConfig:
     goal_check: bool = False
     stop_at_goals: bool = True
     repair: bool = True
+    finish_goals: bool = True
 
 
 @dataclass
@@ -199,11 +200,13 @@ class Planner:
         record = StageRecord("decomposition", chat_template=self.chat_status)
         skills = self.catalogue.skills
         world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site) if self.config.world_check else None
-        goals = stated_conditions(result, scene) if self.config.stop_at_goals else []
-        repairer = Repairer(world, skills) if world is not None and self.config.repair and scene.site is None \
-            else None
+        config = self.config
+        goals = stated_conditions(result, scene) if config.stop_at_goals or config.finish_goals else []
+        repairer = Repairer(world, skills) if world is not None and (config.repair or config.finish_goals) \
+            and scene.site is None else None
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
-                                    for_team=team, goals=goals, repairer=repairer) if self.config.grammar else None
+                                    for_team=team, goals=goals, repairer=repairer, stop=config.stop_at_goals,
+                                    repair=config.repair, finish=config.finish_goals) if config.grammar else None
         rng = self.stage_rng(result, record.stage if k == 0 else f"{record.stage} candidate {k}")
         run_stage(record, backend, prompt, constraint, output_budget=self.config.budgets["decomposition"],
                   sampling=self.config.candidates.sampling(self.config.sampling, k), rng=rng, progress=progress)
@@ -211,6 +214,7 @@ class Planner:
                                 form="decomposed", scene=scene)
         if constraint is not None:
             record.ended_at_goals = constraint.ended_at_goals
+            record.finish = constraint.finish_made
             if constraint.repairs is not None:
                 record.repairs, record.unrepaired = constraint.repairs.made, len(constraint.repairs.missed)
         if record.refusal is not None and constraint is not None and constraint.must_refuse:

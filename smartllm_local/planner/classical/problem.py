@@ -125,10 +125,11 @@ def relevant(objects: Sequence[Mapping[str, Any]], conditions: Sequence[Conditio
 
 
 def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditions: Sequence[Condition],
-                  name: str = "task", members: Sequence[int] | None = None) -> PlanningTask:
+                  name: str = "task", members: Sequence[int] | None = None,
+                  hands_free: bool = False) -> PlanningTask:
     """The problem of reaching ``conditions`` with ``team`` from the dry run's current state. ``members``: the
     dry run's robots the team's are, each starting as that one stands (by what it sees, holding what it holds);
-    none given, the team starts with empty hands, by nothing.
+    none given, the team starts with empty hands, by nothing. ``hands_free``: every robot ends holding nothing.
 
     Raises:
         Unreachable: a condition that no object of the scene can meet (naming it).
@@ -155,7 +156,8 @@ def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditio
     _initial_state(problem, v, dry, chosen, things, future, team)
     for robot, member in zip(robots, members or ()):
         _stands(problem, v, dry, member, robot, things)
-    problem.add_goal(And(*(_condition(v, c, chosen, things, future) for c in conditions)))
+    problem.add_goal(And(*(_condition(v, c, chosen, things, future) for c in conditions),
+                         *(v.free(robot) for robot in robots if hands_free)))
     return PlanningTask(problem, {o.name: oid for oid, o in things.items()},
                         {o.name: i for i, o in enumerate(robots)}, {s.name: s.action for s in skills.values()},
                         skill_of)

@@ -44,6 +44,7 @@ from ..prompting.scene_context import SceneObjects
 from .budget import Budget
 from .candidates import Candidates
 from .feasibility import Step, WholeTeam, call_demand, feasible_lists, minimal_lists, shortest_list
+from .finish import Finish
 from .format import (
     COMMENT_LEN,
     INDENT,
@@ -102,13 +103,18 @@ class PlanConstraint(Constraint):
         for_team: Sequence[Robot] | None = None,
         goals: Sequence[Condition] = (),
         repairer: Repairer | None = None,
+        stop: bool = True,
+        repair: bool = True,
+        finish: bool = False,
     ):
         """``team`` (or ``team_size``) makes it an allocation; ``for_team`` is the team a decomposition is
         written for: it offers only the calls that team can make (see :class:`.feasibility.WholeTeam`), and
         a refusal only for a reason the catalogue gives (:meth:`_reasons`). ``goals`` (the goal stage's, with a
-        world check): once they all hold in the dry run, no further sub-task is begun. ``repairer`` (a
-        decomposition's, with a world check): a call that fails where the function stands is offered too, and
-        written after the planner's steps that enable it (see :mod:`.repair`)."""
+        world check): with ``stop``, once they all hold in the dry run, no further sub-task is begun.
+        ``repairer`` (a decomposition's, with a world check): with ``repair``, a call that fails where the
+        function stands is offered too, and written after the planner's steps that enable it (see
+        :mod:`.repair`); with ``finish`` and goals, the goals the plan leaves unmet are met by a last sub-task
+        of the planner's (:mod:`.finish`)."""
         super().__init__()
         if team is not None:
             team_size = len(team)
@@ -124,7 +130,9 @@ class PlanConstraint(Constraint):
         self.scene = scene
         self.world = world
         self.goals = list(goals) if world is not None else []
+        self.stop = stop
         self.ended_at_goals = False  # a sub-task was withheld: the goals held
+        self.finish_made: dict[str, object] | None = None  # the planner's last sub-task (see :mod:`.finish`)
         self.repairs: Repairs | None = None  # with a repairer, once the candidate calls are known
         self.rewrite: str | None = None  # the text that replaces the line just written
         self.rewriting = False  # that text is being fed
@@ -155,8 +163,12 @@ class PlanConstraint(Constraint):
                                      world=world, max_steps=self.max_steps,
                                      allows=self.whole.can if self.whole is not None else None)
         self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
-        if repairer is not None and world is not None and not self.allocated:
+        planned = repairer is not None and world is not None and not self.allocated
+        if planned and repair:
             self.repairs = Repairs(repairer, self.candidates, self.whole, self.max_steps, self.by_name)
+        self.finish = Finish(repairer, self.candidates, self.whole, self.goals, self.max_steps, self.by_name) \
+            if planned and finish and self.goals and not self.summary else None
+        self.finish_text = ""  # the planner's last sub-task, once found
         self.budget = Budget(allocated=self.allocated, team_size=self.team_size, fixed_names=self.fixed_names,
                              fresh_action=self.fresh_action, body_cost=self._body_cost)
         self.skills_len = longest(Ref("skills"), self.rules)
@@ -233,6 +245,10 @@ class PlanConstraint(Constraint):
             return Forced(self.pending)
         if self.phase == "order-blank":
             return Forced("\n")
+        if self.phase == "done" and self.finish is not None and self.refusal is None:
+            return self._finishing(remaining)
+        if self.phase == "finish":
+            return Forced(self.finish_text)
         handler = {
             "start": self._start, "summary": self._summary, "header": self._header_choice, "body": self._body,
             "orch": self._orch, "threads": self._threads,
@@ -300,7 +316,7 @@ class PlanConstraint(Constraint):
         if self.fixed_names:
             return Forced(f"def {self.fixed_names[k - 1]}(robot_list):\n")
         options: dict[str, Node] = {}
-        if self.owed or (k <= self.max_subtasks and not self._goals_held()):
+        if self.owed or (k <= self.max_subtasks and not (self.stop and self._goals_held())):
             header = self._header(k, remaining)
             if header is None:
                 self._cap(f"sub-task {k}")
@@ -309,6 +325,16 @@ class PlanConstraint(Constraint):
         if not self.owed:
             options.update(self._orch_options(remaining))
         return self._choose({**self.rules, **self._orch_rules(remaining)}, options)
+
+    def _finishing(self, remaining: int) -> Forced | None:
+        """The plan is complete: a blank line before the planner's last sub-task (sought once), if there is one."""
+        finish, self.finish = self.finish, None
+        assert finish is not None and self.world is not None
+        text = finish.text(self.world, len(self.functions) + 1, remaining - 1)
+        if text is None:
+            return None
+        self.finish_made, self.finish_text, self.phase = finish.made, text, "finish"
+        return Forced("\n")
 
     def _goals_held(self) -> bool:
         """Whether every stated goal holds in the dry run (a sub-task begun now would be one nobody asked for)."""
@@ -512,6 +538,10 @@ class PlanConstraint(Constraint):
             kind = self._forced_kind(piece)
         if kind == "repair":
             self._repair(piece)
+        elif kind == "finish":
+            self._finished(piece)
+        elif kind == "finish-blank":
+            pass
         elif kind == "rewrite":
             self.rewriting = False
             gotos = {s.name for s in self.candidates.gotos}
@@ -560,6 +590,8 @@ class PlanConstraint(Constraint):
         """What a piece of forced text was, from where the plan stands."""
         if self.rewriting:
             return "rewrite"
+        if self.phase == "finish":
+            return "finish-blank" if piece == "\n" else "finish"
         if self.pending:
             return "pending"
         if self.phase == "order-blank":
@@ -571,6 +603,20 @@ class PlanConstraint(Constraint):
         if piece.lstrip().startswith("#"):
             return "comment"
         return "sleep"
+
+    def _finished(self, piece: str) -> None:
+        """The planner's last sub-task was written: its steps applied in the dry run, its call made."""
+        gotos = {s.name for s in self.candidates.gotos}
+        for line in piece.splitlines(keepends=True):
+            if line.startswith("def "):
+                self.functions.append(WrittenFunction(line[4:line.index("(")]))
+            elif line.lstrip().startswith("#"):
+                self._step_written("comment", line)
+            elif line.startswith(INDENT):
+                self._step_written("goto" if line.strip().split("(")[0] in gotos else "action", line)
+            elif line.strip():
+                self.launched.append(line.split("(", 1)[0])
+        self.phase = "done"
 
     def _step_written(self, kind: str, piece: str) -> None:
         fn = self.functions[-1]

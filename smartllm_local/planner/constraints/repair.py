@@ -74,6 +74,31 @@ class Repairer:
         goal = effect(skill, objects)
         if goal is None:
             return None
+        found = self._plan(member, [goal], place, skills)
+        if found is None:
+            return None
+        calls, seconds = found
+        if calls[-1] != (skill.name, tuple(objects)) or not 1 < len(calls) <= MOST_STEPS + 1 \
+                or not self._usable(member, calls, allows):
+            return None
+        return Repair(tuple(calls[:-1]), seconds)
+
+    def meet(self, member: int, goals: Sequence[Condition], most: int,
+             allows: Callable[[str, Sequence[str]], bool] | None = None,
+             skills: frozenset[str] | None = None) -> Repair | None:
+        """The steps of a new sub-task whose robot ``member`` (one no sub-task has used) meets ``goals`` and ends
+        with empty hands, in at most ``most`` steps, or None."""
+        found = self._plan(member, goals, None, skills, hands_free=True)
+        if found is None:
+            return None
+        calls, seconds = found
+        if not 0 < len(calls) <= most or not self._usable(member, calls, allows):
+            return None
+        return Repair(tuple(calls), seconds)
+
+    def _plan(self, member: int, goals: Sequence[Condition], place: str | None, skills: frozenset[str] | None,
+              hands_free: bool = False) -> tuple[list[Written], float] | None:
+        """Fast Downward's shortest plan for ``member`` from the dry run's state now, as a plan writes it."""
         # Unified Planning takes most of a second to import: it loads with the first repair sought, not every plan
         from ..classical.problem import Unreachable, planning_task
         from ..classical.search import search
@@ -83,20 +108,22 @@ class Repairer:
         if skills is not None:
             robot = replace(robot, skills=robot.skills & skills)
         try:
-            task = planning_task(self.run, [robot], self.skills, [goal], name="repair", members=[member])
+            task = planning_task(self.run, [robot], self.skills, goals, name="repair", members=[member],
+                                 hands_free=hands_free)
         except Unreachable:
             return None
         found = search(task, self.time_limit)
-        seconds = time.perf_counter() - started
+        seconds = round(time.perf_counter() - started, 3)
         if not found.found or not found.steps:
             return None
         types = {o["objectId"]: o["objectType"] for o in self.run.objects}
-        calls = self._gone_first([(s.skill, tuple(types.get(o, o) for o in s.objects)) for s in found.steps], place)
-        if calls[-1] != (skill.name, tuple(objects)) or not 1 < len(calls) <= MOST_STEPS + 1 \
-                or (allows is not None and not all(allows(name, objs) for name, objs in calls)) \
-                or not self._succeeds(member, calls):
-            return None
-        return Repair(tuple(calls[:-1]), round(seconds, 3))
+        return self._gone_first([(s.skill, tuple(types.get(o, o) for o in s.objects)) for s in found.steps],
+                                place), seconds
+
+    def _usable(self, member: int, calls: Sequence[Written],
+                allows: Callable[[str, Sequence[str]], bool] | None) -> bool:
+        """Whether the plan may make every call (the team's reach and strength) and they succeed as written."""
+        return (allows is None or all(allows(name, objs) for name, objs in calls)) and self._succeeds(member, calls)
 
     def _gone_first(self, calls: Sequence[Written], place: str | None) -> list[Written]:
         """The calls as a decomposition writes them: each action where the function last went (a GoToObject

@@ -1,0 +1,56 @@
+"""The planner's last sub-task: the stated goals the model's sub-tasks left unmet, met by Fast Downward.
+
+With the goal stage run first and a world check, once the model has written its sub-tasks and launched them,
+the stated goals that do not hold in the dry run go to the planner (the repair's, :mod:`.repair`), for a robot
+no sub-task has used: its shortest plan that meets them all and ends with empty hands is written as one more
+sub-task, called after the model's orchestration, so it starts from the state the model's sub-tasks leave (the
+state it was planned from), every step succeeding in the dry run. Where no plan meets them all in the steps and
+budget a sub-task has, nothing is written.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from ...goal_language import condition_line
+from ...scoring import Condition
+from ...skills import Skill
+from .candidates import Candidates
+from .feasibility import WholeTeam
+from .format import INDENT
+from .repair import Repairer
+from .world_check import WorldCheck
+
+#: The name of the planner's sub-task (after ``subtask<k>_``).
+NAME = "meet_goals"
+
+
+class Finish:
+    """One decomposition's last sub-task, sought once its model has ended (``made``: what was written)."""
+
+    def __init__(self, repairer: Repairer, candidates: Candidates, whole: WholeTeam | None,
+                 goals: Sequence[Condition], max_steps: int, skills: dict[str, Skill]):
+        self.repairer, self.candidates, self.whole, self.goals, self.max_steps, self.skills = \
+            repairer, candidates, whole, list(goals), max_steps, skills
+        self.made: dict[str, Any] | None = None
+
+    def text(self, world: WorldCheck, k: int, room: int) -> str | None:
+        """Sub-task ``k`` (its definition and its call) within ``room`` characters, or None: no goal left
+        unmet, no robot left for it, or no plan that meets them all."""
+        unmet = [c for c in self.goals if not world.met([c])]
+        if not unmet or k > len(world.run.team):
+            return None
+        whole = self.whole
+        found = self.repairer.meet(k - 1, unmet, self.max_steps, allows=whole.can if whole else None,
+                                   skills=whole.skills if whole else None)
+        if found is None:
+            return None
+        name = f"subtask{k}_{NAME}"
+        said = [condition_line(c) for c in unmet]
+        lines = [self.candidates.line((self.skills[skill], objects)) for skill, objects in found.calls]
+        text = f"def {name}():\n{INDENT}# the goals left: {'; '.join(said)}\n{''.join(lines)}\n{name}()\n"
+        if len(text) > room:
+            return None
+        self.made = {"goals": said, "lines": lines, "seconds": found.seconds}
+        return text
