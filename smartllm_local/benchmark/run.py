@@ -74,7 +74,7 @@ class TaskOutcome:
                                         "choices": r.choices, "refused": r.refused, "logprob": round(r.logprob, 3),
                                         "completed_lines": r.completed_lines,
                                         **({"repairs": len(r.repairs), "unrepaired": r.unrepaired,
-                                            "ended_at_goals": r.ended_at_goals}
+                                            "ended_at_goals": r.ended_at_goals, "finished": r.finish is not None}
                                            if r.stage == "decomposition" else {})}
                               for r in self.result.stages}
             if self.result.notices:

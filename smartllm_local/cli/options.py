@@ -59,7 +59,8 @@ class ModelOptions:
                  no_loop_guard: bool = False, no_token_alignment: bool = False,
                  candidates: int = DEFAULT_CANDIDATES, candidate_temperature: float = CANDIDATE_TEMPERATURE,
                  select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
-                 no_repair: bool = False, no_finish_goals: bool = False):
+                 no_repair: bool = False, no_finish_goals: bool = False,
+                 one_at_a_time: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -110,6 +111,7 @@ class ModelOptions:
             stop_at_goals=not no_stop_at_goals,
             repair=not no_repair,
             finish_goals=not no_finish_goals,
+            together=not one_at_a_time,
         )
         self.seed = seed
 
@@ -232,6 +234,11 @@ _NO_FINISH_GOALS = typer.Option(False, "--no-finish-goals", help=(
     "meets the stated goals the model's sub-tasks left unmet in the dry run (see docs/planner.md, \"The "
     "planner's last sub-task\")."))
 
+_ONE_AT_A_TIME = typer.Option(False, "--one-at-a-time", help=(
+    "Let the allocation call a sub-task on its own or start a block of threads where the next sub-task could "
+    "still join it, rather than have every sub-task that can join the block being written join it (see "
+    "docs/planner.md, \"Threads together\")."))
+
 #: Every model option: its parameter name, type and typer option, in the order --help lists them.
 MODEL_PARAMETERS = [
     inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=option, annotation=kind)
@@ -249,6 +256,7 @@ MODEL_PARAMETERS = [
         ("candidate_temperature", float, _CANDIDATE_TEMPERATURE), ("select", str, _SELECT),
         ("goal_check", bool, _GOAL_CHECK), ("no_stop_at_goals", bool, _NO_STOP_AT_GOALS),
         ("no_repair", bool, _NO_REPAIR), ("no_finish_goals", bool, _NO_FINISH_GOALS),
+        ("one_at_a_time", bool, _ONE_AT_A_TIME),
     )
 ]
 

@@ -96,6 +96,7 @@ class PlannerConfig:
     stop_at_goals: bool = True
     repair: bool = True
     finish_goals: bool = True
+    together: bool = True
 
 
 @dataclass
@@ -318,12 +319,13 @@ class Planner:
                      if self.config.world_check else None)
             constraint = RestatedAllocation(scene, skills, team=len(team) if self.config.free_teams else team,
                                             function_names=names, bodies=restated_bodies(decomposition, names),
-                                            world=world)
+                                            world=world, together=self.config.together)
         elif self.config.grammar:
             team_skills = [s for s in skills.values() if any(s.name in r.skills for r in team)]
             constraint = PlanConstraint(scene, SkillSet(team_skills), team_size=len(team),
                                         comments=self.config.prompts.comments,
-                                        function_names=names, team=None if self.config.free_teams else team)
+                                        function_names=names, team=None if self.config.free_teams else team,
+                                        together=self.config.together)
         # Restating, the output's length is known to the character; rewriting, it is estimated.
         if isinstance(constraint, RestatedAllocation):
             return constraint, constraint.maximum_output()

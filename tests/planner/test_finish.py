@@ -99,3 +99,20 @@ def test_writers_that_write_as_models_do_keep_every_guarantee_with_the_last_sub_
             assert not [f for f in failed if f"{f[0]}('" in finish], (task.id, text)
             made += 1
     assert made > 0
+
+
+def test_a_goal_on_an_object_the_model_acted_on_is_left_to_the_model():
+    """The model put the apple on the counter: "Apple in Fridge" contradicts its plan, and the planner does not
+    overrule it (a wrong statement is as likely as a wrong plan); a goal on an object it never acted on is met."""
+    script = ["def subtask1_apple():\n", "    GoToObject('Apple')\n", "    PickupObject('Apple')\n",
+              "    GoToObject('CounterTop')\n", "    PutObject('Apple', 'CounterTop')\n", "\n", "subtask1_apple()\n"]
+    decomposer = _decomposer(6, GOALS)
+    text = run_constraint(decomposer, _scripted(script), len, 3000)
+    assert decomposer.finish_made["goals"] == ["Bread sliced"], text
+
+
+def test_the_planners_steps_name_slices_by_their_type():
+    """A goal on a slice that does not exist yet: the planner's steps name the piece by its type, as a plan does."""
+    decomposer = _decomposer(6, [Condition("Pan", item="TomatoSliced")])
+    text = run_constraint(decomposer, _scripted(SLICE_BREAD), len, 3000)
+    assert "PutObject('TomatoSliced', 'Pan')" in text and "|" not in text, text

@@ -132,3 +132,40 @@ def test_robot_slots_are_numbered_in_the_order_they_first_act(first):
     slots = [first, "robot_list[0]", "robot_list[0]"]
     lists = ["robots[0], robots[1], robots[2]", "robots[1]", "robots[2]"]
     assert not accepts(_allocator(1, 2, 3), _allocated(lists, slots))
+
+
+def _orchestration(allocator: RestatedAllocation) -> str:
+    """The allocation a writer that prefers direct calls and early starts writes (robots: the first offered)."""
+    from smartllm_local.planner.decoding.writer import run_constraint, shortest_line
+
+    def write(choose, remaining):
+        for line in (f"{n}([robots[0]])\n" for n in NAMES):
+            if choose.grammar.matches(line):
+                return line, len(line)
+        if choose.grammar.matches("t1.start()\n"):
+            return "t1.start()\n", 11
+        text = shortest_line(choose)
+        return text, len(text)
+
+    text = run_constraint(allocator, write, len, 5000)
+    return text[text.index("\n\n", text.rindex("def ")) + 2:]
+
+
+def test_together_every_function_that_can_join_the_block_joins_it():
+    """Two robots and three functions: a writer that would call each function on its own (two transitions)
+    gets, with ``together``, a block of two threads and then the third (one transition); without it, its
+    direct calls."""
+    team = CATALOGUE.team((1, 2))
+
+    def allocator(together):
+        return RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=NAMES,
+                                  bodies=restated_bodies(DECOMPOSITION, NAMES),
+                                  world=WorldCheck(KITCHEN, CATALOGUE.skills, len(team)), together=together)
+    alone = _orchestration(allocator(False))
+    assert alone.splitlines() == [f"{n}([robots[0]])" for n in NAMES], alone
+    joined = _orchestration(allocator(True)).splitlines()
+    assert joined[:2] == [f"t1 = threading.Thread(target={NAMES[0]}, args=([robots[0]],))",
+                          f"t2 = threading.Thread(target={NAMES[1]}, args=([robots[1]],))"], joined
+    assert joined[2:6] == ["t1.start()", "t2.start()", "t1.join()", "t2.join()"]
+    assert joined[6:] == [f"t1 = threading.Thread(target={NAMES[2]}, args=([robots[0]],))", "t1.start()",
+                          "t1.join()"], joined

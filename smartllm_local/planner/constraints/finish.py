@@ -1,11 +1,13 @@
 """The planner's last sub-task: the stated goals the model's sub-tasks left unmet, met by Fast Downward.
 
 With the goal stage run first and a world check, once the model has written its sub-tasks and launched them,
-the stated goals that do not hold in the dry run go to the planner (the repair's, :mod:`.repair`), for a robot
-no sub-task has used: its shortest plan that meets them all and ends with empty hands is written as one more
-sub-task, called after the model's orchestration, so it starts from the state the model's sub-tasks leave (the
-state it was planned from), every step succeeding in the dry run. Where no plan meets them all in the steps and
-budget a sub-task has, nothing is written.
+the stated goals that do not hold in the dry run, on objects none of its calls acted on (goals it forgot; where
+it acted on the object, the plan has its own idea of it, and a statement that contradicts the plan is as likely
+wrong as the plan), go to the planner (the repair's, :mod:`.repair`), for a robot no sub-task has used: its
+shortest plan that meets them all and ends with empty hands is written as one more sub-task, called after the
+model's orchestration, so it starts from the state the model's sub-tasks leave (the state it was planned from),
+every step succeeding in the dry run. Where no plan meets them all in the steps and budget a sub-task has,
+nothing is written.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import Any
 from ...goal_language import condition_line
 from ...scoring import Condition
 from ...skills import Skill
+from ...world.object_types import base_type
 from .candidates import Candidates
 from .feasibility import WholeTeam
 from .format import INDENT
@@ -35,10 +38,11 @@ class Finish:
             repairer, candidates, whole, list(goals), max_steps, skills
         self.made: dict[str, Any] | None = None
 
-    def text(self, world: WorldCheck, k: int, room: int) -> str | None:
+    def text(self, world: WorldCheck, k: int, room: int, acted: set[str]) -> str | None:
         """Sub-task ``k`` (its definition and its call) within ``room`` characters, or None: no goal left
-        unmet, no robot left for it, or no plan that meets them all."""
-        unmet = [c for c in self.goals if not world.met([c])]
+        unmet on an object of none of the types ``acted`` on, no robot left for it, or no plan that meets them
+        all."""
+        unmet = [c for c in self.goals if not world.met([c]) and base_type(c.item or c.subject) not in acted]
         if not unmet or k > len(world.run.team):
             return None
         whole = self.whole

@@ -100,7 +100,7 @@ class Repairer:
               hands_free: bool = False) -> tuple[list[Written], float] | None:
         """Fast Downward's shortest plan for ``member`` from the dry run's state now, as a plan writes it."""
         # Unified Planning takes most of a second to import: it loads with the first repair sought, not every plan
-        from ..classical.problem import Unreachable, planning_task
+        from ..classical.problem import Unreachable, planning_task, with_future_pieces
         from ..classical.search import search
 
         started = time.perf_counter()
@@ -116,7 +116,7 @@ class Repairer:
         seconds = round(time.perf_counter() - started, 3)
         if not found.found or not found.steps:
             return None
-        types = {o["objectId"]: o["objectType"] for o in self.run.objects}
+        types = {o["objectId"]: o["objectType"] for o in with_future_pieces(self.run.objects)[0]}  # slices to come
         return self._gone_first([(s.skill, tuple(types.get(o, o) for o in s.objects)) for s in found.steps],
                                 place), seconds
 

@@ -58,13 +58,15 @@ class RestatedAllocation(PlanConstraint):
     """An allocated plan whose function bodies are the decomposition's, robots left to the model."""
 
     def __init__(self, scene: SceneObjects, skills: SkillSet, *, team: Sequence[Robot] | int,
-                 function_names: Sequence[str], bodies: Sequence[Sequence[str]], world: WorldCheck | None = None):
+                 function_names: Sequence[str], bodies: Sequence[Sequence[str]], world: WorldCheck | None = None,
+                 together: bool = False):
         if len(bodies) != len(function_names):
             raise ValueError("a restated allocation needs one body per function name")
         self.bodies = [list(body) for body in bodies]
         known = {"team": team} if not isinstance(team, int) else {"team_size": team}
         # Refusing is the coalition stage's answer; once teams are formed, the plan is written.
-        super().__init__(scene, skills, function_names=function_names, world=world, allow_refusal=False, **known)
+        super().__init__(scene, skills, function_names=function_names, world=world, allow_refusal=False,
+                         together=together, **known)
         # Robot lists are checked with the team's own robots, in launch order.
         self.team_world = WorldCheck(world.floor_plan, world.skills, robots=self.team, site=world.site) \
             if world is not None and self.team is not None else None
