@@ -169,3 +169,49 @@ def test_together_every_function_that_can_join_the_block_joins_it():
     assert joined[2:6] == ["t1.start()", "t2.start()", "t1.join()", "t2.join()"]
     assert joined[6:] == [f"t1 = threading.Thread(target={NAMES[2]}, args=([robots[0]],))", "t1.start()",
                           "t1.join()"], joined
+
+
+def test_together_a_body_brings_in_no_robot_it_can_do_without():
+    """A writer that gives a step a second robot (robot_list[1]) wherever it may makes a function that moves two
+    things need two robots; with ``together``, where one robot can do the whole body, robot_list[1] is not
+    offered, so the function takes one robot and the other is free for the next function's thread."""
+    from smartllm_local.planner.decoding.writer import run_constraint, shortest_line
+
+    names = ["subtask1_two_things", "subtask2_lettuce"]
+    decomposition = (
+        "def subtask1_two_things():\n    GoToObject('Apple')\n    PickupObject('Apple')\n"
+        "    GoToObject('CounterTop')\n    PutObject('Apple', 'CounterTop')\n    GoToObject('Tomato')\n"
+        "    PickupObject('Tomato')\n    GoToObject('CounterTop')\n    PutObject('Tomato', 'CounterTop')\n\n"
+        "def subtask2_lettuce():\n    GoToObject('Lettuce')\n    PickupObject('Lettuce')\n"
+        "    GoToObject('CounterTop')\n    PutObject('Lettuce', 'CounterTop')\n\n")
+
+    def write(choose, remaining):
+        text = choose.grammar.sample(_Second())
+        if not choose.grammar.matches(text):
+            text = shortest_line(choose)
+        return text, len(text)
+
+    team = CATALOGUE.team((1, 2))
+    for together, second in ((False, True), (True, False)):
+        allocator = RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=names,
+                                       bodies=restated_bodies(decomposition, names),
+                                       world=WorldCheck(KITCHEN, CATALOGUE.skills, len(team)), together=together)
+        text = run_constraint(allocator, write, len, 5000)
+        assert ("robot_list[1]" in text) == second, text
+        assert ("[robots[0], robots[1]]" in text or "[robots[1], robots[0]]" in text) == second, text
+
+
+class _Second:
+    """Grammar.sample's choices: robot_list[1] where it is an option, else robot_list[0], else the first."""
+
+    @staticmethod
+    def choice(options):
+        for wanted in ("robot_list[1]", "robot_list[0]"):
+            for option in options:
+                if getattr(option, "text", None) == wanted:
+                    return option
+        return options[0]
+
+    @staticmethod
+    def randint(low, high):
+        return low

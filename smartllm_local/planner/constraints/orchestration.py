@@ -104,7 +104,7 @@ class Orchestration:
             options["thread"] = seq(f"t{len(self.threads) + 1} = threading.Thread(target=", Ref("target"), ")\n")
         elif self._unlaunched() and not self._waits(rules):
             self._cap("a thread")
-        if "direct" in rules and not (self.together and "thread" in options):
+        if "direct" in rules and not (self.joins and "thread" in options):
             options["direct"] = Ref("direct")
         return options
 
@@ -121,7 +121,7 @@ class Orchestration:
 
     def _threads(self, remaining: int) -> Choose:
         options = {k: v for k, v in self._orch_options(remaining).items() if k == "thread"}
-        if not (self.together and options):
+        if not (self.joins and options):
             options["start"] = "t1.start()\n"
         return self._choose({**self.rules, **self._orch_rules(remaining)}, options)
 

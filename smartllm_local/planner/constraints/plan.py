@@ -117,8 +117,9 @@ class PlanConstraint(Orchestration, Constraint):
         function stands is offered too, and written after the planner's steps that enable it (see
         :mod:`.repair`); with ``finish`` and goals, the goals the plan leaves unmet are met by a last sub-task
         of the planner's (:mod:`.finish`). ``together`` (an allocation's): a function that can join the block
-        of threads being written joins it (no direct call, no start, where a thread is offered), so the plan
-        has as few transitions as the order of its functions allows."""
+        of threads being written joins it (no direct call, no start, where a thread is offered), and a restated
+        body brings in no robot it can do without, so the plan has as few transitions as the order of its
+        functions allows."""
         super().__init__()
         if team is not None:
             team_size = len(team)
@@ -135,7 +136,7 @@ class PlanConstraint(Orchestration, Constraint):
         self.world = world
         self.goals = list(goals) if world is not None else []
         self.stop = stop
-        self.together = together and self.allocated
+        self.joins = together and self.allocated
         self.ended_at_goals = False  # a sub-task was withheld: the goals held
         self.finish_made: dict[str, object] | None = None  # the planner's last sub-task (see :mod:`.finish`)
         self.repairs: Repairs | None = None  # with a repairer, once the candidate calls are known

@@ -114,12 +114,19 @@ class RestatedAllocation(PlanConstraint):
             # Only robots after whose step the rest of the body can still be done by some robots.
             found = [(a, self._completes(fn, a, skill, objects)) for a in working]
             working = [a for a, ok in found if ok] or [a for a, ok in found if ok is None]
+            if self.joins:  # a robot the sub-task can do without stays free for another thread
+                working = [a for a in working if not self._new_slot(fn, a)] or working
         if self.world is not None and not working:
             self.world.dead_ends += 1
         # No robot can: the coalition stage refuses such plans, and free teams leave it to the model.
         robots = working or able or self.robot_args
         text = seq(f"{INDENT}{skill.name}(", alt(*robots), f", {args})\n")
         return self._choose(self.rules, {"goto" if skill.action == "" else "action": text})
+
+    @staticmethod
+    def _new_slot(fn: WrittenFunction, arg: str) -> bool:
+        """Whether the robot argument brings a robot into the function beyond those its steps use so far."""
+        return arg.startswith("robot_list[") and int(arg[len("robot_list["):-1]) > max(fn.max_index, 0)
 
     def _skill_call(self, line: str) -> tuple[Skill, list[str], str] | None:
         """A body line's skill, objects and argument text; None for a comment or a sleep."""
