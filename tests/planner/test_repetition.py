@@ -96,6 +96,18 @@ def test_a_line_that_begins_a_third_copy_of_a_block_of_lines_is_a_loop():
     assert not LoopGuard(times=4).cycles(head + CABINET * 2 + CABINET[:1])
 
 
+def test_the_same_steps_under_other_comments_are_the_same_loop():
+    """The 1.5B's faucet cycle (bathroom-06, development half): go to, switch on, wait, switch off, each time under
+    other comments. Two copies stand; the step that begins a third is a loop; a comment alone is not one."""
+    def copy(where):
+        return [f"    # go to the {where}", "    GoToObject('Faucet')", "    # run the water", "    SwitchOn('Faucet')",
+                "    time.sleep(2)", "    SwitchOff('Faucet')"]
+    lines = ["def subtask2_take_cloth():", *copy("bathtub"), *copy("basin")]
+    assert not GUARD.cycles(lines)
+    assert not GUARD.cycles([*lines, "    # go to the bathtub again"])
+    assert GUARD.cycles([*lines, "    # go to the bathtub again", "    GoToObject('Faucet')"])
+
+
 @given(st.lists(st.sampled_from(["a", "b", "c", ""]), max_size=8), st.lists(st.text(min_size=1), min_size=1,
                                                                            max_size=12))
 def test_a_block_repeated_twice_and_begun_again_is_found_after_any_lines(before, block):

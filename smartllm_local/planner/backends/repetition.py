@@ -55,7 +55,13 @@ class LoopGuard:
 
     def cycles(self, lines: Sequence[str]) -> bool:
         """Whether the last of ``lines`` begins the ``times``-th copy in a row of a block of up to ``block``
-        lines (three identical lines in a row are a block of one)."""
+        lines (three identical lines in a row are a block of one); a line that is not a comment, also counting
+        the lines that are not comments only (the same steps under other comments are the same loop)."""
+        if self._cycles(lines):
+            return True
+        return bool(lines) and not _comment(lines[-1]) and self._cycles([line for line in lines if not _comment(line)])
+
+    def _cycles(self, lines: Sequence[str]) -> bool:
         for size in range(1, self.block + 1):
             n = (self.times - 1) * size + 1
             if n > len(lines):
@@ -64,6 +70,10 @@ class LoopGuard:
             if all(tail[i] == tail[i + size] for i in range(n - size)):
                 return True
         return False
+
+
+def _comment(line: str) -> bool:
+    return line.lstrip().startswith("#")
 
 
 #: How many of the likeliest admitted tokens (or draws) are tried for one that closes no loop, by every
