@@ -169,12 +169,7 @@ class PlanConstraint(Orchestration, Constraint):
                                      world=world, max_steps=self.max_steps,
                                      allows=self.whole.can if self.whole is not None else None)
         self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
-        planned = repairer is not None and world is not None and not self.allocated
-        if planned and repair:
-            self.repairs = Repairs(repairer, self.candidates, self.whole, self.max_steps, self.by_name)
-        self.finish = Finish(repairer, self.candidates, self.whole, self.goals, self.max_steps, self.by_name) \
-            if planned and finish and self.goals and not self.summary else None
-        self.finish_text = ""  # the planner's last sub-task, once found
+        self._plan_with(repairer if world is not None and not self.allocated else None, repair, finish)
         self.budget = Budget(allocated=self.allocated, team_size=self.team_size, fixed_names=self.fixed_names,
                              fresh_action=self.fresh_action, body_cost=self._body_cost)
         self.skills_len = longest(Ref("skills"), self.rules)
@@ -185,6 +180,14 @@ class PlanConstraint(Orchestration, Constraint):
         self.threads: list[str] = []  # targets of the block being written
         self.busy: set[int] = set()  # robots given to the threads of that block
         self.pending = ""  # boilerplate to write next (the rest of a block's starts and joins)
+
+    def _plan_with(self, repairer: Repairer | None, repair: bool, finish: bool) -> None:
+        """The planner's part in a decomposition: repairs (:mod:`.repair`) and the last sub-task (:mod:`.finish`)."""
+        if repairer is not None and repair:
+            self.repairs = Repairs(repairer, self.candidates, self.whole, self.max_steps, self.by_name)
+        self.finish = Finish(repairer, self.candidates, self.whole, self.goals, self.max_steps, self.by_name) \
+            if repairer is not None and finish and self.goals and not self.summary else None
+        self.finish_text = ""  # the planner's last sub-task, once found
 
     def _may_use(self, skill: Skill) -> bool:
         """Whether a plan for the team may call the skill: a robot of it has the skill, and the whole team
