@@ -1,6 +1,6 @@
 """The goal-planner on site domains: the planning model written from a site domain's file, checked against the
-site executor (the plans Fast Downward finds run there with every call succeeding and meet the goal, and random
-calls leave both in the same states), and the planner's refusals."""
+site executor (the plans found run there, their parts in parallel, every call succeeding and the goal met, and
+random calls leave both in the same states), and the planner's refusals."""
 
 from __future__ import annotations
 
@@ -15,10 +15,11 @@ from unified_planning.shortcuts import SequentialSimulator
 
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain, starter_domain
+from smartllm_local.executor import run_site_plan
 from smartllm_local.executor.site import SiteWorld
 from smartllm_local.goal_language import parse_goal_statement, statement_of
 from smartllm_local.planner.classical.planning import plan_to_goal
-from smartllm_local.planner.classical.search import pddl, search
+from smartllm_local.planner.classical.search import pddl
 from smartllm_local.planner.classical.site import EFFECT_TYPES, site_planning_task, teams
 from smartllm_local.scoring import condition_holds
 
@@ -51,27 +52,25 @@ def test_the_pddl_written_from_the_domain_file_parses_back_with_unified_planning
 
 
 def _run(domain, task):
-    """Plan for the task's own goal and run the plan's calls, part after part, on the domain's site."""
+    """Plan for the task's own goal and run the allocated plan (its parts in parallel) on the domain's site."""
     team = domain.catalogue.team(task.robots)
     record = plan_to_goal(statement_of(task.goals).conditions, task.floor_plan, team, domain.catalogue.skills,
                           time_limit=LIMIT, name=task.id, site=domain)
-    world = SiteWorld(domain, team)
     if record.plan is None or record.refusal is not None:
-        return record, world
-    problem = site_planning_task(domain, team, statement_of(task.goals).conditions)
-    for step in search(problem, LIMIT).steps:
-        outcome = world.perform(domain.catalogue.skills[step.skill], step.objects, step.robots)
-        assert outcome.success, f"{task.id}: {step}: {outcome.error}"
-    return record, world
+        return record, None
+    execution = run_site_plan(record.plan, domain, team)
+    failed = [e for e in execution.trace if not e.success]
+    assert execution.attempted and not failed and not execution.truncated, f"{task.id}: {failed}"
+    return record, execution.final_objects
 
 
 @pytest.mark.parametrize("task_id", [t for t in PATROL_TASKS if PATROL_TASKS[t].feasible])
 def test_every_feasible_patrol_task_gets_a_plan_whose_calls_all_succeed_and_meet_the_goal(task_id):
     task = PATROL_TASKS[task_id]
-    record, world = _run(PATROL, task)
+    record, final = _run(PATROL, task)
     assert record.plan is not None and record.refusal is None and not record.error, record.raw[-2000:]
     for condition in statement_of(task.goals).conditions:
-        assert condition_holds(condition, world.objects), condition
+        assert condition_holds(condition, final), condition
 
 
 @pytest.mark.parametrize("task_id", [t for t in PATROL_TASKS if not PATROL_TASKS[t].feasible])
@@ -84,9 +83,9 @@ def test_every_infeasible_patrol_task_is_the_planner_s_refusal_with_the_reason(t
 
 def test_the_starter_domain_s_task_is_planned_and_met():
     task = next(iter(_tasks(STARTER).values()))
-    record, world = _run(STARTER, task)
+    record, final = _run(STARTER, task)
     assert record.plan is not None
-    assert all(condition_holds(c, world.objects) for c in statement_of(task.goals).conditions)
+    assert all(condition_holds(c, final) for c in statement_of(task.goals).conditions)
 
 
 def test_a_region_beyond_one_robot_s_visibility_is_patrolled_by_a_team_and_one_robot_is_used_where_one_will_do():
