@@ -35,8 +35,11 @@ def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: S
     record = StageRecord(STAGE)
     dry = DryRun(floor_plan, team, skills) if site is None else None
     try:
-        task = (planning_task(dry, team, skills, conditions, name=_problem_name(name)) if dry is not None
-                else site_planning_task(site, team, conditions, name=_problem_name(name)))  # type: ignore[arg-type]
+        if site is not None:
+            task = site_planning_task(site, team, conditions, name=_problem_name(name))
+        else:
+            assert dry is not None
+            task = planning_task(dry, team, skills, conditions, name=_problem_name(name))
     except Unreachable as exc:
         _refuse(record, f"the planner found no plan: {exc}")
         record.seconds = time.perf_counter() - started

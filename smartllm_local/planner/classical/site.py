@@ -38,8 +38,9 @@ KIND_TYPES = {"location": UserType("location", PLACE), "region": UserType("regio
 ROBOT = UserType("robot")
 TEAM = UserType("team")
 EFFECT_TYPES = {"move": PLACE, "patrol": KIND_TYPES["region"], "photograph": KIND_TYPES["object"]}
-#: A goal state, the effect that makes it true, and the kind of place it takes ("" for any).
-GOAL_EFFECTS = {"COVERED": ("patrol", "region"), "PHOTOGRAPHED": ("photograph", "object"), "RETURNED": ("move", "")}
+#: A goal state, the effect that makes it true, and the kind of place it takes ("" for any). The team is returned
+#: where it starts before any call, and by any call that moves it: no one effect.
+GOAL_EFFECTS = {"COVERED": ("patrol", "region"), "PHOTOGRAPHED": ("photograph", "object"), "RETURNED": ("", "")}
 CAMERA = "camera_range"  # the capacity the executor measures a picture's distance against
 MAX_TEAM = 10  # robots in a task: its teams are every group of them (2^n - 1 objects)
 
@@ -194,7 +195,7 @@ def _goal_place(domain: Domain, condition: Condition) -> Place:
     effect, kind = GOAL_EFFECTS[condition.state]
     if kind and place.kind != kind:
         raise Unreachable(f"`{what}`: {place.name} is a {place.kind}, and only a {kind} can be {condition.state}")
-    if effect not in domain.effects.values():
+    if effect and effect not in domain.effects.values():
         raise Unreachable(f"`{what}`: no skill of the {domain.name} domain has the effect {effect}")
     return place
 
