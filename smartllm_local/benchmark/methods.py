@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
+from ..domain import Domain
 from ..errors import UserError
 from ..goal_language import parse_goal_statement, statement_of
 from ..plan_language import parse_plan
@@ -114,10 +115,13 @@ class GoalPlanner:
 
     With ``oracle``, the task's own goal conditions are the goal and no model runs
     (``goal-planner-oracle``): it measures the planner alone, what it reaches when the goal is right.
+    ``site``: the site domain the tasks are on (None: AI2-THOR's floor plans).
     """
 
-    def __init__(self, planner: Planner | None, catalogue: Catalogue, *, time_limit: float, oracle: bool = False):
+    def __init__(self, planner: Planner | None, catalogue: Catalogue, *, time_limit: float, oracle: bool = False,
+                 site: Domain | None = None):
         self.planner, self.catalogue, self.time_limit, self.oracle = planner, catalogue, time_limit, oracle
+        self.site = site
         self.name = "goal-planner-oracle" if oracle else "goal-planner"
 
     def stages(self) -> list[Stage]:
@@ -141,7 +145,7 @@ class GoalPlanner:
         else:
             conditions = parse_goal_statement(result.stages[0].output, where="<goal output>").conditions
         record = plan_to_goal(conditions, task.floor_plan, self.catalogue.team(task.robots), self.catalogue.skills,
-                              time_limit=self.time_limit, name=task.id)
+                              time_limit=self.time_limit, name=task.id, site=self.site)
         result.stages.append(record)
         if record.refusal is not None:
             result.refusal = record.refusal
@@ -186,9 +190,10 @@ MODEL_FREE = frozenset({"reference", "goal-planner-oracle"})
 
 
 def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_dir: Path | None = None, *,
-                planner_time_limit: float = DEFAULT_TIME_LIMIT) -> Method:
+                planner_time_limit: float = DEFAULT_TIME_LIMIT, site: Domain | None = None) -> Method:
     """The method ``name`` (the reference plans, from ``plans_dir`` or the benchmark's, and the goal-planner
-    on the task's own goals need no model); ``planner_time_limit``: the goal-planner's search, per task."""
+    on the task's own goals need no model); ``planner_time_limit``: the goal-planner's search, per task, on
+    ``site`` where the tasks are a site domain's."""
     if name == "reference":
         return Reference(catalogue, plans_dir)
     if name not in METHODS:
@@ -196,7 +201,8 @@ def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_
     if name.startswith("goal-planner"):
         if not planner_time_limit > 0:
             raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
-        return GoalPlanner(planner, catalogue, time_limit=planner_time_limit, oracle=name == "goal-planner-oracle")
+        return GoalPlanner(planner, catalogue, time_limit=planner_time_limit, oracle=name == "goal-planner-oracle",
+                           site=site)
     assert planner is not None
     if name == "smartllm":
         return SmartLLM(planner, catalogue)

@@ -213,9 +213,6 @@ def run(
     arguments = {k: v for k, v in ctx.params.items()
                  if k not in ("out", "restart", "seeds", "prefix_cache", "parallel", "server_timeout")}
     arguments["n_ctx"] = options.n_ctx  # the context asked for, given or not, as run.json has always named it
-    if method.startswith("goal-planner") and not dom.is_ai2thor:
-        raise UserError(f"--method {method} plans in AI2-THOR domains; the {dom.name} domain's site world has no "
-                        "planning model yet")
     model_path = None if method in MODEL_FREE else model_location(options.backend, options.model)
     runs = []
     for s in chosen_seeds:  # every run folder is checked before the model loads
@@ -291,8 +288,8 @@ def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: Mo
                       "tasks done", file=sys.stderr)
             seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.site) for p in planners] or [None]
             with RunProgress(f"seed {s}" if labelled else "") as progress:
-                methods = [make_method(method, cat, p, dom.plans_dir(), planner_time_limit=planner_time_limit)
-                           for p in seeded]
+                methods = [make_method(method, cat, p, dom.plans_dir(), planner_time_limit=planner_time_limit,
+                                       site=dom.as_site) for p in seeded]
                 run_benchmark(chosen, methods, cat,
                               out=store.out, store=store, build=str(thor_build) if thor_build else None,
                               progress=progress, domain=dom,

@@ -7,9 +7,11 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 from smartllm_local.benchmark.methods import GoalPlanner, make_method
 from smartllm_local.benchmark.tasks import load_tasks
-from smartllm_local.domain import load_domain
+from smartllm_local.domain import load_domain, starter_domain
 from smartllm_local.planner.pipeline import Planner, PlanResult
 from smartllm_local.planner.stages import StageRecord
 
@@ -99,3 +101,30 @@ def test_the_goal_stage_on_smollm2_then_the_planner(tmp_path, smollm2):
         record = result.stages[-1]
         assert record.stage == "allocation"
         assert record.plan is not None or record.refused_by == "planner" or "holds already" in record.error
+
+
+def test_the_oracle_plans_on_a_site_domain_and_its_plans_run_on_the_site(tmp_path):
+    # a region four robots patrol together, then a picture; a picture from the roof only drones reach; a region
+    # too large for the team (refused, with the executor's reason)
+    out = tmp_path / "patrol"
+    benchmark_run(out, "--domain", "patrol", "--method", "goal-planner-oracle", "--task", "patrol-11",
+                  "--task", "patrol-07", "--task", "patrol-inf-02")
+    lines = _lines(out)
+    for task_id in ("patrol-11", "patrol-07"):
+        assert lines[task_id]["SR"] == 1.0 and lines[task_id]["Exe"] == 1.0, lines[task_id]
+    refused = lines["patrol-inf-02"]
+    assert refused["refused"] and refused["refused_by"] == "planner", refused
+    assert "pool 800, less than its area 3500" in (out / "patrol-inf-02" / "allocated.py").read_text()
+    assert "(define (domain" in (out / "patrol-11" / "allocation" / "prompt.txt").read_text()
+
+
+@pytest.mark.heavy
+@pytest.mark.parametrize("domain", ["patrol", str(starter_domain())], ids=["patrol", "starter"])
+def test_the_oracle_meets_every_feasible_site_task_and_refuses_every_infeasible_one(domain, tmp_path):
+    out = tmp_path / "site"
+    benchmark_run(out, "--domain", domain, "--method", "goal-planner-oracle")
+    for task_id, line in _lines(out).items():
+        if line["feasible"]:
+            assert line["SR"] == 1.0, (task_id, line)
+        else:
+            assert line["refused"] and line["refused_by"] == "planner", (task_id, line)

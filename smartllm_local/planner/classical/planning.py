@@ -10,28 +10,36 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 
+from ...domain import Domain
 from ...executor.dry_run import DryRun
+from ...executor.site import unattainable
 from ...plan_language import parse_plan
 from ...robots import Robot
 from ...scoring import Condition
 from ...skills import SkillSet
 from ..stages import StageRecord
-from .problem import Unreachable, planning_task
+from .problem import PlanningTask, Unreachable, planning_task
 from .search import SEARCH, Search, search
-from .threads import parts, plan_text, spread
+from .site import goals_of, site_planning_task
+from .threads import parts, plan_text, robot_parts, spread
 
 STAGE = "allocation"
 REFUSED_BY = "planner"
 
 
 def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: Sequence[Robot], skills: SkillSet,
-                 *, time_limit: float, name: str = "task") -> StageRecord:
-    """Plan for ``team`` in ``floor_plan`` until every condition holds (the scorer's conditions)."""
+                 *, time_limit: float, name: str = "task", site: Domain | None = None) -> StageRecord:
+    """Plan for ``team`` in ``floor_plan`` (or on ``site``, a site domain) until every condition holds (the
+    scorer's conditions)."""
     started = time.perf_counter()
     record = StageRecord(STAGE)
-    dry = DryRun(floor_plan, team, skills)
+    dry = DryRun(floor_plan, team, skills) if site is None else None
     try:
-        task = planning_task(dry, team, skills, conditions, name=_problem_name(name))
+        if site is not None:
+            task = site_planning_task(site, team, conditions, name=_problem_name(name))
+        else:
+            assert dry is not None
+            task = planning_task(dry, team, skills, conditions, name=_problem_name(name))
     except Unreachable as exc:
         _refuse(record, f"the planner found no plan: {exc}")
         record.seconds = time.perf_counter() - started
@@ -43,20 +51,33 @@ def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: S
         record.error = (f"the planner's time limit ran out: Fast Downward found no plan in {time_limit:g} s "
                         "(raise it with --planner-time-limit)")
     elif found.unsolvable:
-        _refuse(record, "the planner found no plan: the team cannot reach the goal in this scene "
-                        f"(Fast Downward proved it: {found.status})")
+        why = "; ".join(unattainable(site, goals_of(conditions), team)) if site is not None else ""
+        _refuse(record, f"the planner found no plan: the team cannot reach the goal in this "
+                        f"{'scene' if site is None else 'site'} (Fast Downward proved it: {found.status})"
+                        + (f": {why}" if why else ""))
     elif not found.steps:
         record.error = "the goal holds already: there is nothing to plan"
     else:
-        split = parts(found.steps, dry.objects)
-        _, steps, split = spread(task, found.actions, list(found.steps), split, len(team))
-        header = (f"goal-planner: Fast Downward's shortest plan ({SEARCH}), {len(steps)} steps, "
-                  f"in {len(split)} part(s) run in parallel\n\n")
-        record.output = plan_text(steps, split, header)
+        record.output = _allocated(task, found, dry, len(team))
         record.plan = parse_plan(record.output, form="allocated", skills=skills, team_size=len(team),
                                  name="<goal-planner allocation>")
     record.seconds = time.perf_counter() - started
     return record
+
+
+def _allocated(task: PlanningTask, found: Search, dry: DryRun | None, team_size: int) -> str:
+    """The plan found as sub-tasks run in parallel. On a site (no dry run) a call by more robots costs more,
+    so the plan is the cheapest in robot-calls, and steps of different robots commute: a part is the steps
+    that share robots."""
+    if dry is None:
+        steps, split = list(found.steps), robot_parts(found.steps)
+        what = "plan with the fewest robot-calls"
+    else:
+        split = parts(found.steps, dry.objects)
+        _, steps, split = spread(task, found.actions, list(found.steps), split, team_size)
+        what = "shortest plan"
+    return plan_text(steps, split, f"goal-planner: Fast Downward's {what} ({SEARCH}), {len(steps)} steps, "
+                                   f"in {len(split)} part(s) run in parallel\n\n")
 
 
 def _refuse(record: StageRecord, why: str) -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from unified_planning.model import Object, Problem, Variable
@@ -68,9 +68,10 @@ class PlanningTask:
     robots: dict[str, int]  # planning name -> team index
     actions: dict[str, str]  # skill -> the AI2-THOR action it performs
     skill_of: dict[str, str]  # planning action -> the skill a plan calls for it
+    teams: dict[str, tuple[int, ...]] = field(default_factory=dict)  # a site's: planning name -> team indices
 
 
-def _name(text: str, taken: set[str]) -> str:
+def pddl_name(text: str, taken: set[str]) -> str:
     """A PDDL name: letters and digits only (a grounder joins an action's and its arguments' names with _)."""
     base = re.sub(r"[^A-Za-z0-9]+", "", text).lower() or "thing"
     name, k = base, 1
@@ -148,10 +149,10 @@ def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditio
     kept |= {o["objectId"] for o in relevant(table, conditions)}
     chosen = [o for o in table if o["objectId"] in kept]
     taken: set[str] = set()
-    things = {o["objectId"]: Object(_name(o["objectType"] + str(k), taken),
+    things = {o["objectId"]: Object(pddl_name(o["objectType"] + str(k), taken),
                                     ITEM if o.get("pickupable") else FIXTURE)
               for k, o in enumerate(chosen)}
-    robots = [Object(_name(f"robot{i}", taken), ROBOT) for i in range(len(team))]  # robots[i] of a plan
+    robots = [Object(pddl_name(f"robot{i}", taken), ROBOT) for i in range(len(team))]  # robots[i] of a plan
     problem.add_objects([*things.values(), *robots])
     _initial_state(problem, v, dry, chosen, things, future, team)
     for robot, member in zip(robots, members or ()):

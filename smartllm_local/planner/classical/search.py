@@ -1,7 +1,8 @@
 """Fast Downward, through Unified Planning, on a planning task: the shortest plan, a proof there is none, or
 the time limit.
 
-The search is A* with the h^max heuristic: admissible (so the plan found is a shortest one in actions)
+The search is A* with the h^max heuristic: admissible (so the plan found is a shortest one in actions,
+or the cheapest where the problem gives its actions costs, as a site's does)
 and, unlike LM-cut, defined for the conditional effects the world's rules need. The PDDL that
 Unified Planning writes for Fast Downward is kept, for a reader or another planner.
 """
@@ -110,9 +111,10 @@ def search(task: PlanningTask, time_limit: float) -> Search:
 
 def _step(task: PlanningTask, action: ActionInstance) -> Step:
     """A planner action as a skill call: PickupObject_together(r, helper, t) is one call by both robots,
-    the first of whom acts (the executor's choice: the free hand with the skill, the hand with the knife)."""
+    the first of whom acts (the executor's choice: the free hand with the skill, the hand with the knife);
+    a site's Patrol(team, region) is one call by the team's members."""
     names = [str(p) for p in action.actual_parameters]
-    robots = tuple(task.robots[n] for n in names if n in task.robots)
+    robots = tuple(r for n in names for r in ((task.robots[n],) if n in task.robots else task.teams.get(n, ())))
     objects = tuple(task.things[n] for n in names if n in task.things)
     skill = task.skill_of[action.action.name]
     return Step(skill, robots, objects, task.actions[skill])

@@ -115,6 +115,12 @@ def parts(steps: Sequence[Step], objects: Sequence[Mapping[str, Any]]) -> list[P
     return [Part(g, sorted({r for k in g for r in steps[k].robots})) for g in groups.values()]
 
 
+def robot_parts(steps: Sequence[Step]) -> list[Part]:
+    """The plan's parts where steps depend on their robots alone (a site's: a call changes where its robots
+    stand and adds to what is covered or photographed): steps that share a robot, in plan order."""
+    return _merge([Part([k], sorted(set(step.robots))) for k, step in enumerate(steps)])
+
+
 def spread(task: PlanningTask, actions: Sequence[ActionInstance], steps: list[Step], found: list[Part],
            team_size: int) -> tuple[list[ActionInstance], list[Step], list[Part]]:
     """Give each part robots no earlier part uses, where the model says its steps stay valid; parts that
