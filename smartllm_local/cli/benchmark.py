@@ -289,7 +289,7 @@ def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: Mo
             if done:
                 print(f"resuming the run in {store.out}: {sum(t.id in done for t in chosen)} of {len(chosen)} "
                       "tasks done", file=sys.stderr)
-            seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.site) for p in planners] or [None]
+            seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.world) for p in planners] or [None]
             with RunProgress(f"seed {s}" if labelled else "") as progress:
                 methods = [make_method(method, cat, p, dom.plans_dir(), planner_time_limit=planner_time_limit)
                            for p in seeded]
