@@ -40,7 +40,7 @@ from smartllm_local.planner.decoding.grammar import Grammar
 from smartllm_local.planner.decoding.loop import Choice
 from smartllm_local.planner.models import resolve_gguf
 from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.prompting.scene_context import scene_objects
+from smartllm_local.worlds import scene_objects
 
 
 class Timed:

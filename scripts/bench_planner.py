@@ -32,8 +32,8 @@ from smartllm_local.benchmark.tasks import Task, find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.planner.backends import BACKENDS, Sampling, load_backend
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord
+from smartllm_local.worlds import scene_objects
 
 
 def raw_speed(args: argparse.Namespace, prompt: str, n: int = 64) -> tuple[float, float, int]:

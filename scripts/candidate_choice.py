@@ -20,9 +20,9 @@ from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.goal_stage import stated_conditions
 from smartllm_local.planner.pipeline import PlanResult
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord
 from smartllm_local.planner.verifier import Weights, check_decomposition, choose, score
+from smartllm_local.worlds import scene_objects
 
 
 def task_rows(run: Path) -> list[list[dict]]:

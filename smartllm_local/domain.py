@@ -97,11 +97,6 @@ class Domain:
         return self.world == AI2THOR
 
     @property
-    def as_site(self) -> Domain | None:
-        """The domain itself if its world is a site (what the executor and planner take as ``site=``), else None."""
-        return None if self.is_ai2thor else self
-
-    @property
     def states(self) -> tuple[str, ...]:
         """The goal states its tasks may ask for (AI2-THOR: the scorer's AI2-THOR states)."""
         return STATES if self.is_ai2thor else tuple(SITE_STATES)

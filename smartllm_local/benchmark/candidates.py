@@ -11,8 +11,8 @@ from typing import Any
 from ..errors import PlanError
 from ..plan_language import parse_plan
 from ..planner.pipeline import PlanResult
-from ..planner.prompting.scene_context import SceneObjects
 from ..planner.verifier import check_decomposition
+from ..scene import SceneObjects
 from ..skills import SkillSet
 from .tasks import Task
 

@@ -17,13 +17,10 @@ from typing import Any
 
 from ..domain import Domain, load_domain
 from ..errors import PlanError, SmartLLMError, UserError
-from ..executor import run_site_plan
-from ..executor.dry_run import DryRun
-from ..executor.scheduler import execute
-from ..executor.site import SiteWorld
 from ..goal_language import condition_line, parse_goal_statement
 from ..plan_language import read_plan
 from ..scoring import Condition, condition_holds, containment
+from ..worlds import world_of
 from .goal_accuracy import unmatched
 from .results import Line, read_results
 from .run_store import RESULTS, RUN_FILE
@@ -166,15 +163,13 @@ def _end(task_folder: Path, task: Task, ran: bool, domain: Domain) -> list[dict[
     (the dry run's world, in which a call does what it does through a Controller), or the scene as it
     began where no plan ran."""
     team = domain.catalogue.team(task.robots)
-    skills, site = domain.catalogue.skills, domain.as_site
+    skills, world = domain.catalogue.skills, world_of(domain)
     if not ran:
-        return SiteWorld(site, team).objects if site else DryRun(task.floor_plan, team, skills).objects
+        return list(world.dry_run(task.floor_plan, skills, team).objects)
     try:
         plan = read_plan(task_folder / "allocated.py", form="allocated", skills=skills, team_size=len(team),
-                         scene_types=set(site.places) if site else None)
-        if site is not None:
-            return run_site_plan(plan, site, team).final_objects
-        return execute(plan, DryRun(task.floor_plan, team, skills).controller, team, skills=skills).final_objects
+                         scene_types=world.plan_types(task.floor_plan))
+        return world.run_in_process(plan, task.floor_plan, team, skills).final_objects
     except SmartLLMError as exc:
         raise UserError(f"{task.id}: its plan ran in the benchmark but cannot be replayed to judge its failure "
                         f"({exc}): is {task_folder} the run's own?") from exc

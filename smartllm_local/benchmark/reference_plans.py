@@ -18,15 +18,13 @@ from pathlib import Path
 from statistics import mean
 from typing import Any
 
-from ..domain import Domain, load_domain
+from ..domain import AI2THOR, Domain, load_domain
 from ..errors import UserError
-from ..executor import Execution, run_plan
-from ..executor.site import unattainable
+from ..executor import Execution
 from ..plan_language import Plan, read_plan
 from ..robots import Catalogue, team_skills
 from ..scoring import Scores, score_execution
-from ..world.controller import open_controller
-from ..world.scenes import load_scene
+from ..worlds import Ai2ThorWorld, World, world_of
 from .tasks import CATEGORIES, Task
 
 METRICS = ("SR", "GCR", "RU", "Exe")
@@ -68,7 +66,7 @@ def check_reference_plans(
     Raises:
         WorldError: the AI2-THOR process failed (no later run could be trusted).
     """
-    site = domain.as_site if domain is not None else None
+    world = world_of(domain or load_domain())
     catalogue = catalogue or (domain or load_domain()).catalogue
     folder = Path(plans_dir) if plans_dir is not None else (domain.plans_dir() if domain else default_plans_dir())
     results: list[ReferenceResult] = []
@@ -76,18 +74,17 @@ def check_reference_plans(
     try:
         for task in tasks:
             if not task.feasible:
-                results.append(_check_infeasible(task, catalogue, site))
+                results.append(_check_infeasible(task, catalogue, world))
                 continue
-            plan, problem = load_reference_plan(task, catalogue, folder, site)
+            plan, problem = load_reference_plan(task, catalogue, folder, world)
             if plan is None:
                 results.append(ReferenceResult(task, None, False, problem))
                 continue
             team = catalogue.team(task.robots)
-            if controller is None and site is None:
-                controller = open_controller(task.floor_plan, agent_count=len(team), build=build)
+            if controller is None:
+                controller = world.open(task.floor_plan, len(team), build)
             try:
-                execution = run_plan(plan, task.floor_plan, team, controller=controller, skills=catalogue.skills,
-                                     site=site)
+                execution = world.run(plan, task.floor_plan, team, skills=catalogue.skills, controller=controller)
             except UserError as exc:  # the executor's own checks: the plan does not fit the team
                 results.append(ReferenceResult(task, None, False, f"invalid reference plan: {exc}"))
                 continue
@@ -101,28 +98,29 @@ def check_reference_plans(
 
 
 def reference_ticks(task: Task, catalogue: Catalogue, controller: Any, plans_dir: Path | None = None, *,
-                    site: Domain | None = None) -> int | None:
-    """How many ticks the task's reference plan takes to meet every goal condition (None: it has no
-    plan that does), run on ``controller`` or on ``site`` (the Speed measure's yardstick)."""
-    if site is not None and plans_dir is None:
-        plans_dir = site.plans_dir()
-    plan, _ = load_reference_plan(task, catalogue, plans_dir, site) if task.feasible and task.goals else (None, "")
+                    world: World | None = None) -> int | None:
+    """How many ticks the task's reference plan (in ``plans_dir``, default household's) takes to meet every goal
+    condition (None: it has no plan that does), run in ``world`` (default AI2-THOR's) on ``controller`` (the
+    Speed measure's yardstick)."""
+    world = world or Ai2ThorWorld()
+    plan, _ = load_reference_plan(task, catalogue, plans_dir, world) if task.feasible and task.goals else (None, "")
     if plan is None:
         return None
     team = catalogue.team(task.robots)
-    execution = run_plan(plan, task.floor_plan, team, controller=controller, skills=catalogue.skills, site=site)
+    execution = world.run(plan, task.floor_plan, team, skills=catalogue.skills, controller=controller)
     scores = score_execution(execution, task.goals)
     return execution.ticks if scores.TCR == 1.0 else None
 
 
 def load_reference_plan(task: Task, catalogue: Catalogue, plans_dir: Path | None = None,
-                        site: Domain | None = None) -> tuple[Plan | None, str]:
-    """The task's reference plan, validated against its team and floor plan (or site), or None and why not."""
+                        world: World | None = None) -> tuple[Plan | None, str]:
+    """The task's reference plan, validated against its team and its scene in ``world`` (default AI2-THOR's),
+    or None and why not."""
     path = (plans_dir or default_plans_dir()) / f"{task.id}.py"
     if not path.is_file():
         return None, f"no reference plan: {path} does not exist"
     try:
-        types = set(site.places) if site is not None else {o["objectType"] for o in load_scene(task.floor_plan)}
+        types = (world or Ai2ThorWorld()).scene(task.floor_plan).types
         plan = read_plan(path, form="allocated", skills=catalogue.skills, team_size=len(task.robots),
                          scene_types=types)
     except UserError as exc:
@@ -132,14 +130,16 @@ def load_reference_plan(task: Task, catalogue: Catalogue, plans_dir: Path | None
     return plan, ""
 
 
-def _check_infeasible(task: Task, catalogue: Catalogue, site: Domain | None = None) -> ReferenceResult:
+def _check_infeasible(task: Task, catalogue: Catalogue, world: World) -> ReferenceResult:
     """Not run (there is nothing to run); the team must lack every skill listed as missing. On a site, a
-    task may list none when the site shows it infeasible: some goal condition no plan for the team can meet."""
+    task may list none when the site shows it infeasible: some goal condition no plan for the team can meet
+    (an AI2-THOR task lists its missing skills, as SMART-LLM's infeasible tasks do)."""
     team = catalogue.team(task.robots)
-    blocked = unattainable(site, task.goals, team) if site is not None else []
+    by_goals = world.kind != AI2THOR
+    blocked = world.unattainable(task.goals, team, catalogue.skills, task.floor_plan) if by_goals else []
     if not task.missing_skills and not blocked:
         return ReferenceResult(task, None, False, "an infeasible task must list its missing_skills"
-                               + (" or have a goal condition its team cannot meet" if site is not None else ""))
+                               + (" or have a goal condition its team cannot meet" if by_goals else ""))
     present = sorted(set(task.missing_skills) & team_skills(team))
     if present:
         return ReferenceResult(task, None, False, f"missing_skills {present} are skills the team has")

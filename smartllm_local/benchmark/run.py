@@ -20,15 +20,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..domain import Domain
+from ..domain import Domain, load_domain
 from ..errors import SmartLLMError
-from ..executor import Execution, run_plan
+from ..executor import Execution
 from ..files import write_atomic
 from ..planner.pipeline import Planner, PlanResult, restore_stage, write_artifacts
-from ..planner.prompting.scene_context import scene_objects, site_objects
 from ..robots import Catalogue
 from ..scoring import Goal, Scores, score_execution
-from ..world.controller import open_controller
+from ..worlds import Ai2ThorWorld, World, world_of
 from .candidates import candidate_measures
 from .methods import Method, SmartLLM, Stage
 from .parallel import plan_and_execute
@@ -113,23 +112,32 @@ class Progress:
         return f"[{self.done}/{self.total}] {self.phase} {self.task}".rstrip() + tail
 
 
+@dataclass(frozen=True)
+class _Venue:
+    """Where a run's plans are executed: the domain's world, and its reference plans (the Speed measure's)."""
+
+    world: World
+    plans: Path
+
+
 def execute_and_score(result: PlanResult, goals: Sequence[Goal], catalogue: Catalogue, *,
                       trans: int | None = None, max_trans: int | None = None, controller: Any = None,
-                      build: str | None = None, site: Domain | None = None) -> Scores:
-    """Run a planned task's allocated plan (in AI2-THOR, or on ``site``) and score it (a refusal runs nothing)."""
+                      build: str | None = None, world: World | None = None) -> Scores:
+    """Run a planned task's allocated plan in ``world`` (default AI2-THOR's) and score it (a refusal runs
+    nothing)."""
     return execute_scored(result, goals, catalogue, trans=trans, max_trans=max_trans, controller=controller,
-                          build=build, site=site)[1]
+                          build=build, world=world)[1]
 
 
 def execute_scored(result: PlanResult, goals: Sequence[Goal], catalogue: Catalogue, *,
                    trans: int | None = None, max_trans: int | None = None, controller: Any = None,
-                   build: str | None = None, site: Domain | None = None) -> tuple[Execution, Scores]:
+                   build: str | None = None, world: World | None = None) -> tuple[Execution, Scores]:
     """:func:`execute_and_score`, with the execution itself (its trace, for trace.json)."""
     if result.plan is None:
         raise SmartLLMError(result.error or "there is no valid plan to execute")
     team = catalogue.team(result.robots)
-    execution = run_plan(result.plan, result.floor_plan, team, controller=controller, build=build,
-                         skills=catalogue.skills, site=site)
+    execution = (world or Ai2ThorWorld()).run(result.plan, result.floor_plan, team, skills=catalogue.skills,
+                                              controller=controller, build=build)
     return execution, score_execution(execution, goals, trans=trans, max_trans=max_trans)
 
 
@@ -145,8 +153,8 @@ def run_benchmark(
     domain: Domain | None = None,
     interrupt: Callable[[], None] = lambda: None,
 ) -> list[TaskOutcome]:
-    """Plan (with ``method``; a Planner is SMART-LLM's), execute (in AI2-THOR, or on a site ``domain``'s
-    site) and score every task; write per-task artifacts and results.jsonl under ``out``.
+    """Plan (with ``method``; a Planner is SMART-LLM's), execute (in the ``domain``'s world, default
+    household's: AI2-THOR) and score every task; write per-task artifacts and results.jsonl under ``out``.
 
     With a ``store`` (the run folder), each finished stage is saved at once and each scored task's
     line appended at once; tasks and stages the store already holds are not run again. Any
@@ -156,7 +164,8 @@ def run_benchmark(
     the tasks planned are executed (:mod:`.parallel`); ``interrupt`` then ends the workers' calls in flight
     when the run stops. Returns the outcomes of the tasks run this time.
     """
-    site = domain.as_site if domain is not None else None
+    domain = domain or load_domain()
+    venue = _Venue(world_of(domain), domain.plans_dir())
     methods = [SmartLLM(m, catalogue) if isinstance(m, Planner) else m
                for m in (method if isinstance(method, Sequence) else [method])]
     done = store.results() if store is not None else {}
@@ -166,15 +175,15 @@ def run_benchmark(
         task = outcome.task
         outcome.result = PlanResult(instruction=task.instruction, floor_plan=task.floor_plan, robots=list(task.robots))
         if store is not None:
-            _restore(store, catalogue, outcome, site, methods[0].stages())
+            _restore(store, catalogue, outcome, venue.world, methods[0].stages())
         if _goes_on(outcome):
             live.append(outcome)
     counts = _Counts(len(methods[0].stages()), len(outcomes), progress)
     if len(methods) == 1:
         _plan_all(outcomes, live, methods[0], store, counts)
-        _execute_all(outcomes, catalogue, site, build, out, store, counts)
+        _execute_all(outcomes, catalogue, venue, build, out, store, counts)
     else:
-        _plan_and_execute(outcomes, live, methods, catalogue, site, build, out, store, counts, interrupt)
+        _plan_and_execute(outcomes, live, methods, catalogue, venue, build, out, store, counts, interrupt)
     if out is not None:
         lines = store.results() if store is not None else {o.task.id: o.as_json() for o in outcomes}
         if store is None:
@@ -244,7 +253,7 @@ def _plan_pass(method: Method, outcome: TaskOutcome, group: Sequence[tuple[int, 
 
 
 def _plan_and_execute(outcomes: list[TaskOutcome], live: list[TaskOutcome], methods: Sequence[Method],
-                      catalogue: Catalogue, site: Domain | None, build: str | None, out: Path | None,
+                      catalogue: Catalogue, venue: _Venue, build: str | None, out: Path | None,
                       store: RunStore | None, counts: _Counts, interrupt: Callable[[], None]) -> None:
     """Plan the live tasks on every worker at once and execute each, in the run's order, once it is planned
     (:func:`.parallel.plan_and_execute`); progress counts each stage and execution as it starts."""
@@ -264,7 +273,7 @@ def _plan_and_execute(outcomes: list[TaskOutcome], live: list[TaskOutcome], meth
     def execute(_: int, outcome: TaskOutcome) -> None:
         with lock:
             counts.step("execution", outcome.task.id, next(done))
-        controller[0] = _execute_one(outcome, catalogue, site, build, out, store, counts, controller[0], lock)
+        controller[0] = _execute_one(outcome, catalogue, venue, build, out, store, counts, controller[0], lock)
 
     try:
         plan_and_execute(outcomes, todo, methods, plan, _goes_on, execute, interrupt)
@@ -275,7 +284,7 @@ def _plan_and_execute(outcomes: list[TaskOutcome], live: list[TaskOutcome], meth
             controller[0].stop()
 
 
-def _execute_all(outcomes: list[TaskOutcome], catalogue: Catalogue, site: Domain | None, build: str | None,
+def _execute_all(outcomes: list[TaskOutcome], catalogue: Catalogue, venue: _Venue, build: str | None,
                  out: Path | None, store: RunStore | None, counts: _Counts) -> None:
     """Execute and score every planned task on one Controller (a fresh one after a failure leaves it in an
     unknown state), writing each task's artifacts and results line as soon as it is scored."""
@@ -283,7 +292,7 @@ def _execute_all(outcomes: list[TaskOutcome], catalogue: Catalogue, site: Domain
     try:
         for k, outcome in enumerate(outcomes):
             counts.step("execution", outcome.task.id, counts.stages * len(outcomes) + k)
-            controller = _execute_one(outcome, catalogue, site, build, out, store, counts, controller)
+            controller = _execute_one(outcome, catalogue, venue, build, out, store, counts, controller)
         if outcomes:
             counts.step("done", "", counts.total)
     finally:
@@ -291,7 +300,7 @@ def _execute_all(outcomes: list[TaskOutcome], catalogue: Catalogue, site: Domain
             controller.stop()
 
 
-def _execute_one(outcome: TaskOutcome, catalogue: Catalogue, site: Domain | None, build: str | None,
+def _execute_one(outcome: TaskOutcome, catalogue: Catalogue, venue: _Venue, build: str | None,
                  out: Path | None, store: RunStore | None, counts: _Counts, controller: Any,
                  lock: threading.Lock | None = None) -> Any:
     """Conclude a planned task, execute and score its plan, write its artifacts and results line; the
@@ -303,8 +312,8 @@ def _execute_one(outcome: TaskOutcome, catalogue: Catalogue, site: Domain | None
         outcome.error = result.error
     started = time.perf_counter()
     if outcome.task.feasible and result.plan is not None and not outcome.error:
-        controller = _execute(outcome, catalogue, site, build, controller)
-    scene = site_objects(site) if site is not None else scene_objects(outcome.task.floor_plan)
+        controller = _execute(outcome, catalogue, venue, build, controller)
+    scene = venue.world.scene(outcome.task.floor_plan)
     outcome.extra.update(candidate_measures(result, outcome.task, catalogue.skills, scene))
     outcome.seconds = time.perf_counter() - started + sum(r.seconds for r in result.stages)
     if out is not None:
@@ -317,16 +326,17 @@ def _execute_one(outcome: TaskOutcome, catalogue: Catalogue, site: Domain | None
     return controller
 
 
-def _execute(outcome: TaskOutcome, catalogue: Catalogue, site: Domain | None, build: str | None,
+def _execute(outcome: TaskOutcome, catalogue: Catalogue, venue: _Venue, build: str | None,
              controller: Any) -> Any:
     """Execute and score one task's plan; the Controller to go on with (None after one failed oddly)."""
     try:
-        if controller is None and site is None:
-            controller = open_controller(outcome.task.floor_plan, len(outcome.task.robots), build=build)
+        if controller is None:
+            controller = venue.world.open(outcome.task.floor_plan, len(outcome.task.robots), build)
         outcome.execution, scores = execute_scored(outcome.result, outcome.task.goals, catalogue,
                                                    trans=outcome.task.trans, max_trans=outcome.task.max_trans,
-                                                   controller=controller, site=site)
-        outcome.scores = scores.with_speed(reference_ticks(outcome.task, catalogue, controller, site=site))
+                                                   controller=controller, world=venue.world)
+        outcome.scores = scores.with_speed(reference_ticks(outcome.task, catalogue, controller, venue.plans,
+                                                           world=venue.world))
     except SmartLLMError as exc:
         outcome.error = f"execution: {exc}"
     except Exception as exc:
@@ -365,7 +375,7 @@ def _goes_on(outcome: TaskOutcome) -> bool:
     return not (outcome.error or result is None or result.error or result.refusal is not None)
 
 
-def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome, site: Domain | None,
+def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome, world: World,
              stages: Sequence[Stage]) -> None:
     """Put back the stages an interrupted run finished for this task (a damaged one is run again, and
     so is one that the next stage goes on from, when that one is not done: the context they share is not saved)."""
@@ -373,7 +383,7 @@ def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome, site: 
     assert result is not None
     scene = None
     for record in store.saved_stages(task.id):
-        scene = scene or (site_objects(site) if site is not None else scene_objects(task.floor_plan))
+        scene = scene or world.scene(task.floor_plan)
         try:
             restore_stage(result, record, catalogue.skills, scene, len(task.robots))
         except SmartLLMError:

@@ -41,10 +41,10 @@ from ..executor import run_plan
 from ..planner.backends import Backend, Sampling
 from ..planner.pipeline import Planner, PlannerConfig, PlanResult
 from ..planner.prompting.prompts import STAGES
-from ..planner.prompting.scene_context import scene_objects
 from ..provenance import versions
 from ..robots import Catalogue
 from ..world.controller import open_controller
+from ..worlds import scene_objects
 from .reference_plans import load_reference_plan
 from .sharing import core_sharing
 from .tasks import Task

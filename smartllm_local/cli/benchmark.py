@@ -286,10 +286,10 @@ def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: Mo
             if done:
                 print(f"resuming the run in {store.out}: {sum(t.id in done for t in chosen)} of {len(chosen)} "
                       "tasks done", file=sys.stderr)
-            seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.site) for p in planners] or [None]
+            seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.world) for p in planners] or [None]
             with RunProgress(f"seed {s}" if labelled else "") as progress:
                 methods = [make_method(method, cat, p, dom.plans_dir(), planner_time_limit=planner_time_limit,
-                                       site=dom.as_site) for p in seeded]
+                                       site=None if dom.is_ai2thor else dom) for p in seeded]
                 run_benchmark(chosen, methods, cat,
                               out=store.out, store=store, build=str(thor_build) if thor_build else None,
                               progress=progress, domain=dom,

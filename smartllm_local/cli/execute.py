@@ -11,12 +11,13 @@ import typer
 from ..benchmark.tasks import find_task, load_tasks
 from ..domain import load_domain
 from ..errors import UserError
-from ..executor import Execution, run_plan
+from ..executor import Execution
 from ..files import check_output_file, read_json, write_json
 from ..plan_language import read_plan
 from ..robots import parse_robot_ids
 from ..scoring import Scores, parse_goals, score_execution
 from ..world.scenes import floor_plan_name
+from ..worlds import world_of
 from .dispatch import run_record
 from .options import (
     CATALOGUE_HELP,
@@ -73,10 +74,10 @@ def execute(
     if given_transitions:
         check_transitions(trans, max_trans)
     team = cat.team(team_ids)
+    world = world_of(dom)
     parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team),
-                       scene_types=None if dom.is_ai2thor else set(dom.places))
-    execution = run_plan(parsed, scene, team, build=str(thor_build) if thor_build else None, skills=cat.skills,
-                         site=dom.as_site)
+                       scene_types=world.plan_types(scene))
+    execution = world.run(parsed, scene, team, skills=cat.skills, build=str(thor_build) if thor_build else None)
     scores = score_execution(execution, goals, trans=trans, max_trans=max_trans)
     if trace is not None:
         write_json(trace, {"plan": str(plan), "floor_plan": scene, "robots": team_ids, **run_record(execution)})

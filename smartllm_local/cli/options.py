@@ -14,7 +14,7 @@ from typing import Any
 
 import typer
 
-from ..domain import Domain
+from ..domain import Domain, load_domain
 from ..errors import UserError
 from ..planner.backends import (
     BACKENDS,
@@ -33,6 +33,7 @@ from ..planner.pipeline import Planner, PlannerConfig
 from ..planner.prompting.chat import CHAT_TEMPLATE_MODES, mode_for
 from ..planner.prompting.prompts import PromptOptions
 from ..planner.verifier import SELECTORS
+from ..worlds import world_of
 
 DOMAIN_HELP = "The domain: household (the default), patrol, or a domain folder (see `smartllm-local domain`)."
 CATALOGUE_HELP = "A JSON robot catalogue to use instead of an AI2-THOR domain's robots (default: the domain's own)."
@@ -139,17 +140,18 @@ class ModelOptions:
 
     def planners(self, catalogue, domain: Domain | None = None) -> list[Planner]:
         """One planner (a server backend's first slot), for ``domain``'s tasks."""
-        site = domain.as_site if domain is not None else None
-        return [Planner(backend, catalogue, self.config, site=site) for backend in self._backends(1, self.prefix_cache)]
+        world = world_of(domain or load_domain())
+        return [Planner(backend, catalogue, self.config, world=world)
+                for backend in self._backends(1, self.prefix_cache)]
 
     def open_planners(self, catalogue, domain: Domain | None = None, tasks: int | None = None) -> PlannerSet:
         """A planner per task planned at once (``--parallel``, at most ``tasks``): on lanes of one in-process
         llama.cpp model, or on a server's slots; one elsewhere. Close the set when done (it closes the backends)."""
-        site = domain.as_site if domain is not None else None
+        world = world_of(domain or load_domain())
         parallel = min(self.parallel, tasks or self.parallel)  # a lane is a task's key/value cache: none idle
         backends = self._backends(parallel if self.backend == "server" else 1, self.prefix_cache)
         return PlannerSet(backends, parallel if self.backend == "llamacpp" else 1,
-                          lambda backend: Planner(backend, catalogue, self.config, site=site))
+                          lambda backend: Planner(backend, catalogue, self.config, world=world))
 
 
 _MODEL = typer.Option(None, help=MODEL_HELP)

@@ -27,6 +27,7 @@ from ..robots import Catalogue, Robot, parse_robot_ids
 from ..scoring import Scores
 from ..world.controller import check_build
 from ..world.scenes import floor_plan_name
+from ..worlds import world_of
 from .dispatch import dispatch_report, dispatch_succeeded, run_record
 from .execute import metrics_lines
 from .options import (
@@ -93,7 +94,7 @@ def plan_command(
         execution, scores = execute_scored(result, chosen.goals if chosen else (), cat,
                                            trans=chosen.trans if chosen else None,
                                            max_trans=chosen.max_trans if chosen else None,
-                                           build=str(thor_build) if thor_build else None, site=dom.as_site)
+                                           build=str(thor_build) if thor_build else None, world=world_of(dom))
     dispatched = None
     if functions is not None and planned and not result.plan.is_refusal:
         dispatched = dispatch_plan(result.plan, team, functions, skills=cat.skills)

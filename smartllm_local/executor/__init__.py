@@ -32,15 +32,12 @@ def run_plan(
     skills: SkillSet = DEFAULT_SKILL_SET,
     max_ticks: int = DEFAULT_MAX_TICKS,
     object_filter: bool = True,
-    site: Domain | None = None,
 ) -> Execution:
-    """Execute ``plan`` on ``floor_plan`` with ``team`` (or, given a site domain, on its site).
+    """Execute ``plan`` on ``floor_plan`` with ``team`` (AI2-THOR's world: :class:`smartllm_local.worlds.Ai2ThorWorld`).
 
     A given ``controller`` is reset to the floor plan with one agent per robot
     and reused (much faster for many runs); otherwise one is opened and stopped.
     """
-    if site is not None:
-        return run_site_plan(plan, site, team, max_ticks=max_ticks)
     scene = floor_plan_name(floor_plan)
     if controller is not None:
         controller.reset(scene, agentCount=len(team))

@@ -174,7 +174,7 @@ def check_team(plan: Plan, team_size: int) -> None:
         raise UserError(f"the plan does not fit this team of {team_size}: {exc.message}") from None
 
 
-class World(Protocol):
+class Performer(Protocol):
     """What carries out a plan's skill calls: the simulated team (:class:`TeamWorld`) or a lab's own
     code (:class:`~.dispatch.DispatchWorld`)."""
 
@@ -194,7 +194,7 @@ class World(Protocol):
         where the world has no positions."""
 
 
-def run(plan: Plan, world: World, team: Sequence[Robot], *, skills: SkillSet = DEFAULT_SKILL_SET,
+def run(plan: Plan, world: Performer, team: Sequence[Robot], *, skills: SkillSet = DEFAULT_SKILL_SET,
         max_ticks: int = DEFAULT_MAX_TICKS) -> Execution:
     """Run a checked allocated plan (see :func:`check_team`) with ``world`` carrying out its steps."""
     return _Run(plan, world, team, skills).until_done(max_ticks)
@@ -207,7 +207,7 @@ class _Run:
     """One run's state: the main flow, where it waits, the sub-tasks waiting for their robots and those
     working, the robots they hold, and what the run has recorded so far."""
 
-    def __init__(self, plan: Plan, world: World, team: Sequence[Robot], skills: SkillSet):
+    def __init__(self, plan: Plan, world: Performer, team: Sequence[Robot], skills: SkillSet):
         self.plan, self.world, self.team, self.skills = plan, world, team, skills
         self.team_size = len(team)
         self.trace: list[TraceEntry] = []

@@ -126,6 +126,11 @@ class SiteDryRun:
         finally:
             self.restore(saved)
 
+    @property
+    def objects(self) -> list[dict[str, Any]]:
+        """The site's entries now, as the scorer reads a final state."""
+        return self.world.objects
+
     def apply(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> Outcome:
         return self.world.perform(self.skills[skill], objects, members)
 

@@ -9,21 +9,15 @@ does not run it.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..domain import Domain, load_domain
 from ..errors import PlanError
-from ..executor import reach, site
 from ..goal_language import GoalStatement, parse_goal_statement
-from ..robots import Robot
+from ..scene import SceneObjects
 from ..scoring import STATES, Condition
-from ..skills import SkillSet
-from ..world.scenes import load_scene
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
-from .prompting.scene_context import SceneObjects
 from .stages import StageRecord, fit_prompt, run_stage
 
 if TYPE_CHECKING:
@@ -65,9 +59,8 @@ class StatedGoals:
 
 
 def goal_examples(planner: Planner) -> list[GoalExample]:
-    """The goal examples of the planner's domain (its site's, or household's)."""
-    folder = planner.site.prompts_dir() if planner.site is not None else load_domain().prompts_dir()
-    return load_goal_examples(folder)
+    """The goal examples of the planner's world (beside its plans' worked examples)."""
+    return load_goal_examples(planner.world.examples_dir())
 
 
 def state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, refusals: bool = True) -> StatedGoals:
@@ -122,12 +115,3 @@ def stated_conditions(result: PlanResult, scene: SceneObjects, record: StageReco
     except PlanError:
         return []
     return statement.conditions if statement.refusal is None else []
-
-
-def unattainable_for(domain: Domain | None, statement: GoalStatement | None, conditions: Sequence[Condition],
-                     team: Sequence[Robot], skills: SkillSet, scene: SceneObjects) -> list[str]:
-    """The stated conditions no plan of ``team`` can meet, each with why: on a site domain's site, or in the
-    AI2-THOR scene from its initial state."""
-    if domain is not None:
-        return site.unattainable(domain, statement.goals, team) if statement is not None else []
-    return reach.unattainable(conditions, team, skills, load_scene(scene.floor_plan))

@@ -20,12 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..domain import Domain
 from ..errors import PlanError, UserError
 from ..files import json_text, write_atomic
 from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
+from ..scene import SceneObjects
 from ..skills import SkillSet
+from ..worlds import Ai2ThorWorld, World
 from .backends.base import Backend, Sampling
 from .candidates import Candidates, mean_logprob, write_all
 from .constraints.coalition import LINE as COALITION_LINE
@@ -37,7 +38,7 @@ from .constraints.repair import Repairer
 from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
-from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions, unattainable_for
+from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -51,7 +52,6 @@ from .prompting.prompts import (
     examples_for,
     load_examples,
 )
-from .prompting.scene_context import SceneObjects, scene_objects, site_objects
 from .stages import Fitted, StageRecord, check_output, fit_prompt, run_stage
 from .verifier import check_decomposition, choose, score
 
@@ -141,23 +141,23 @@ class Planner:
     """Plans tasks with one backend; keeps nothing between tasks but the backend's cache."""
 
     def __init__(self, backend: Backend, catalogue: Catalogue, config: PlannerConfig = PlannerConfig(),
-                 examples: Sequence[Example] | None = None, site: Domain | None = None,
+                 examples: Sequence[Example] | None = None, world: World | None = None,
                  progress: StageProgress = SILENT):
-        """``site``: plan for a site domain (its catalogue, its site, and its examples unless given);
+        """``world``: the world the tasks happen in (default AI2-THOR's; a site domain's, see
+        :func:`~smartllm_local.worlds.world_of`), whose worked examples the prompts show unless given;
         ``progress`` hears of each stage as it runs (see :mod:`.progress`)."""
         self.backend = backend
         self.progress = progress
         self.catalogue = catalogue
         self.config = config
-        self.site = site
-        self.examples = list(examples) if examples is not None else load_examples(
-            site.prompts_dir() if site is not None else None)
+        self.world = world or Ai2ThorWorld()
+        self.examples = list(examples) if examples is not None else load_examples(self.world.examples_dir())
         self.chat, self.chat_status = chat_format(backend, config.chat_template)
         self._shared: bool | None = None  # whether coalition and allocation share a prompt (see _shares_context)
 
     def scene(self, floor_plan: str | int) -> SceneObjects:
         """What the stages know of where a task happens: a floor plan's objects, or the site's entries."""
-        return site_objects(self.site) if self.site is not None else scene_objects(floor_plan)
+        return self.world.scene(floor_plan)
 
     def stage_rng(self, result: PlanResult, stage: str) -> np.random.Generator:
         """A stage's sampling randomness, from (seed, task, stage) alone: a task planned by itself
@@ -200,11 +200,11 @@ class Planner:
         opts = self.config.prompts
         record = StageRecord("decomposition", chat_template=self.chat_status)
         skills = self.catalogue.skills
-        world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site) if self.config.world_check else None
+        world = WorldCheck(scene, skills, MAX_SUBTASKS) if self.config.world_check else None
         config = self.config
         goals = stated_conditions(result, scene) if config.stop_at_goals or config.finish_goals else []
         repairer = Repairer(world, skills) if world is not None and (config.repair or config.finish_goals) \
-            and scene.site is None else None
+            and Repairer.fits(world) else None
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
                                     for_team=team, goals=goals, repairer=repairer, stop=config.stop_at_goals,
                                     repair=config.repair, finish=config.finish_goals) if config.grammar else None
@@ -315,7 +315,7 @@ class Planner:
         names = [f.name for f in decomposed.functions]
         constraint: Constraint | None = None
         if self.config.grammar and self.config.restate:
-            world = (WorldCheck(scene.floor_plan, skills, len(team), site=scene.site)
+            world = (WorldCheck(scene, skills, len(team))
                      if self.config.world_check else None)
             constraint = RestatedAllocation(scene, skills, team=len(team) if self.config.free_teams else team,
                                             function_names=names, bodies=restated_bodies(decomposition, names),
@@ -396,8 +396,8 @@ class Planner:
         record = stated.record
         conditions = stated_conditions(result, scene, record)
         team = self.catalogue.team(result.robots)
-        problems = unattainable_for(self.site, stated.statement, conditions, team, self.catalogue.skills,
-                                    scene) if conditions else []
+        problems = self.world.unattainable(stated.statement.goals, team, self.catalogue.skills,
+                                           scene.floor_plan) if conditions and stated.statement else []
         if problems:
             record.refusal, record.refused_by = "; ".join(problems), GOAL_CHECK
         if record.refusal is not None:

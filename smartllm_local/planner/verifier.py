@@ -16,11 +16,11 @@ from dataclasses import asdict, dataclass
 
 from ..plan_language import Plan
 from ..plan_language.ir import Call, Function, SkillCall
+from ..scene import SceneObjects
 from ..scoring import Condition
 from ..skills import SkillSet
 from .constraints.format import MAX_SUBTASKS
 from .constraints.world_check import WorldCheck
-from .prompting.scene_context import SceneObjects
 
 SELECTORS = ("verifier", "likelihood")
 
@@ -62,7 +62,7 @@ def check_decomposition(plan: Plan, scene: SceneObjects, skills: SkillSet, condi
                         *, idle: bool = True) -> Check:
     """Dry-run a decomposed plan and check it against ``conditions``; ``idle`` also counts the idle sub-tasks
     (a dry run more per sub-task)."""
-    world = WorldCheck(scene.floor_plan, skills, MAX_SUBTASKS, site=scene.site)
+    world = WorldCheck(scene, skills, MAX_SUBTASKS)
     start = world.run.snapshot()
     calls, failed = _run(world, plan, skip=None)
     met = world.met(conditions)

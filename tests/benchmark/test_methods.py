@@ -13,7 +13,7 @@ from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.baselines import allocate_by, random_chooser, rule_chooser
 from smartllm_local.planner.constraints.feasibility import function_needs
-from smartllm_local.planner.prompting.scene_context import scene_objects
+from smartllm_local.worlds import scene_objects
 
 from .conftest import SAMPLE
 

@@ -8,6 +8,7 @@ import shutil
 import pytest
 
 import smartllm_local.benchmark.reference_plans as bench
+import smartllm_local.worlds as worlds
 from smartllm_local.benchmark.reference_plans import ReferenceResult, category_table, check_reference_plans
 from smartllm_local.benchmark.tasks import SMARTLLM_CATEGORIES, find_task
 from smartllm_local.executor import run_plan
@@ -81,8 +82,8 @@ def small_set(all_tasks, tmp_path):
 def test_checker_reports_each_problem_and_goes_on(small_set, catalogue, monkeypatch):
     tasks, plans = small_set
     opened = []
-    real_open = bench.open_controller
-    monkeypatch.setattr(bench, "open_controller", lambda *a, **k: opened.append(a) or real_open(*a, **k))
+    real_open = worlds.open_controller  # the AI2-THOR world opens the Controller the runs reuse
+    monkeypatch.setattr(worlds, "open_controller", lambda *a, **k: opened.append(a) or real_open(*a, **k))
     good, missing, invalid, failing, refused = check_reference_plans(tasks, plans, catalogue=catalogue)
 
     assert len(opened) == 1, "one Controller must serve every run"

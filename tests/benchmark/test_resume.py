@@ -21,8 +21,8 @@ from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import SmartLLMError
 from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord
+from smartllm_local.worlds import scene_objects
 
 TASKS = ("living-01", "bedroom-inf-01", "bathroom-01")  # tasks no other test plans with these settings
 # The model decomposes; robots are the rule's (every stage through the model resumes alike, and costs minutes).

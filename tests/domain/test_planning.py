@@ -21,23 +21,23 @@ from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import accepts, sample_output
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
 from smartllm_local.planner.prompting.prompts import load_examples
-from smartllm_local.planner.prompting.scene_context import site_objects
 from smartllm_local.scoring import parse_goals, score_execution
+from smartllm_local.worlds import world_of
 
 PATROL = load_domain("patrol")
-SCENE = site_objects(PATROL)
+SCENE = world_of(PATROL).scene("")
 SKILLS = PATROL.catalogue.skills
 EXAMPLES = load_examples(PATROL.prompts_dir())
 
 
 def decomposer() -> PlanConstraint:
-    return PlanConstraint(SCENE, SKILLS, world=WorldCheck(SCENE.floor_plan, SKILLS, 8, site=PATROL))
+    return PlanConstraint(SCENE, SKILLS, world=WorldCheck(SCENE, SKILLS, 8))
 
 
 def allocator(decomposition: str, ids) -> RestatedAllocation:
     names = [f.name for f in parse_plan(decomposition, form="decomposed", skills=SKILLS).functions]
     team = PATROL.catalogue.team(ids)
-    world = WorldCheck(SCENE.floor_plan, SKILLS, len(team), site=PATROL)
+    world = WorldCheck(SCENE, SKILLS, len(team))
     return RestatedAllocation(SCENE, SKILLS, team=team, function_names=names,
                               bodies=restated_bodies(decomposition, names), world=world)
 
@@ -134,9 +134,9 @@ def test_a_task_the_site_shows_infeasible_leaves_the_coalition_only_a_refusal():
 
 def test_the_starter_domain_plans_too():
     starter = load_domain(starter_domain())
-    scene = site_objects(starter)
+    scene = world_of(starter).scene("")
     constraint = PlanConstraint(scene, starter.catalogue.skills,
-                                world=WorldCheck(scene.floor_plan, starter.catalogue.skills, 8, site=starter))
+                                world=WorldCheck(scene, starter.catalogue.skills, 8))
     out = sample_output(constraint, random.Random(1), 900)
     parse_plan(out, form="decomposed", skills=starter.catalogue.skills, scene_types=scene.types)
 
@@ -145,7 +145,7 @@ def test_a_decomposition_for_ground_robots_never_goes_where_only_aerial_ones_do(
     """Rovers 4 and 5 cannot reach the warehouse roof: their decomposition never names it, by any writer, and
     may refuse saying so, where the drones' names it."""
     rovers = PATROL.catalogue.team([4, 5])
-    world = lambda: WorldCheck(SCENE.floor_plan, SKILLS, 8, site=PATROL)  # noqa: E731
+    world = lambda: WorldCheck(SCENE, SKILLS, 8)  # noqa: E731
     rng = random.Random(0)
     for _ in range(12):
         text = sample_output(PlanConstraint(SCENE, SKILLS, world=world(), for_team=rovers, allow_refusal=False),

@@ -28,8 +28,8 @@ from smartllm_local.planner.prompting.chat import (
     prompt_tokens,
 )
 from smartllm_local.planner.prompting.prompts import Prompt
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import STOP_STRINGS, Fitted, StageRecord, fit_prompt, run_stage
+from smartllm_local.worlds import scene_objects
 from tests.planner.fakes import FakeBackend
 from tests.test_cli_errors import cli, one_line_error
 

@@ -14,8 +14,8 @@ from smartllm_local.planner.decoding.protocol import Forced
 from smartllm_local.planner.decoding.writer import BudgetError, accepts, run_constraint, sample_output
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
 from smartllm_local.planner.prompting.prompts import load_examples
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.skills import DEFAULT_SKILL_SET
+from smartllm_local.worlds import scene_objects
 
 from .writers import WRITERS, writer
 

@@ -62,8 +62,8 @@ def test_a_refusal_the_grammar_forces_is_told_from_one_the_model_chose(smollm2):
     """kitchen-inf-02's team cannot slice: once the model writes a SliceObject step, the coalition
     grammar admits only a refusal, and the result says the grammar refused, not the model."""
     from smartllm_local.planner.pipeline import PlanResult
-    from smartllm_local.planner.prompting.scene_context import scene_objects
     from smartllm_local.planner.stages import StageRecord
+    from smartllm_local.worlds import scene_objects
 
     catalogue = load_domain().catalogue
     task = next(t for t in load_tasks() if t.id == "kitchen-inf-02")

@@ -20,10 +20,10 @@ from smartllm_local.planner.decoding.writer import accepts
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
 from smartllm_local.planner.prompting.example_check import check_examples
 from smartllm_local.planner.prompting.prompts import PromptOptions, load_examples, shape
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.scoring import parse_goals, score_execution
 from smartllm_local.skills import DEFAULT_SKILL_SET
 from smartllm_local.world.controller import open_controller
+from smartllm_local.worlds import scene_objects
 
 EXAMPLES = load_examples()
 
@@ -128,7 +128,7 @@ def test_a_function_naming_the_whole_list_may_run_with_part_of_the_team():
     def restated():
         return RestatedAllocation(scene, catalogue.skills, team=team, function_names=names,
                                   bodies=restated_bodies(ex.decomposition, names),
-                                  world=WorldCheck(scene.floor_plan, catalogue.skills, len(team)))
+                                  world=WorldCheck(scene, catalogue.skills, len(team)))
 
     pair = "args=([robots[0], robots[1]],)"
     assert pair in ex.allocation and accepts(restated(), ex.allocation)

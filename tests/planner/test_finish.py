@@ -16,8 +16,8 @@ from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.repair import Repairer
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import run_constraint, run_tokens
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.scoring import Condition, condition_holds, containment
+from smartllm_local.worlds import scene_objects
 
 from .test_repair import CATALOGUE, SKILLS, _scripted
 from .writers import TokenAdversary
@@ -29,7 +29,7 @@ GOALS = [Condition("Bread", state="SLICED"), Condition("Fridge", item="Apple")]
 
 
 def _decomposer(floor_plan, goals, *, finish=True, team=None) -> PlanConstraint:
-    world = WorldCheck(floor_plan, SKILLS, MAX_SUBTASKS)
+    world = WorldCheck(scene_objects(floor_plan), SKILLS, MAX_SUBTASKS)
     return PlanConstraint(scene_objects(floor_plan), SKILLS, world=world, summary=False, comments=False,
                           repairer=Repairer(world, SKILLS), goals=goals, finish=finish, for_team=team)
 

@@ -21,10 +21,10 @@ from smartllm_local.planner.constraints.goal import MAX_GOALS, GoalConstraint, g
 from smartllm_local.planner.decoding.writer import Report, accepts, run_constraint, run_tokens
 from smartllm_local.planner.goal_stage import GOAL_BUDGET
 from smartllm_local.planner.prompting.example_check import check_examples, check_goal_examples
-from smartllm_local.planner.prompting.scene_context import scene_objects, site_objects
 from smartllm_local.scoring import Goal, score
 from smartllm_local.world.object_types import RECEPTACLE_ONLY_ACCEPTS, TYPE_PROPERTIES
 from smartllm_local.world.scenes import load_scene
+from smartllm_local.worlds import scene_objects, world_of
 
 from .writers import WRITERS, TokenAdversary, writer
 
@@ -65,7 +65,8 @@ def _check_statement(text: str, scene) -> GoalStatement:
 @pytest.mark.parametrize("kind", WRITERS)
 def test_adversarial_writers_state_only_scene_objects_in_states_they_can_have(kind):
     rng = random.Random(43)
-    scenes = [scene_objects(fp) for fp in sorted({t.floor_plan for t in TASKS})] + [site_objects(load_domain("patrol"))]
+    patrol = world_of(load_domain("patrol")).scene("")
+    scenes = [scene_objects(fp) for fp in sorted({t.floor_plan for t in TASKS})] + [patrol]
     for scene in scenes:
         vocabulary = goal_vocabulary(scene)
         for seed in range(6):
@@ -86,7 +87,7 @@ def test_the_world_decides_which_states_and_receptacles_a_type_is_offered():
     assert "Toaster" in kitchen.holders["BreadSliced"] and "Toaster" not in kitchen.holders["Apple"]
     assert "Mug" not in kitchen.holders["Mug"] and "CoffeeMachine" in kitchen.holders["Mug"]
     assert "Television" not in kitchen.types
-    site = goal_vocabulary(site_objects(load_domain("patrol")))
+    site = goal_vocabulary(world_of(load_domain("patrol")).scene(""))
     assert site.states["Orchard"] == {"COVERED"} and site.states["WeatherMast"] == {"PHOTOGRAPHED"}
     assert site.states["Base"] == {"RETURNED"} and not site.holders
 

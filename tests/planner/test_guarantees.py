@@ -39,10 +39,10 @@ from smartllm_local.planner.decoding.writer import (
     run_constraint,
     run_tokens,
 )
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.robots import team_skills
 from smartllm_local.skills import DEFAULT_SKILL_SET, SkillSet
 from smartllm_local.world.controller import open_controller
+from smartllm_local.worlds import scene_objects
 
 from .writers import WRITERS, Booker, Cycler, TokenAdversary, writer
 
@@ -286,8 +286,7 @@ def _world_checked(task, rng: random.Random, allocation_writer: TokenWriter, bud
     dead ends; None where the coalition refuses."""
     scene = scene_objects(task.floor_plan)
     team = CATALOGUE.team(task.robots)
-    decomposer = PlanConstraint(scene, CATALOGUE.skills, world=WorldCheck(task.floor_plan, CATALOGUE.skills,
-                                                                          MAX_SUBTASKS))
+    decomposer = PlanConstraint(scene, CATALOGUE.skills, world=WorldCheck(scene, CATALOGUE.skills, MAX_SUBTASKS))
     text = run_constraint(decomposer, _subtasks(rng, 3), len, budget)
     plan = parse_plan(text, form="decomposed", skills=CATALOGUE.skills, scene_types=scene.types)
     names = [f.name for f in plan.functions]
@@ -298,7 +297,7 @@ def _world_checked(task, rng: random.Random, allocation_writer: TokenWriter, bud
         return None
     allocator = RestatedAllocation(scene, CATALOGUE.skills, team=team, function_names=names,
                                    bodies=restated_bodies(text, names),
-                                   world=WorldCheck(task.floor_plan, CATALOGUE.skills, len(team)))
+                                   world=WorldCheck(scene_objects(task.floor_plan), CATALOGUE.skills, len(team)))
     allocated = run_tokens(allocator, allocation_writer, allocator.maximum_output())
     return allocated, decomposer.world_counts()[1] + allocator.world_counts()[1]
 
@@ -369,7 +368,7 @@ def test_a_writer_that_loops_its_lines_has_every_loop_cut():
             scene = scene_objects(task.floor_plan)
             cycler = Cycler(rng)
             constraint = PlanConstraint(scene, CATALOGUE.skills,
-                                        world=WorldCheck(task.floor_plan, CATALOGUE.skills, MAX_SUBTASKS))
+                                        world=WorldCheck(scene, CATALOGUE.skills, MAX_SUBTASKS))
             text = run_tokens(constraint, cycler, 1024, guard=guard if guarded else None)
             parse_plan(text, form="decomposed", skills=CATALOGUE.skills, scene_types=scene.types)
             lines = text.split("\n")

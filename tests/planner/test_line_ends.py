@@ -13,8 +13,8 @@ from smartllm_local.planner.decoding.line_ends import BLANKS, COMMENT_NEXT, INDE
 from smartllm_local.planner.decoding.matcher import Matcher
 from smartllm_local.planner.decoding.protocol import Choose
 from smartllm_local.planner.decoding.writer import Line, Report, TokenWriter, Written, run_tokens
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.skills import DEFAULT_SKILL_SET
+from smartllm_local.worlds import scene_objects
 
 
 def test_an_opened_line_admits_spaces_before_its_newline_and_what_may_follow_after_it():

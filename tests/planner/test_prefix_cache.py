@@ -25,7 +25,7 @@ from smartllm_local.planner.backends.prefix_cache import (
     state_key,
 )
 from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.prompting.scene_context import scene_objects
+from smartllm_local.worlds import scene_objects
 from tests.test_cli_errors import cli, one_line_error
 
 PREFIX = [1, 5, 9, 200]

@@ -18,7 +18,7 @@ from smartllm_local.planner.prompting.prompts import (
     strip_comments,
     strip_summary,
 )
-from smartllm_local.planner.prompting.scene_context import scene_objects
+from smartllm_local.worlds import scene_objects
 
 from .fakes import FakeBackend
 

@@ -19,9 +19,9 @@ from smartllm_local.planner.constraints.repair import Repairer, effect
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.protocol import Constraint, Rewrite
 from smartllm_local.planner.decoding.writer import REWRITTEN, run_constraint, run_tokens, shortest_line
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
 from smartllm_local.scoring import Condition
+from smartllm_local.worlds import scene_objects
 
 from .writers import TokenAdversary
 
@@ -41,7 +41,7 @@ def _scripted(lines: list[str]):
 
 
 def _decomposer(floor_plan: int, *, repair: bool = True, goals=()) -> PlanConstraint:
-    world = WorldCheck(floor_plan, SKILLS, MAX_SUBTASKS)
+    world = WorldCheck(scene_objects(floor_plan), SKILLS, MAX_SUBTASKS)
     return PlanConstraint(scene_objects(floor_plan), SKILLS, world=world, summary=False, comments=False,
                           repairer=Repairer(world, SKILLS) if repair else None, goals=goals)
 
@@ -98,7 +98,7 @@ def test_a_repair_uses_only_what_the_team_can_do():
     """A robot that can only go, pick up and put cannot open the cabinet a put into it needs: the planner's steps
     never call a skill the team lacks (the coalition would refuse the plan), so the put is taken back."""
     team = CATALOGUE.team([25])
-    world = WorldCheck("FloorPlan402", SKILLS, MAX_SUBTASKS)
+    world = WorldCheck(scene_objects("FloorPlan402"), SKILLS, MAX_SUBTASKS)
     decomposer = PlanConstraint(scene_objects("FloorPlan402"), SKILLS, world=world, summary=False, comments=False,
                                 repairer=Repairer(world, SKILLS), for_team=team)
     put = "    PutObject('Cloth', 'Cabinet')\n"

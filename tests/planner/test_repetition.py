@@ -19,8 +19,8 @@ from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.grammar import Grammar, alt, opt, seq
 from smartllm_local.planner.decoding.matcher import Matcher
 from smartllm_local.planner.decoding.protocol import Choose
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+from smartllm_local.worlds import scene_objects
 
 from .fakes import FakeBackend
 
@@ -150,7 +150,7 @@ def test_a_stage_takes_back_the_line_that_begins_a_third_copy_and_writes_the_way
     among the loops ended; unguarded, the loop runs on to the function's limit of steps."""
     scene = scene_objects(6)
     constraint = PlanConstraint(scene, load_domain().catalogue.skills,
-                                world=WorldCheck(6, load_domain().catalogue.skills, MAX_SUBTASKS))
+                                world=WorldCheck(scene_objects(6), load_domain().catalogue.skills, MAX_SUBTASKS))
     record = StageRecord("decomposition")
     run_stage(record, _LoopingModel(), Fitted("prompt", [0] * 8), constraint, output_budget=1024,
               sampling=Sampling(loop_guard=LoopGuard() if guarded else None), rng=np.random.default_rng(0))

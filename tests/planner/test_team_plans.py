@@ -17,9 +17,9 @@ from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import accepts, run_constraint, run_tokens
 from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import StageRecord
 from smartllm_local.robots import Robot, team_skills
+from smartllm_local.worlds import scene_objects
 
 from .fakes import FakeBackend
 from .writers import WRITERS, TokenAdversary, writer
@@ -33,7 +33,7 @@ REASON = re.compile(r"^# INFEASIBLE: no robot of the team has ((?:\w+, )*\w+)\n$
 def decomposer(floor_plan: int, ids, **kwargs) -> PlanConstraint:
     scene = scene_objects(floor_plan)
     team = CATALOGUE.team(ids) if ids is not None else None
-    return PlanConstraint(scene, SKILLS, for_team=team, world=WorldCheck(scene.floor_plan, SKILLS, MAX_SUBTASKS),
+    return PlanConstraint(scene, SKILLS, for_team=team, world=WorldCheck(scene, SKILLS, MAX_SUBTASKS),
                           **kwargs)
 
 

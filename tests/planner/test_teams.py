@@ -13,7 +13,7 @@ from smartllm_local.planner.constraints.feasibility import Need, minimal_lists, 
 from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import accepts
-from smartllm_local.planner.prompting.scene_context import scene_objects
+from smartllm_local.worlds import scene_objects
 
 CATALOGUE = load_domain().catalogue
 KITCHEN = 6
@@ -47,7 +47,7 @@ def _allocator(*robot_ids: int) -> RestatedAllocation:
     team = CATALOGUE.team(robot_ids)
     return RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=NAMES,
                               bodies=restated_bodies(DECOMPOSITION, NAMES),
-                              world=WorldCheck(KITCHEN, CATALOGUE.skills, len(team)))
+                              world=WorldCheck(scene_objects(KITCHEN), CATALOGUE.skills, len(team)))
 
 
 def test_minimal_teams_and_lists_drop_only_robots_that_are_not_needed():
@@ -99,14 +99,14 @@ def test_free_teams_never_book_a_robot_into_two_threads_of_a_block_either():
     """--free-teams: the team's skills are the model's business, a robot in two threads at once is not."""
     free = RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=2, function_names=NAMES,
                               bodies=restated_bodies(DECOMPOSITION, NAMES),
-                              world=WorldCheck(KITCHEN, CATALOGUE.skills, 2))
+                              world=WorldCheck(scene_objects(KITCHEN), CATALOGUE.skills, 2))
     assert not accepts(free, _allocated(["robots[0]", "robots[1]", "robots[0]"]))
     full = _allocated(["robots[0]", "robots[1]", "robots[1]"])
     plan = full.replace("t3 = threading.Thread(target=subtask3_lettuce, args=([robots[1]],))\n", "")
     plan = plan.replace("t3.start()\n", "").replace("t3.join()\n", "") + "subtask3_lettuce([robots[1]])\n"
     assert accepts(RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=2, function_names=NAMES,
                                       bodies=restated_bodies(DECOMPOSITION, NAMES),
-                                      world=WorldCheck(KITCHEN, CATALOGUE.skills, 2)), plan)
+                                      world=WorldCheck(scene_objects(KITCHEN), CATALOGUE.skills, 2)), plan)
 
 
 def test_a_robot_list_adds_no_robot_the_function_does_without():
@@ -160,7 +160,8 @@ def test_together_every_function_that_can_join_the_block_joins_it():
     def allocator(together):
         return RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=NAMES,
                                   bodies=restated_bodies(DECOMPOSITION, NAMES),
-                                  world=WorldCheck(KITCHEN, CATALOGUE.skills, len(team)), together=together)
+                                  world=WorldCheck(scene_objects(KITCHEN), CATALOGUE.skills, len(team)),
+                                  together=together)
     alone = _orchestration(allocator(False))
     assert alone.splitlines() == [f"{n}([robots[0]])" for n in NAMES], alone
     joined = _orchestration(allocator(True)).splitlines()
@@ -195,7 +196,8 @@ def test_together_a_body_brings_in_no_robot_it_can_do_without():
     for together, second in ((False, True), (True, False)):
         allocator = RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=names,
                                        bodies=restated_bodies(decomposition, names),
-                                       world=WorldCheck(KITCHEN, CATALOGUE.skills, len(team)), together=together)
+                                       world=WorldCheck(scene_objects(KITCHEN), CATALOGUE.skills, len(team)),
+                                  together=together)
         text = run_constraint(allocator, write, len, 5000)
         assert ("robot_list[1]" in text) == second, text
         assert ("[robots[0], robots[1]]" in text or "[robots[1], robots[0]]" in text) == second, text

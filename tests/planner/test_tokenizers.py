@@ -37,8 +37,8 @@ from smartllm_local.planner.prompting.prompts import (
     examples_for,
     load_examples,
 )
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+from smartllm_local.worlds import scene_objects
 
 from .fakes import Script
 

@@ -17,7 +17,7 @@ from smartllm_local.planner.backends.transformers import _placement, _quiet_load
 from smartllm_local.planner.decoding.grammar import Grammar, alt
 from smartllm_local.planner.models import embedded_model_path
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
-from smartllm_local.planner.prompting.scene_context import scene_objects
+from smartllm_local.worlds import scene_objects
 
 from .conftest import LOAD_STDERR
 from .test_repetition import check_loop_guard

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.planner.verifier import Check, Weights, check_decomposition, choose, score
 from smartllm_local.scoring import Condition
+from smartllm_local.worlds import scene_objects
 
 SKILLS = load_domain("household").catalogue.skills
 SCENE = scene_objects(1)

@@ -18,8 +18,8 @@ from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import accepts, run_constraint
-from smartllm_local.planner.prompting.scene_context import scene_objects
 from smartllm_local.world.controller import open_controller
+from smartllm_local.worlds import scene_objects
 
 from .writers import writer
 
@@ -29,7 +29,7 @@ PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObjec
 
 def _decomposer(floor_plan: int) -> PlanConstraint:
     return PlanConstraint(scene_objects(floor_plan), CATALOGUE.skills,
-                          world=WorldCheck(floor_plan, CATALOGUE.skills, MAX_SUBTASKS))
+                          world=WorldCheck(scene_objects(floor_plan), CATALOGUE.skills, MAX_SUBTASKS))
 
 
 def _plan(task, rng, sequential: bool, budget: int = 1400):
@@ -55,7 +55,7 @@ def _plan(task, rng, sequential: bool, budget: int = 1400):
         return None
     allocator = RestatedAllocation(scene, CATALOGUE.skills, team=team, function_names=names,
                                    bodies=restated_bodies(text, names),
-                                   world=WorldCheck(task.floor_plan, CATALOGUE.skills, len(team)))
+                                   world=WorldCheck(scene_objects(task.floor_plan), CATALOGUE.skills, len(team)))
     allocated = run_constraint(allocator, write, len, allocator.maximum_output())
     dead_ends = decomposer.world_counts()[1], allocator.world_counts()[1]
     return parse_plan(allocated, form="allocated", skills=CATALOGUE.skills, team_size=len(team)), dead_ends
@@ -143,7 +143,7 @@ def test_the_team_dry_run_decides_robot_lists_as_the_executor_does():
     the real executor confirms for every offered list."""
     task = next(t for t in load_tasks() if len(t.robots) >= 2)
     team = CATALOGUE.team(task.robots)
-    world = WorldCheck(task.floor_plan, CATALOGUE.skills, robots=team)
+    world = WorldCheck(scene_objects(task.floor_plan), CATALOGUE.skills, robots=team)
     calls = [(0, "GoToObject", ("Fridge",)), (0, "OpenObject", ("Fridge",))]
     controller = open_controller(scene_objects(task.floor_plan).floor_plan, agent_count=len(team))
     try:
@@ -180,7 +180,7 @@ def test_threads_started_together_are_checked_as_they_run_interleaved(wait):
     def allocator() -> RestatedAllocation:
         return RestatedAllocation(scene_objects(6), CATALOGUE.skills, team=team, function_names=LIGHT_NAMES,
                                   bodies=restated_bodies(decomposition, LIGHT_NAMES),
-                                  world=WorldCheck(6, CATALOGUE.skills, len(team)))
+                                  world=WorldCheck(scene_objects(6), CATALOGUE.skills, len(team)))
 
     bodies = decomposition.replace("():", "(robot_list):").replace("Object('", "Object(robot_list[0], '") \
         .replace("Off('", "Off(robot_list[0], '").replace("On('", "On(robot_list[0], '")

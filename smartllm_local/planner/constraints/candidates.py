@@ -12,9 +12,9 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from ...scene import SceneObjects
 from ...skills import Skill
 from ..decoding.grammar import Node, Ref, alt, seq
-from ..prompting.scene_context import SceneObjects
 from .format import INDENT
 from .world_check import WorldCheck
 

@@ -25,7 +25,7 @@ from ...domain import Place, pooled
 from ...plan_language import Plan
 from ...plan_language.ir import Call, SkillCall
 from ...robots import Robot, team_skills
-from ..prompting.scene_context import SceneObjects
+from ...scene import SceneObjects
 
 MASS_TOLERANCE = 1e-6  # scene masses are float32
 SOME_CAMERA = 1e-3  # metres: a photograph needs a robot with some camera (how far it sees, the world check asks)

@@ -16,12 +16,12 @@ from functools import cache
 from itertools import count
 
 from ...goal_language import CONTAINMENT, OPPOSITES, STATE_WORDS, object_states, parse_goal_statement
+from ...scene import SceneObjects
 from ...scoring import Condition
 from ...world.object_types import RECEPTACLE_ONLY_ACCEPTS, SLICE_RESULTS, TYPE_PROPERTIES
 from ...world.scenes import load_scene
 from ..decoding.grammar import Node, Ref, alt, seq
 from ..decoding.protocol import Choose, Constraint, longest
-from ..prompting.scene_context import SceneObjects
 from .format import refusal_line
 
 MAX_GOALS = 8

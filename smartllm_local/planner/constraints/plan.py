@@ -35,13 +35,13 @@ import re
 from collections.abc import Sequence
 
 from ...robots import Robot
+from ...scene import SceneObjects
 from ...scoring import Condition
 from ...skills import Skill, SkillSet
 from ...world.object_types import base_type
 from ..decoding.grammar import Node, Ref, alt, chars, rep, seq
 from ..decoding.line_ends import COMMENT_NEXT, INDENTED_NEXT
 from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, Rewrite, longest
-from ..prompting.scene_context import SceneObjects
 from .budget import Budget
 from .candidates import Candidates
 from .feasibility import Step, WholeTeam, call_demand

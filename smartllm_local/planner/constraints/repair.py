@@ -60,8 +60,13 @@ class Repair:
 class Repairer:
     """Finds repairs for the calls of one decomposition (a dry run of the household world)."""
 
+    @staticmethod
+    def fits(world: WorldCheck) -> bool:
+        """Whether repair can plan in the world check's dry run (the AI2-THOR world's rules, its planning model)."""
+        return isinstance(world.run, DryRun)
+
     def __init__(self, world: WorldCheck, skills: SkillSet, time_limit: float = TIME_LIMIT):
-        if not isinstance(world.run, DryRun):
+        if not self.fits(world):
             raise ValueError("repair plans in the household world's dry run")
         self.run, self.skills, self.time_limit = world.run, skills, time_limit
 

@@ -24,10 +24,10 @@ from collections.abc import Sequence
 from dataclasses import replace
 
 from ...robots import Robot
+from ...scene import SceneObjects
 from ...skills import Skill, SkillSet
 from ..decoding.grammar import alt, seq
 from ..decoding.protocol import Choose, Forced
-from ..prompting.scene_context import SceneObjects
 from .candidates import acts_on
 from .feasibility import Step, call_demand, feasible_lists
 from .format import INDENT
@@ -68,11 +68,11 @@ class RestatedAllocation(PlanConstraint):
         super().__init__(scene, skills, function_names=function_names, world=world, allow_refusal=False,
                          together=together, **known)
         # Robot lists are checked with the team's own robots, in launch order.
-        self.team_world = WorldCheck(world.floor_plan, world.skills, robots=self.team, site=world.site) \
+        self.team_world = WorldCheck(world.scene, world.skills, robots=self.team) \
             if world is not None and self.team is not None else None
         # While bodies are written, the team's own robots run each finished body (with the first robot
         # list under which it succeeds), so a body is checked from the state its predecessors leave.
-        self.body_world = WorldCheck(world.floor_plan, world.skills, robots=self.team, site=world.site) \
+        self.body_world = WorldCheck(world.scene, world.skills, robots=self.team) \
             if self.team_world is not None else None
         self._bodies_run: set[str] = set()
         # The open block of threads: the team's dry run where it began, and its threads so far.

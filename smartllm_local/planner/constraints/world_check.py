@@ -9,8 +9,8 @@ and nothing another sub-task's robot holds); an allocation for one notional robo
 per ``robot_list`` slot (whether a robot has the skill and the strength is the
 team feasibility's question). Sub-tasks are checked in the order they are
 written; an allocation's threads started together, as the executor interleaves them (see
-docs/planner.md, "The world check"). A site domain's plan is tried on its site simulator the same way
-(:class:`~smartllm_local.executor.site.SiteDryRun`).
+docs/planner.md, "The world check"). The dry run is the scene's world's (:meth:`.worlds.World.dry_run`): a
+site domain's plan is tried on its site simulator the same way.
 """
 
 from __future__ import annotations
@@ -18,10 +18,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from ...domain import Domain
-from ...executor.dry_run import DryRun, notional_robot
-from ...executor.site import SiteDryRun, notional_site_robot
 from ...robots import Robot
+from ...scene import SceneObjects
 from ...scoring import Condition, condition_holds, containment
 from ...skills import SkillSet
 
@@ -34,14 +32,10 @@ Thread = tuple[Sequence[Call | None], Sequence[int]]
 class WorldCheck:
     """A dry run of the scene with a team (notional robots unless given), and counts of what it decided."""
 
-    def __init__(self, floor_plan: int | str, skills: SkillSet, agents: int = 1,
-                 robots: Sequence[Robot] | None = None, site: Domain | None = None):
-        self.floor_plan, self.skills, self.site = floor_plan, skills, site
-        if site is not None:
-            team = list(robots) if robots else [notional_site_robot(site)] * max(1, agents)
-            self.run: DryRun | SiteDryRun = SiteDryRun(site, team)
-        else:
-            self.run = DryRun(floor_plan, list(robots) if robots else [notional_robot(skills)] * max(1, agents), skills)
+    def __init__(self, scene: SceneObjects, skills: SkillSet, agents: int = 1,
+                 robots: Sequence[Robot] | None = None):
+        self.scene, self.skills = scene, skills
+        self.run = scene.world.dry_run(scene.floor_plan, skills, robots, agents)
         self.tries = 0
         self.dead_ends = 0  # lines for which nothing that succeeds could be offered
 
@@ -54,8 +48,7 @@ class WorldCheck:
 
     def objects(self) -> list[Mapping[str, Any]]:
         """The dry run's objects now, as the scorer reads a final state."""
-        run = self.run
-        return list(run.objects if isinstance(run, DryRun) else run.world.objects)
+        return list(self.run.objects)
 
     def met(self, conditions: Sequence[Condition]) -> int:
         """How many of ``conditions`` hold in the dry run now."""

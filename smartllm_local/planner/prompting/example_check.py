@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from ...domain import Domain
 from ...errors import SmartLLMError
-from ...executor import run_plan
 from ...plan_language import parse_plan
 from ...scoring import parse_goals, score_execution
+from ...worlds import world_of
 from ..constraints.coalition import CoalitionConstraint
 from ..constraints.feasibility import function_needs
 from ..constraints.goal import GoalConstraint, goal_vocabulary
@@ -23,7 +23,6 @@ from ..decoding.protocol import REFUSAL_PREFIX
 from ..decoding.writer import accepts
 from .goal_prompt import GOAL_FOLDER, load_goal_examples
 from .prompts import STAGES, load_examples
-from .scene_context import scene_objects, site_objects
 
 
 def check_examples(domain: Domain) -> tuple[int, list[str]]:
@@ -40,20 +39,21 @@ def check_examples(domain: Domain) -> tuple[int, list[str]]:
         problems.append(f"{folder}/examples.json: no example for the {', '.join(missing)} stage(s)")
     skills = domain.catalogue.skills
     pickups = [s.name for s in skills.values() if s.action == "PickupObject"]
+    world = world_of(domain)
     for ex in examples:
         where = f"{folder}/decomposition/{ex.name}.py"
         try:
-            scene = scene_objects(ex.floor_plan) if domain.is_ai2thor else site_objects(domain)
+            scene = world.scene(ex.floor_plan)
             team = domain.catalogue.team(ex.robots)
             plan = parse_plan(ex.decomposition, form="decomposed", skills=skills, scene_types=scene.types, name=where)
         except SmartLLMError as exc:
             problems.append(f"{where}: {exc}")
             continue
-        world = WorldCheck(scene.floor_plan, skills, 8, site=scene.site)
+        check = WorldCheck(scene, skills, 8)
         # A decomposition example is written for its team; a coalition example's decomposition is only what
         # its coalition weighs (the infeasible one's calls a skill the team lacks).
         for_team = team if "decomposition" in ex.stages else None
-        if not accepts(PlanConstraint(scene, skills, world=world, for_team=for_team), ex.decomposition):
+        if not accepts(PlanConstraint(scene, skills, world=check, for_team=for_team), ex.decomposition):
             problems.append(f"{where}: not in the decomposition grammar for its team (a skill no robot of the team "
                             "has, a step that fails on the site, a comment too long, a bare move that ends nothing?)")
         names = [f.name for f in plan.functions]
@@ -68,13 +68,13 @@ def check_examples(domain: Domain) -> tuple[int, list[str]]:
             where = f"{folder}/allocation/{ex.name}.py"
             restated = RestatedAllocation(scene, skills, team=team, function_names=names,
                                           bodies=restated_bodies(ex.decomposition, names),
-                                          world=WorldCheck(scene.floor_plan, skills, len(team), site=scene.site))
+                                          world=WorldCheck(scene, skills, len(team)))
             if not accepts(restated, ex.allocation):
                 problems.append(f"{where}: not in the allocation grammar (its steps and comments must be the "
                                 "decomposition's, with robots that can do them)")
                 continue
             allocated = parse_plan(ex.allocation, form="allocated", skills=skills, team_size=len(team), name=where)
-            scores = score_execution(run_plan(allocated, ex.floor_plan, team, skills=skills, site=scene.site),
+            scores = score_execution(world.run(allocated, ex.floor_plan, team, skills=skills),
                                      parse_goals(list(ex.goals), states=domain.states), trans=ex.trans,
                                      max_trans=ex.max_trans)
             if scores.SR != 1.0:
@@ -93,10 +93,11 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
     except SmartLLMError as exc:
         return 0, [str(exc)]
     problems = []
+    world = world_of(domain)
     for ex in examples:
         where = f"{folder}/{ex.name}.txt"
         try:
-            scene = scene_objects(ex.floor_plan) if domain.is_ai2thor else site_objects(domain)
+            scene = world.scene(ex.floor_plan)
         except SmartLLMError as exc:
             problems.append(f"{where}: {exc}")
             continue

@@ -15,9 +15,9 @@ from pathlib import Path
 
 from ...errors import UserError
 from ...goal_language import STATE_WORDS
+from ...scene import SceneObjects
 from ..constraints.goal import goal_vocabulary
 from .prompts import Prompt
-from .scene_context import SceneObjects, scene_objects
 
 GOAL_FOLDER = "goal"
 
@@ -71,7 +71,7 @@ def goal_prompt(instruction: str, scene: SceneObjects, examples: Sequence[GoalEx
     """The prompt in parts, as the decomposition's: examples, the scene's objects, the task's own words."""
     parts = [goal_intro(states, scene.site is not None)]
     for k, ex in enumerate(examples, start=1):
-        seen = scene if scene.site is not None else scene_objects(ex.floor_plan)
+        seen = scene.world.scene(ex.floor_plan)
         parts.append(f"\n# Example {k}\nobjects = {names_list(seen)}\n# Task Description: {ex.instruction}\n"
                      f"# Goal:\n{ex.statement.rstrip()}\n")
     return Prompt(("".join(parts) + "\n# Your", f" task\nobjects = {names_list(scene)}\n# Task",

@@ -30,9 +30,9 @@ from typing import Any
 from ...domain import load_domain
 from ...errors import UserError
 from ...robots import Catalogue, Robot
+from ...scene import SceneObjects
 from ...skills import SkillSet
 from ..constraints.coalition import LINE as COALITION_LINE
-from .scene_context import SceneObjects, scene_objects
 
 STAGES = ("decomposition", "coalition", "allocation")
 DEFAULT_EXAMPLE_COUNTS = {"decomposition": 5, "coalition": 5, "allocation": 4}
@@ -184,8 +184,8 @@ def robots_list(team: Sequence[Robot], plan: str) -> str:
 
 
 def _example_scene(example: Example, scene: SceneObjects) -> SceneObjects:
-    """The scene an example was written for: a site domain's examples are on its one site."""
-    return scene if scene.site is not None else scene_objects(example.floor_plan)
+    """The scene an example was written for, in the task's world (a site domain's are all on its one site)."""
+    return scene.world.scene(example.floor_plan)
 
 
 # --------------------------------------------------------------------- stages

@@ -1,0 +1,252 @@
+"""The world a plan runs in: the one interface each kind of world implements, and the two built in.
+
+A domain names its kind of world (``world = "ai2thor"`` in domain.toml, or a site's tables) and
+:func:`world_of` gives the :class:`World` for it. Everything above the executor (the planner, the
+benchmark, the commands) asks the world, never which kind it is: the scene a prompt and a grammar see,
+running a plan, the dry run the constraints try lines on, what the scorer reads, and which goals a team
+can never meet. A new kind of world is a class with :class:`World`'s members, named in :data:`WORLDS`;
+:func:`check_world` says which member it lacks (the tests run it on every kind).
+
+- :class:`Ai2ThorWorld`: AI2-THOR's floor plans, run through the real ``ai2thor`` Controller.
+- :class:`SimulatedSite`: a site domain's 2-D site, run on its simulator (:mod:`.executor.site`).
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, Protocol
+
+from .domain import AI2THOR, ARGUMENT_TYPES, Domain, load_domain
+from .executor import Execution, reach, run_plan, run_site_plan, site
+from .executor.dry_run import DryRun, notional_robot
+from .executor.scheduler import execute
+from .executor.site import SiteDryRun, notional_site_robot
+from .executor.team_actions import Outcome
+from .plan_language import Plan
+from .robots import Robot
+from .scene import AFFORDANCE_NAMES, SceneObjects
+from .scoring import Goal
+from .skills import SkillSet, has_affordance
+from .world.controller import open_controller
+from .world.object_types import SLICE_RESULTS, TYPE_PROPERTIES
+from .world.scenes import floor_plan_name, load_scene
+
+
+class Trial(Protocol):
+    """A world that can branch, for the planner's world check: a call tried (and undone) or applied."""
+
+    def succeeds(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> Outcome: ...
+    def apply(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> Outcome: ...
+    def snapshot(self) -> Any: ...
+    def restore(self, saved: Any) -> None: ...
+
+    @property
+    def objects(self) -> Sequence[Mapping[str, Any]]:
+        """The objects now, as the scorer reads a final state."""
+
+
+class World(Protocol):
+    """The world a domain's plans run in. ``floor_plan`` is the task's (a world of one place ignores it)."""
+
+    kind: str  # the domain file's world: ai2thor or site
+
+    def scene(self, floor_plan: int | str) -> SceneObjects:
+        """What the planner knows of where a task happens: the objects a prompt lists and a grammar admits."""
+
+    def examples_dir(self) -> Path:
+        """The worked examples the planner's prompts show (written on this world's scenes)."""
+
+    def open(self, floor_plan: int | str, agents: int, build: str | None) -> Any:
+        """A Controller that :meth:`run` may reuse from one task to the next (the caller stops it), or None
+        where runs need none."""
+
+    def run(self, plan: Plan, floor_plan: int | str, team: Sequence[Robot], *, skills: SkillSet,
+            controller: Any = None, build: str | None = None) -> Execution:
+        """Run an allocated plan with ``team``; the scorer reads the :class:`Execution` (its final objects)."""
+
+    def run_in_process(self, plan: Plan, floor_plan: int | str, team: Sequence[Robot],
+                       skills: SkillSet) -> Execution:
+        """:meth:`run` with nothing outside the process, call for call the same (to judge a run afterwards)."""
+
+    def dry_run(self, floor_plan: int | str, skills: SkillSet, robots: Sequence[Robot] | None = None,
+                agents: int = 1) -> Trial:
+        """The world check's dry run, with ``robots``, or else ``agents`` notional robots that have every skill."""
+
+    def plan_types(self, floor_plan: int | str) -> set[str] | None:
+        """The object names a plan read from a file must use, checked before it runs (None: the run judges
+        them, as AI2-THOR resolves a type to an instance)."""
+
+    def unattainable(self, goals: Sequence[Goal], team: Sequence[Robot], skills: SkillSet,
+                     floor_plan: int | str) -> list[str]:
+        """The goal conditions no plan of ``team`` can meet here, each with why (what a planner may refuse on)."""
+
+
+class Ai2ThorWorld:
+    """AI2-THOR's floor plans: scenes from AI2-THOR's object metadata, plans run on the ai2thor Controller."""
+
+    kind = AI2THOR
+
+    def scene(self, floor_plan: int | str) -> SceneObjects:
+        """The object types of the floor plan, grouped by affordance. Pieces that only exist after slicing
+        (``TomatoSliced``) are included for every sliceable type: a plan may slice, then handle the pieces."""
+        name = floor_plan_name(floor_plan)
+        masses: dict[str, float] = {}
+        flags: dict[str, set[str]] = {}
+        for obj in load_scene(name):
+            kind = obj["objectType"]
+            masses[kind] = round(max(masses.get(kind, 0.0), float(obj.get("mass") or 0.0)), 3)
+            flags.setdefault(kind, set()).update(a for a in AFFORDANCE_NAMES if has_affordance(obj, a))
+        for kind in list(masses):
+            if kind in SLICE_RESULTS:
+                piece, count = SLICE_RESULTS[kind]
+                masses[piece] = round(masses[kind] / count, 3)
+                flags[piece] = {a for a in AFFORDANCE_NAMES
+                                if has_affordance({p: True for p in TYPE_PROPERTIES[piece]}, a)}
+        by_affordance = {"": tuple(sorted(masses))}
+        for affordance in AFFORDANCE_NAMES:
+            by_affordance[affordance] = tuple(sorted(t for t, f in flags.items() if affordance in f))
+        return SceneObjects(floor_plan=name, masses=masses, by_affordance=by_affordance, world=self)
+
+    def examples_dir(self) -> Path:
+        """Household's: every AI2-THOR domain's prompts show household's examples."""
+        return load_domain().prompts_dir()
+
+    def open(self, floor_plan: int | str, agents: int, build: str | None) -> Any:
+        return open_controller(floor_plan, agent_count=agents, build=build)
+
+    def run(self, plan: Plan, floor_plan: int | str, team: Sequence[Robot], *, skills: SkillSet,
+            controller: Any = None, build: str | None = None) -> Execution:
+        return run_plan(plan, floor_plan, team, controller=controller, build=build, skills=skills)
+
+    def run_in_process(self, plan: Plan, floor_plan: int | str, team: Sequence[Robot],
+                       skills: SkillSet) -> Execution:
+        """On the dry run's world (in which a call does what it does through a Controller)."""
+        return execute(plan, DryRun(floor_plan, team, skills).controller, team, skills=skills)
+
+    def dry_run(self, floor_plan: int | str, skills: SkillSet, robots: Sequence[Robot] | None = None,
+                agents: int = 1) -> DryRun:
+        return DryRun(floor_plan, list(robots) if robots else [notional_robot(skills)] * max(1, agents), skills)
+
+    def plan_types(self, floor_plan: int | str) -> set[str] | None:
+        return None
+
+    def unattainable(self, goals: Sequence[Goal], team: Sequence[Robot], skills: SkillSet,
+                     floor_plan: int | str) -> list[str]:
+        """What the team's skills cannot bring about from the scene's initial state (:mod:`.executor.reach`)."""
+        conditions = list(dict.fromkeys(c for g in goals for c in g.conditions()))
+        return reach.unattainable(conditions, team, skills, load_scene(floor_plan_name(floor_plan)))
+
+
+class SimulatedSite:
+    """A site domain's one 2-D site: its entries are the objects, plans run on its simulator in process."""
+
+    kind = "site"
+
+    def __init__(self, domain: Domain):
+        self.domain = domain
+
+    def scene(self, floor_plan: int | str) -> SceneObjects:
+        """The site's entries, grouped by the argument type each can fill (``place``: any entry); nothing is
+        lifted, so every mass is 0. Every task is on the one site."""
+        domain = self.domain
+        by_type = {kind: tuple(sorted(p.name for p in domain.places.values() if kind in ("place", p.kind)))
+                   for kind in ARGUMENT_TYPES}
+        return SceneObjects(floor_plan=domain.site, masses={name: 0.0 for name in domain.places},
+                            by_affordance={"": by_type["place"], **by_type}, world=self, site=domain)
+
+    def examples_dir(self) -> Path:
+        return self.domain.prompts_dir()
+
+    def open(self, floor_plan: int | str, agents: int, build: str | None) -> Any:
+        return None
+
+    def run(self, plan: Plan, floor_plan: int | str, team: Sequence[Robot], *, skills: SkillSet,
+            controller: Any = None, build: str | None = None) -> Execution:
+        """On the site simulator, with the domain's own skills (``skills``, ``controller`` and ``build`` are
+        AI2-THOR's)."""
+        return run_site_plan(plan, self.domain, team)
+
+    def run_in_process(self, plan: Plan, floor_plan: int | str, team: Sequence[Robot],
+                       skills: SkillSet) -> Execution:
+        return run_site_plan(plan, self.domain, team)
+
+    def dry_run(self, floor_plan: int | str, skills: SkillSet, robots: Sequence[Robot] | None = None,
+                agents: int = 1) -> SiteDryRun:
+        return SiteDryRun(self.domain, list(robots) if robots else [notional_site_robot(self.domain)] * max(1, agents))
+
+    def plan_types(self, floor_plan: int | str) -> set[str] | None:
+        return set(self.domain.places)
+
+    def unattainable(self, goals: Sequence[Goal], team: Sequence[Robot], skills: SkillSet,
+                     floor_plan: int | str) -> list[str]:
+        return site.unattainable(self.domain, goals, team)
+
+
+def scene_objects(floor_plan: int | str) -> SceneObjects:
+    """An AI2-THOR floor plan's scene (:meth:`Ai2ThorWorld.scene`), for callers that only know AI2-THOR."""
+    return Ai2ThorWorld().scene(floor_plan)
+
+
+#: Each kind of world (a domain's ``world``), and how a domain's world of that kind is made.
+WORLDS: dict[str, Callable[[Domain], World]] = {
+    AI2THOR: lambda domain: Ai2ThorWorld(),
+    "site": SimulatedSite,
+}
+
+#: The members a world has, each with the arguments it is called with (positional names, then keywords).
+MEMBERS: dict[str, tuple[str, ...] | None] = {
+    "kind": None,
+    "scene": ("floor_plan",),
+    "examples_dir": (),
+    "open": ("floor_plan", "agents", "build"),
+    "run": ("plan", "floor_plan", "team", "*skills", "*controller", "*build"),
+    "run_in_process": ("plan", "floor_plan", "team", "skills"),
+    "dry_run": ("floor_plan", "skills", "robots", "agents"),
+    "plan_types": ("floor_plan",),
+    "unattainable": ("goals", "team", "skills", "floor_plan"),
+}
+
+
+def check_world(world: Any) -> World:
+    """``world`` itself if it has every member of :class:`World`, taking the arguments it is called with.
+
+    Raises:
+        TypeError: a member is missing, is not a method, or does not take those arguments (says which).
+    """
+    name = type(world).__name__
+    problems = []
+    for member, arguments in MEMBERS.items():
+        value = getattr(world, member, None)
+        if value is None:
+            problems.append(f"it has no {member}")
+        elif arguments is None:
+            if not isinstance(value, str) or not value:
+                problems.append(f"{member} must be a name (a str), not {value!r}")
+        elif not callable(value):
+            problems.append(f"{member} must be a method")
+        else:
+            args = [a for a in arguments if not a.startswith("*")]
+            kwargs = {a[1:]: None for a in arguments if a.startswith("*")}
+            try:
+                inspect.signature(value).bind(*args, **kwargs)
+            except TypeError as exc:
+                problems.append(f"{member} must take ({', '.join(a.lstrip('*') for a in arguments)}): {exc}")
+    if problems:
+        raise TypeError(f"{name} is not a World: {'; '.join(problems)}. A kind of world implements every member "
+                        "of smartllm_local.worlds.World (see docs/architecture.md, \"Kinds of world\").")
+    return world
+
+
+def world_of(domain: Domain) -> World:
+    """The world the domain's plans run in.
+
+    Raises:
+        TypeError: no kind of world is named ``domain.world`` (the domain file's check only lets known kinds by).
+    """
+    make = WORLDS.get(domain.world)
+    if make is None:
+        raise TypeError(f"the {domain.name} domain's world is {domain.world!r}, which no kind of world in "
+                        f"smartllm_local.worlds.WORLDS implements ({', '.join(WORLDS)})")
+    return check_world(make(domain))
