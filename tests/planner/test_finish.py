@@ -116,3 +116,37 @@ def test_the_planners_steps_name_slices_by_their_type():
     decomposer = _decomposer(6, [Condition("Pan", item="TomatoSliced")])
     text = run_constraint(decomposer, _scripted(SLICE_BREAD), len, 3000)
     assert "PutObject('TomatoSliced', 'Pan')" in text and "|" not in text, text
+
+
+def test_searches_from_threads_never_overlap(monkeypatch):
+    """Candidates are written in threads, each repairing, and Unified Planning's environment is one per process:
+    the searches of several threads run one at a time (a KeyError inside Unified Planning, seen once with four
+    candidates, came of two at once)."""
+    import threading
+    import time
+
+    from smartllm_local.planner.classical import search as module
+
+    real, inside, most = module.search, [0], [0]
+
+    def counted(task, limit):
+        inside[0] += 1
+        most[0] = max(most[0], inside[0])
+        time.sleep(0.05)
+        try:
+            return real(task, limit)
+        finally:
+            inside[0] -= 1
+
+    monkeypatch.setattr(module, "search", counted)
+
+    def work():
+        world = WorldCheck(scene_objects(6), SKILLS, MAX_SUBTASKS)
+        assert Repairer(world, SKILLS).meet(0, GOALS, 12) is not None
+
+    threads = [threading.Thread(target=work) for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert most[0] == 1

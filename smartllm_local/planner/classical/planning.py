@@ -19,7 +19,7 @@ from ...scoring import Condition
 from ...skills import SkillSet
 from ..stages import StageRecord
 from .problem import PlanningTask, Unreachable, planning_task
-from .search import SEARCH, Search, search
+from .search import SEARCH, UP_LOCK, Search, search
 from .site import goals_of, site_planning_task
 from .threads import parts, plan_text, robot_parts, spread
 
@@ -34,17 +34,18 @@ def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: S
     started = time.perf_counter()
     record = StageRecord(STAGE)
     dry = DryRun(floor_plan, team, skills) if site is None else None
-    try:
-        if site is not None:
-            task = site_planning_task(site, team, conditions, name=_problem_name(name))
-        else:
-            assert dry is not None
-            task = planning_task(dry, team, skills, conditions, name=_problem_name(name))
-    except Unreachable as exc:
-        _refuse(record, f"the planner found no plan: {exc}")
-        record.seconds = time.perf_counter() - started
-        return record
-    found = search(task, time_limit)
+    with UP_LOCK:
+        try:
+            if site is not None:
+                task = site_planning_task(site, team, conditions, name=_problem_name(name))
+            else:
+                assert dry is not None
+                task = planning_task(dry, team, skills, conditions, name=_problem_name(name))
+        except Unreachable as exc:
+            _refuse(record, f"the planner found no plan: {exc}")
+            record.seconds = time.perf_counter() - started
+            return record
+        found = search(task, time_limit)
     record.prompt = (f";; domain.pddl\n{found.domain_pddl}\n;; problem.pddl\n{found.problem_pddl}")
     record.raw = found.log + _plan_log(found)
     if found.timed_out:

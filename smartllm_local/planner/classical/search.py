@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import io
 import tempfile
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,11 @@ from .problem import PlanningTask
 SEARCH = "astar(hmax())"
 up.get_environment().credits_stream = None  # the engines' banners are not the planner's log
 
+
+#: Unified Planning keeps one environment for the process (its expression manager), which is not safe to use from
+#: several threads at once (candidates are written in threads, each repairing): a problem is built and solved
+#: holding this lock.
+UP_LOCK = threading.RLock()
 
 class _FastDownward(FastDownwardPDDLPlanner):
     """Fast Downward with its intermediate file in a folder of its own: by default its translator writes

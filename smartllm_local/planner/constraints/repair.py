@@ -106,18 +106,19 @@ class Repairer:
         """Fast Downward's shortest plan for ``member`` from the dry run's state now, as a plan writes it."""
         # Unified Planning takes most of a second to import: it loads with the first repair sought, not every plan
         from ..classical.problem import Unreachable, planning_task, with_future_pieces
-        from ..classical.search import search
+        from ..classical.search import UP_LOCK, search
 
         started = time.perf_counter()
         robot = self.run.team[member]
         if skills is not None:
             robot = replace(robot, skills=robot.skills & skills)
-        try:
-            task = planning_task(self.run, [robot], self.skills, goals, name="repair", members=[member],
-                                 hands_free=hands_free)
-        except Unreachable:
-            return None
-        found = search(task, self.time_limit)
+        with UP_LOCK:
+            try:
+                task = planning_task(self.run, [robot], self.skills, goals, name="repair", members=[member],
+                                     hands_free=hands_free)
+            except Unreachable:
+                return None
+            found = search(task, self.time_limit)
         seconds = round(time.perf_counter() - started, 3)
         if not found.found or not found.steps:
             return None
