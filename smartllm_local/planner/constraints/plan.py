@@ -444,9 +444,8 @@ class PlanConstraint(Orchestration, Constraint):
             pass
         elif kind == "rewrite":
             self.rewriting = False
-            gotos = {s.name for s in self.candidates.gotos}
             for line in piece.splitlines(keepends=True):
-                self._step_written("goto" if line.strip().split("(")[0] in gotos else "action", line)
+                self._step_written(self._call_kind(line), line)
         elif kind == "refusal":
             self.phase = "done"
         elif kind == "summary":
@@ -506,17 +505,20 @@ class PlanConstraint(Orchestration, Constraint):
 
     def _finished(self, piece: str) -> None:
         """The planner's last sub-task was written: its steps applied in the dry run, its call made."""
-        gotos = {s.name for s in self.candidates.gotos}
         for line in piece.splitlines(keepends=True):
             if line.startswith("def "):
                 self.functions.append(WrittenFunction(line[4:line.index("(")]))
             elif line.lstrip().startswith("#"):
                 self._step_written("comment", line)
             elif line.startswith(INDENT):
-                self._step_written("goto" if line.strip().split("(")[0] in gotos else "action", line)
+                self._step_written(self._call_kind(line), line)
             elif line.strip():
                 self.launched.append(line.split("(", 1)[0])
         self.phase = "done"
+
+    def _call_kind(self, line: str) -> str:
+        """Whether a call line the planner wrote is a go-to or an action."""
+        return "goto" if line.strip().split("(")[0] in {s.name for s in self.candidates.gotos} else "action"
 
     def _step_written(self, kind: str, piece: str) -> None:
         fn = self.functions[-1]
