@@ -41,13 +41,21 @@ pack() {
     find "$vendor/ggml/src" -mindepth 1 -maxdepth 1 -type d -name 'ggml-*' ! -name ggml-cpu ! -name ggml-cuda \
         -exec rm -rf {} +
     tar -czf "$GPU/llama-cpp-python-src.tar.gz" -C "$tmp" "llama_cpp_python-$LLAMA_CPP_PYTHON"
-    # Python 3.12 wheels of what the build and the project import and such a machine lacks (numpy, typer, rich,
-    # jinja2, matplotlib and msgpack it has), each without its own needs: all of them are listed.
+    # Python 3.12 wheels of what the build and the project import and such a machine lacks (numpy, scipy, typer,
+    # rich, jinja2, matplotlib, msgpack, networkx and pyparsing it has), each without its own needs: all are listed.
     "$PY" -m pip download --quiet --no-deps --only-binary :all: --python-version 3.12 \
         --platform manylinux2014_x86_64 --platform manylinux_2_17_x86_64 --platform any -d "$GPU/wheels" \
         scikit-build-core pathspec diskcache gguf pyyaml tqdm ai2thor==5.0.0 procthor==0.0.1.dev2 botocore \
         aws-requests-auth blinker flask itsdangerous jmespath jsonschema jsonschema-specifications referencing \
-        rpds-py progressbar2 python-utils python-xlib urllib3 python-dateutil werkzeug
+        rpds-py progressbar2 python-utils python-xlib urllib3 python-dateutil werkzeug \
+        unified-planning fast-downward.translate ConfigSpace more-itertools
+    # Fast Downward's wheel (61 MB) is its search binary with debugging symbols: stripped, it packs to 2 MB.
+    "$PY" -m pip download --quiet --no-deps --only-binary :all: --python-version 3.12 \
+        --platform manylinux_2_28_x86_64 -d "$tmp" up-fast-downward==1.0.0
+    "$PY" -m pip install --quiet --target "$tmp/tools" wheel
+    PYTHONPATH=$tmp/tools "$PY" -m wheel unpack "$tmp"/up_fast_downward-*.whl -d "$tmp/fd"
+    strip "$tmp"/fd/up_fast_downward-*/up_fast_downward/downward/builds/release/bin/downward
+    PYTHONPATH=$tmp/tools "$PY" -m wheel pack "$tmp"/fd/up_fast_downward-* -d "$GPU/wheels"
     rm -rf "$tmp"
     du -sh "$GPU"
 }
@@ -122,7 +130,7 @@ wait_for() {  # a model file the writer in the background is writing
 # Tasks per minute with K tasks planned at once: the benchmark run on one shape for each K, each from a new
 # process and the same prefix store (the shape's plan of kitchen-01 filled it), its wall time in parallel-K.wall.
 parallel_runs() {
-    local model=$1 layers=$2 work=$3 states=$4 deadline=$5 k began
+    local model=$1 layers=$2 work=$3 states=$4 deadline=$5 k began rc
     local -a tasks=()
     for k in ${GPU_CHECK_TASKS:-}; do tasks+=(--task "$k"); done
     for k in $PARALLEL; do
@@ -130,12 +138,15 @@ parallel_runs() {
             echo "the benchmark run with --parallel $k left out: $SECONDS s of $deadline gone"
             continue
         fi
-        began=$SECONDS
-        if "$PY" -m smartllm_local benchmark run --model "$model" --n-ctx 4096 --n-gpu-layers "$layers" \
-            --prefix-cache "$states" --parallel "$k" "${tasks[@]}" --out "$work/parallel-$k" \
-            >"$work/parallel-$k.log" 2>&1; then
-            echo "$((SECONDS - began))" >"$work/parallel-$k.wall"
-        else
+        began=$SECONDS rc=0
+        # Bounded by the time left, so the tables are printed: a run cut short counts the tasks it scored.
+        timeout "$((deadline - 20 - SECONDS))" "$PY" -m smartllm_local benchmark run --model "$model" --n-ctx 4096 \
+            --n-gpu-layers "$layers" --prefix-cache "$states" --parallel "$k" "${tasks[@]}" \
+            --out "$work/parallel-$k" >"$work/parallel-$k.log" 2>&1 || rc=$?
+        echo "$((SECONDS - began))" >"$work/parallel-$k.wall"
+        if [[ $rc == 124 ]]; then
+            echo "the benchmark run with --parallel $k cut at $((SECONDS - began)) s: the tasks it scored are counted"
+        elif [[ $rc != 0 ]]; then
             echo "the benchmark run with --parallel $k failed:"; tail -5 "$work/parallel-$k.log"
         fi
     done

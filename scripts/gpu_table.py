@@ -48,7 +48,8 @@ def parallel_rows(work: Path) -> list[str]:
     runs = sorted(work.glob("parallel-*.wall"), key=lambda path: int(path.stem.split("-")[1]))
     for wall_file in runs:
         k = wall_file.stem.split("-")[1]
-        lines = [json.loads(line) for line in (work / f"parallel-{k}" / "results.jsonl").read_text().splitlines()]
+        results = work / f"parallel-{k}" / "results.jsonl"  # absent where a run failed or was cut before a task
+        lines = [json.loads(line) for line in results.read_text().splitlines()] if results.is_file() else []
         wall = int(wall_file.read_text().strip())
         rate = 60 * len(lines) / wall if wall else float("inf")
         errors = sum("error" in line for line in lines)

@@ -80,6 +80,17 @@ def test_the_matcher_follows_text_and_knows_what_is_forced():
     assert optional.accepting and optional.forced() == ""
 
 
+def test_matchers_of_one_grammar_walk_it_apart():
+    """Matchers of one grammar share its automaton (built once) but not where they stand in it."""
+    from smartllm_local.planner.decoding.matcher import Matcher
+
+    g = Grammar({"root": seq("Go(", alt("'Apple'", "'Fridge'"), ")\n")})
+    first, second = Matcher(g), Matcher(g)
+    assert first.advance("Go('Fri") and not second.advance("Go('B")
+    assert second.forced() == "Go('" and first.forced() == "dge')\n"
+    assert second.advance("Go('Apple')\n") and second.accepting and not first.accepting
+
+
 # A grammar with every kind of node: literals, classes, references, nullable items in sequences, nested and
 # bounded repetitions, alternatives that share their starts.
 _WORDS = Grammar({

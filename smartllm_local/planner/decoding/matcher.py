@@ -5,30 +5,28 @@ time)."""
 from __future__ import annotations
 
 from collections import deque
+from weakref import WeakKeyDictionary
 
 from .grammar import Alt, Chars, Grammar, Lit, Node, Ref, Seq
 
 FREE_TEXT_CHARS = 20  # a run of more kinds of character than this is free text (not digits, not a name's first letter)
 
 
-class Matcher:
-    """Follows text through a grammar, character by character, and says what must come next.
+class _Automaton:
+    """A Thompson automaton of a (finite) grammar: states, their edges, the free-text states, the end.
 
-    A Thompson automaton of the (finite) grammar: backends use it to write the
-    characters a grammar forces (``robots[`` after ``SwitchOn(``...) in one
-    batch instead of sampling them one token at a time.
-    """
+    Built once per grammar (a stage asks about one line's grammar several times, and lanes share them)."""
 
     def __init__(self, grammar: Grammar):
-        self._edges: list[list[tuple[frozenset[str] | None, int]]] = []  # state -> (chars or epsilon, target)
-        self._free: set[int] = set()  # the states of free text (a run of any of many characters)
-        start, self._accept = self._build(grammar.rules["root"], grammar.rules)
+        self.edges: list[list[tuple[frozenset[str] | None, int]]] = []  # state -> (chars or epsilon, target)
+        self.free: set[int] = set()  # the states of free text (a run of any of many characters)
+        start, self.accept = self._build(grammar.rules["root"], grammar.rules)
+        self.start = self.closure({start})
         self._distance: list[float] | None = None
-        self._states = self._closure({start})
 
     def _state(self) -> int:
-        self._edges.append([])
-        return len(self._edges) - 1
+        self.edges.append([])
+        return len(self.edges) - 1
 
     def _build(self, node: Node, rules: dict[str, Node]) -> tuple[int, int]:
         if isinstance(node, Ref):
@@ -38,92 +36,63 @@ class Matcher:
             current = start
             for c in node.text:
                 nxt = self._state()
-                self._edges[current].append((frozenset(c), nxt))
+                self.edges[current].append((frozenset(c), nxt))
                 current = nxt
             return start, current
         if isinstance(node, Chars):
             end = self._state()
-            self._edges[start].append((node.chars, end))
+            self.edges[start].append((node.chars, end))
             return start, end
         if isinstance(node, Seq):
             current = start
             for item in node.items:
                 s, e = self._build(item, rules)
-                self._edges[current].append((None, s))
+                self.edges[current].append((None, s))
                 current = e
             return start, current
         if isinstance(node, Alt):
             end = self._state()
             for option in node.options:
                 s, e = self._build(option, rules)
-                self._edges[start].append((None, s))
-                self._edges[e].append((None, end))
+                self.edges[start].append((None, s))
+                self.edges[e].append((None, end))
             return start, end
         first = start
         end = self._state()
         current = start
         for k in range(node.max):
             if k >= node.min:
-                self._edges[current].append((None, end))
+                self.edges[current].append((None, end))
             s, e = self._build(node.item, rules)
-            self._edges[current].append((None, s))
+            self.edges[current].append((None, s))
             current = e
-        self._edges[current].append((None, end))
+        self.edges[current].append((None, end))
         if isinstance(node.item, Chars) and len(node.item.chars) > FREE_TEXT_CHARS:
-            self._free.update(range(first, len(self._edges)))
+            self.free.update(range(first, len(self.edges)))
         return start, end
 
-    def _closure(self, states: set[int]) -> frozenset[int]:
+    def closure(self, states: set[int]) -> frozenset[int]:
         stack, seen = list(states), set(states)
         while stack:
-            for label, target in self._edges[stack.pop()]:
+            for label, target in self.edges[stack.pop()]:
                 if label is None and target not in seen:
                     seen.add(target)
                     stack.append(target)
         return frozenset(seen)
 
-    def _step(self, states: frozenset[int], c: str) -> frozenset[int]:
-        return self._closure({t for s in states for label, t in self._edges[s] if label is not None and c in label})
+    def step(self, states: frozenset[int], c: str) -> frozenset[int]:
+        return self.closure({t for s in states for label, t in self.edges[s] if label is not None and c in label})
 
-    def advance(self, text: str) -> bool:
-        """Consume ``text``; False (and no change) if the grammar does not allow it."""
-        states = self._states
-        for c in text:
-            states = self._step(states, c)
-            if not states:
-                return False
-        self._states = states
-        return True
-
-    @property
-    def accepting(self) -> bool:
-        return self._accept in self._states
-
-    def shortest_way(self) -> str:
-        """How free text that has run on long enough ends soonest: the characters every shortest way from
-        here to the end of the text begins with, until they leave the free text or come to a choice."""
-        distance = self._distances()
-        out: list[str] = []
-        states = self._states
-        while states & self._free and (nearest := min(distance[s] for s in states)) > 0:
-            c = _only_char({label for s in states if distance[s] == nearest
-                            for label, t in self._edges[s] if label is not None and distance[t] == nearest - 1})
-            if c is None:
-                break
-            out.append(c)
-            states = self._step(states, c)
-        return "".join(out)
-
-    def _distances(self) -> list[float]:
+    def distances(self) -> list[float]:
         """Each state's fewest characters to the end of the text (0-1 breadth-first, backwards)."""
         if self._distance is None:
-            into: list[list[tuple[bool, int]]] = [[] for _ in self._edges]
-            for s, edges in enumerate(self._edges):
+            into: list[list[tuple[bool, int]]] = [[] for _ in self.edges]
+            for s, edges in enumerate(self.edges):
                 for label, t in edges:
                     into[t].append((label is not None, s))
-            distance = [float("inf")] * len(self._edges)
-            distance[self._accept] = 0
-            queue = deque([self._accept])
+            distance = [float("inf")] * len(self.edges)
+            distance[self.accept] = 0
+            queue = deque([self.accept])
             while queue:
                 t = queue.popleft()
                 for step, s in into[t]:
@@ -133,16 +102,69 @@ class Matcher:
             self._distance = distance
         return self._distance
 
-    def forced(self) -> str:
-        """The characters that must come next, up to the first choice (or the end)."""
+
+_AUTOMATA: WeakKeyDictionary[Grammar, _Automaton] = WeakKeyDictionary()
+
+
+def _automaton(grammar: Grammar) -> _Automaton:
+    automaton = _AUTOMATA.get(grammar)
+    if automaton is None:
+        automaton = _AUTOMATA[grammar] = _Automaton(grammar)
+    return automaton
+
+
+class Matcher:
+    """Follows text through a grammar, character by character, and says what must come next.
+
+    A walk through the grammar's automaton: backends use it to write the characters a grammar forces
+    (``robots[`` after ``SwitchOn(``...) in one batch instead of sampling them one token at a time.
+    """
+
+    def __init__(self, grammar: Grammar):
+        self._automaton = _automaton(grammar)
+        self._states = self._automaton.start
+
+    def advance(self, text: str) -> bool:
+        """Consume ``text``; False (and no change) if the grammar does not allow it."""
+        states = self._states
+        for c in text:
+            states = self._automaton.step(states, c)
+            if not states:
+                return False
+        self._states = states
+        return True
+
+    @property
+    def accepting(self) -> bool:
+        return self._automaton.accept in self._states
+
+    def shortest_way(self) -> str:
+        """How free text that has run on long enough ends soonest: the characters every shortest way from
+        here to the end of the text begins with, until they leave the free text or come to a choice."""
+        automaton = self._automaton
+        distance = automaton.distances()
         out: list[str] = []
         states = self._states
-        while self._accept not in states:
-            c = _only_char({label for s in states for label, _ in self._edges[s] if label is not None})
+        while states & automaton.free and (nearest := min(distance[s] for s in states)) > 0:
+            c = _only_char({label for s in states if distance[s] == nearest
+                            for label, t in automaton.edges[s] if label is not None and distance[t] == nearest - 1})
             if c is None:
                 break
             out.append(c)
-            states = self._step(states, c)
+            states = automaton.step(states, c)
+        return "".join(out)
+
+    def forced(self) -> str:
+        """The characters that must come next, up to the first choice (or the end)."""
+        automaton = self._automaton
+        out: list[str] = []
+        states = self._states
+        while automaton.accept not in states:
+            c = _only_char({label for s in states for label, _ in automaton.edges[s] if label is not None})
+            if c is None:
+                break
+            out.append(c)
+            states = automaton.step(states, c)
         return "".join(out)
 
 
