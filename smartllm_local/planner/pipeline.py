@@ -39,6 +39,7 @@ from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
 from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
+from .idle_steps import drop_idle_steps
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -97,6 +98,7 @@ class PlannerConfig:
     repair: bool = True
     finish_goals: bool = True
     together: bool = True
+    drop_idle: bool = True
 
 
 @dataclass
@@ -190,6 +192,11 @@ class Planner:
                 result, scene, team, prompt, lane, k, self.progress if k == 0 else SILENT))
             record = self._choose(result, scene, records)  # type: ignore[arg-type]
             record.seconds = time.perf_counter() - started
+        if self.config.drop_idle and self.config.world_check and isinstance(record.plan, Plan) \
+                and not record.plan.is_refusal:
+            record.output, record.idle_steps = drop_idle_steps(record.output, scene, self.catalogue.skills)
+            if record.idle_steps:
+                record.plan = None  # parsed again below, from the text the coalition and the allocation read
         result.stages.append(record)
         self._finish_plan_stage(record, result, form="decomposed", scene=scene, parsed=record.plan)
         return record
