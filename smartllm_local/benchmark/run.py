@@ -73,7 +73,8 @@ class TaskOutcome:
                                         "choices": r.choices, "refused": r.refused, "logprob": round(r.logprob, 3),
                                         "completed_lines": r.completed_lines,
                                         **({"repairs": len(r.repairs), "unrepaired": r.unrepaired,
-                                            "ended_at_goals": r.ended_at_goals, "finished": r.finish is not None}
+                                            "ended_at_goals": r.ended_at_goals, "finished": r.finish is not None,
+                                            "idle_steps": len(r.idle_steps)}
                                            if r.stage == "decomposition" else {})}
                               for r in self.result.stages}
             if self.result.notices:

@@ -61,7 +61,7 @@ class ModelOptions:
                  candidates: int = DEFAULT_CANDIDATES, candidate_temperature: float = CANDIDATE_TEMPERATURE,
                  select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
                  no_repair: bool = False, no_finish_goals: bool = False,
-                 one_at_a_time: bool = False):
+                 one_at_a_time: bool = False, keep_idle_steps: bool = False):
         if backend not in BACKENDS:
             raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if not math.isfinite(temperature) or temperature < 0:
@@ -113,6 +113,7 @@ class ModelOptions:
             repair=not no_repair,
             finish_goals=not no_finish_goals,
             together=not one_at_a_time,
+            drop_idle=not keep_idle_steps,
         )
         self.seed = seed
 
@@ -240,6 +241,10 @@ _ONE_AT_A_TIME = typer.Option(False, "--one-at-a-time", help=(
     "Let the allocation call a sub-task on its own or start a block of threads where the next sub-task could "
     "still join it, rather than have every sub-task that can join the block being written join it (see "
     "docs/planner.md, \"Threads together\")."))
+_KEEP_IDLE_STEPS = typer.Option(False, "--keep-idle-steps", help=(
+    "Keep the decomposition's pairs of steps that undo each other in a sub-task with nothing changed (a fridge "
+    "opened and closed with nothing put in), rather than take them out before the teams are formed (see "
+    "docs/planner.md, \"Idle steps\")."))
 
 #: Every model option: its parameter name, type and typer option, in the order --help lists them.
 MODEL_PARAMETERS = [
@@ -258,7 +263,7 @@ MODEL_PARAMETERS = [
         ("candidate_temperature", float, _CANDIDATE_TEMPERATURE), ("select", str, _SELECT),
         ("goal_check", bool, _GOAL_CHECK), ("no_stop_at_goals", bool, _NO_STOP_AT_GOALS),
         ("no_repair", bool, _NO_REPAIR), ("no_finish_goals", bool, _NO_FINISH_GOALS),
-        ("one_at_a_time", bool, _ONE_AT_A_TIME),
+        ("one_at_a_time", bool, _ONE_AT_A_TIME), ("keep_idle_steps", bool, _KEEP_IDLE_STEPS),
     )
 ]
 

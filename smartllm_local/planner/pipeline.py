@@ -22,11 +22,13 @@ import numpy as np
 
 from ..errors import PlanError, UserError
 from ..files import json_text, write_atomic
+from ..goal_language import condition_line
 from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
 from ..scene import SceneObjects
 from ..skills import SkillSet
 from ..worlds import Ai2ThorWorld, World
+from .asked import as_goal, invented
 from .backends.base import Backend, Sampling
 from .candidates import Candidates, mean_logprob, write_all
 from .constraints.coalition import LINE as COALITION_LINE
@@ -39,6 +41,7 @@ from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
 from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
+from .idle_steps import drop_idle_steps
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -97,6 +100,7 @@ class PlannerConfig:
     repair: bool = True
     finish_goals: bool = True
     together: bool = True
+    drop_idle: bool = True
 
 
 @dataclass
@@ -190,6 +194,11 @@ class Planner:
                 result, scene, team, prompt, lane, k, self.progress if k == 0 else SILENT))
             record = self._choose(result, scene, records)  # type: ignore[arg-type]
             record.seconds = time.perf_counter() - started
+        if self.config.drop_idle and self.config.world_check and isinstance(record.plan, Plan) \
+                and not record.plan.is_refusal:
+            record.output, record.idle_steps = drop_idle_steps(record.output, scene, self.catalogue.skills)
+            if record.idle_steps:
+                record.plan = None  # parsed again below, from the text the coalition and the allocation read
         result.stages.append(record)
         self._finish_plan_stage(record, result, form="decomposed", scene=scene, parsed=record.plan)
         return record
@@ -391,15 +400,21 @@ class Planner:
         """The goal stage for a task, and the check of what it stated against the team: a stated condition no
         plan of this team can meet (a state no robot's skill gives, a closed fridge nobody can open, a load too
         heavy for every lifter together) refuses the task, with that reason. The model may not refuse here (it
-        refused feasible tasks for untrue reasons, measured): a task is refused for what the world shows."""
+        refused feasible tasks for untrue reasons, measured): a task is refused for what the world shows. A goal
+        out of reach that nobody asked for is dropped instead, where a goal asked for is left (:mod:`.asked`)."""
         stated = state_goals(self, result.instruction, scene.floor_plan, refusals=False)
         record = stated.record
         conditions = stated_conditions(result, scene, record)
         team = self.catalogue.team(result.robots)
-        problems = self.world.unattainable(stated.statement.goals, team, self.catalogue.skills,
-                                           scene.floor_plan) if conditions and stated.statement else []
-        if problems:
-            record.refusal, record.refused_by = "; ".join(problems), GOAL_CHECK
+        problems = {c: self.world.unattainable([as_goal(c)], team, self.catalogue.skills, scene.floor_plan)
+                    for c in conditions} if stated.statement else {}
+        dropped = invented(result.instruction, [c for c, why in problems.items() if why], conditions)
+        if dropped:
+            record.dropped_goals = [condition_line(c) for c in dropped]
+            record.output = "".join(line for line in record.output.splitlines(keepends=True)
+                                    if line.rstrip("\n") not in record.dropped_goals)
+        elif any(problems.values()):
+            record.refusal, record.refused_by = "; ".join(p for why in problems.values() for p in why), GOAL_CHECK
         if record.refusal is not None:
             result.refusal = record.refusal
         result.stages.append(record)

@@ -129,12 +129,12 @@ def test_searches_from_threads_never_overlap(monkeypatch):
 
     real, inside, most = module.search, [0], [0]
 
-    def counted(task, limit):
+    def counted(task, limit, **limits):
         inside[0] += 1
         most[0] = max(most[0], inside[0])
         time.sleep(0.05)
         try:
-            return real(task, limit)
+            return real(task, limit, **limits)
         finally:
             inside[0] -= 1
 

@@ -13,9 +13,11 @@ from smartllm_local.domain import load_domain
 from smartllm_local.executor.dry_run import DryRun, notional_robot
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.backends.base import Sampling
+from smartllm_local.planner.classical.problem import planning_task
+from smartllm_local.planner.classical.search import search
 from smartllm_local.planner.constraints.format import MAX_SUBTASKS
 from smartllm_local.planner.constraints.plan import PlanConstraint
-from smartllm_local.planner.constraints.repair import Repairer, effect
+from smartllm_local.planner.constraints.repair import TIME_LIMIT, Repairer, SearchWallClockError, effect
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.protocol import Constraint, Rewrite
 from smartllm_local.planner.decoding.writer import REWRITTEN, run_constraint, run_tokens, shortest_line
@@ -106,6 +108,32 @@ def test_a_repair_uses_only_what_the_team_can_do():
                                                  "    PickupObject('Cloth')\n", put]), len, 3000)
     assert "OpenObject" not in text and put not in text
     assert all(line.split("(")[0].strip() in team[0].skills for r in decomposer.repairs.made for line in r["before"])
+
+
+def _slice_with_empty_hands(repairer: Repairer):
+    """The planner's steps that let a robot by the bread, with empty hands, slice it."""
+    return repairer.enable(0, "Bread", SKILLS["SliceObject"], ["Bread"])
+
+
+def test_a_repairs_search_is_bounded_by_processor_time_and_reaching_the_bound_finds_no_repair():
+    """The bound that decides a repair is Fast Downward's own processor time, which the machine's load does not
+    change: reaching it (a bound of 0 s, reached at once) gives no repair, not an error; the default bound finds
+    the knife."""
+    world = WorldCheck(scene_objects(6), SKILLS, MAX_SUBTASKS)
+    assert _slice_with_empty_hands(Repairer(world, SKILLS, cpu_limit=0)) is None
+    assert _slice_with_empty_hands(Repairer(world, SKILLS)) is not None
+    task = planning_task(world.run, [world.run.team[0]], SKILLS, [Condition("Bread", state="SLICED")],
+                         name="repair", members=[0])
+    ended = search(task, TIME_LIMIT, cpu_limit=0)
+    assert ended.timed_out and ended.out_of_cpu and not ended.found
+
+
+def test_a_search_past_its_wall_clock_backstop_is_an_error_not_a_missing_repair():
+    """Where the wall clock ran out first, how far the search got depends on the load: the plan would differ from
+    run to run, so it is an error that says so, never a silent "no repair"."""
+    world = WorldCheck(scene_objects(6), SKILLS, MAX_SUBTASKS)
+    with pytest.raises(SearchWallClockError, match="wall-clock"):
+        _slice_with_empty_hands(Repairer(world, SKILLS, time_limit=0.01))
 
 
 def test_an_effect_is_the_scorers_condition():

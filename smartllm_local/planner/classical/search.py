@@ -1,5 +1,10 @@
 """Fast Downward, through Unified Planning, on a planning task: the shortest plan, a proof there is none, or
-the time limit.
+a limit reached.
+
+Two limits: a wall-clock one (Unified Planning ends the process), and optionally one on the processor time Fast
+Downward itself uses (its driver's ``--overall-time-limit``, which counts the CPU time of its translator and search,
+not the time they wait for a core). A search bounded by the second ends the same way however loaded the machine is,
+so a plan that depends on it (a repair, the planner's last sub-task) is the same every run.
 
 The search is A* with the h^max heuristic: admissible (so the plan found is a shortest one in actions,
 or the cheapest where the problem gives its actions costs, as a site's does)
@@ -10,8 +15,10 @@ Unified Planning writes for Fast Downward is kept, for a reader or another plann
 from __future__ import annotations
 
 import io
+import signal
 import tempfile
 import threading
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -33,18 +40,21 @@ up.get_environment().credits_stream = None  # the engines' banners are not the p
 #: several threads at once (candidates are written in threads, each repairing): a problem is built and solved
 #: holding this lock.
 UP_LOCK = threading.RLock()
+#: How Fast Downward's driver logs a component killed by SIGXCPU, its processor-time limit.
+_XCPU = f"exit code: -{signal.SIGXCPU.value}"
 
 class _FastDownward(FastDownwardPDDLPlanner):
     """Fast Downward with its intermediate file in a folder of its own: by default its translator writes
     output.sas in the working directory, where two searches at once (or a user's file) would collide."""
 
-    def __init__(self, sas_file: Path):
+    def __init__(self, sas_file: Path, cpu_limit: int | None = None):
         super().__init__(fast_downward_search_config=SEARCH)
-        self._sas_file = sas_file
+        self._sas_file, self._cpu_limit = sas_file, cpu_limit
 
     def _base_cmd(self, plan_filename: str) -> list[str]:
         interpreter, driver, *rest = super()._base_cmd(plan_filename)
-        return [interpreter, driver, "--sas-file", str(self._sas_file), *rest]
+        limit = ["--overall-time-limit", f"{self._cpu_limit}s"] if self._cpu_limit is not None else []
+        return [interpreter, driver, "--sas-file", str(self._sas_file), *limit, *rest]
 
     def _solve(self, *args: Any, **kwargs: Any) -> Any:
         """The search; where it is interrupted (Ctrl-C, a stopped run), its processes end with it: Unified
@@ -71,13 +81,15 @@ class Step:
 
 @dataclass
 class Search:
-    """What the search gave: ``steps`` (a plan; empty when the goal already holds), or ``unsolvable``,
-    or ``timed_out``; the planner's log and the PDDL it read."""
+    """What the search gave: ``steps`` (a plan; empty when the goal already holds), or ``unsolvable``, or
+    ``timed_out`` (with ``out_of_cpu`` when the processor-time limit ended it, not the wall clock); the planner's
+    log and the PDDL it read."""
 
     steps: list[Step] = field(default_factory=list)
     actions: list[ActionInstance] = field(default_factory=list)  # the same plan, as the model's actions
     unsolvable: bool = False
     timed_out: bool = False
+    out_of_cpu: bool = False
     status: str = ""
     log: str = ""
     domain_pddl: str = ""
@@ -94,17 +106,23 @@ def pddl(task: PlanningTask) -> tuple[str, str]:
     return writer.get_domain(), writer.get_problem()
 
 
-def search(task: PlanningTask, time_limit: float) -> Search:
-    """Run Fast Downward for at most ``time_limit`` seconds."""
+def search(task: PlanningTask, time_limit: float, *, cpu_limit: int | None = None) -> Search:
+    """Run Fast Downward for at most ``time_limit`` seconds of wall-clock time and, with ``cpu_limit``, at most
+    that many seconds of its own processor time."""
     domain, problem = pddl(task)
     result = Search(domain_pddl=domain, problem_pddl=problem)
     log = io.StringIO()
+    started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="smartllm-fd-") as folder, \
-            _FastDownward(Path(folder) / "output.sas") as planner:
+            _FastDownward(Path(folder) / "output.sas", cpu_limit) as planner:
         answer = planner.solve(task.problem, timeout=time_limit, output_stream=log)
     result.log, result.status = log.getvalue(), answer.status.name
-    if answer.status == Status.TIMEOUT:
+    if cpu_limit is not None and _XCPU in result.log:  # the translator (Python) is killed at its CPU limit
+        result.timed_out = result.out_of_cpu = True
+    elif answer.status == Status.TIMEOUT:
         result.timed_out = True
+        # Ended before the wall clock ran out: Fast Downward's search stopped at its processor-time limit.
+        result.out_of_cpu = cpu_limit is not None and time.perf_counter() - started < time_limit
     elif answer.status in (Status.UNSOLVABLE_PROVEN, Status.UNSOLVABLE_INCOMPLETELY):
         result.unsolvable = True
     elif answer.plan is None:

@@ -17,6 +17,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
+from ...errors import SmartLLMError
 from ...executor.dry_run import DryRun
 from ...scoring import Condition
 from ...skills import Skill, SkillSet
@@ -27,8 +28,15 @@ from .written import CALL_LINE, WrittenFunction
 
 #: The most steps a repair writes before the model's call (a hand freed and a knife fetched take five).
 MOST_STEPS = 5
-#: Fast Downward's time for one repair (a repair's problem is small: it finds one in well under a second).
-TIME_LIMIT = 5.0
+#: Fast Downward's processor time for one search (a repair, or the planner's last sub-task), whole seconds: its
+#: translator and search take 0.15-0.4 s of CPU on the household tasks (measured), so the bound is never reached
+#: there; being processor time, not the wall clock, it ends a search at the same point however loaded the machine
+#: is, so a greedy plan does not change with the load. A search that reaches it finds no repair.
+CPU_LIMIT = 10
+#: The wall-clock limit on the same search: a backstop against a stuck process only, far above CPU_LIMIT so that
+#: load alone never reaches it. Reaching it is an error (:class:`SearchWallClockError`), never a silent "no repair",
+#: since where it ended would depend on the load.
+TIME_LIMIT = 300.0
 #: A call as a plan writes it: the skill's name and the object types.
 Written = tuple[str, tuple[str, ...]]
 #: The state each action's effect is, as the scorer names it.
@@ -49,6 +57,11 @@ def repairable(skill: Skill) -> bool:
     return skill.action == "PutObject" or skill.action in EFFECTS
 
 
+class SearchWallClockError(SmartLLMError, RuntimeError):
+    """A repair's search ran past its wall-clock backstop before its processor-time limit (a stuck process, or
+    a machine far too loaded to plan on)."""
+
+
 @dataclass(frozen=True)
 class Repair:
     """The planner's calls written before the model's (each a skill and its object types), and the search's time."""
@@ -65,10 +78,11 @@ class Repairer:
         """Whether repair can plan in the world check's dry run (the AI2-THOR world's rules, its planning model)."""
         return isinstance(world.run, DryRun)
 
-    def __init__(self, world: WorldCheck, skills: SkillSet, time_limit: float = TIME_LIMIT):
+    def __init__(self, world: WorldCheck, skills: SkillSet, time_limit: float = TIME_LIMIT,
+                 cpu_limit: int = CPU_LIMIT):
         if not self.fits(world):
             raise ValueError("repair plans in the household world's dry run")
-        self.run, self.skills, self.time_limit = world.run, skills, time_limit
+        self.run, self.skills, self.time_limit, self.cpu_limit = world.run, skills, time_limit, cpu_limit
 
     def enable(self, member: int, place: str | None, skill: Skill, objects: Sequence[str],
                allows: Callable[[str, Sequence[str]], bool] | None = None,
@@ -118,8 +132,14 @@ class Repairer:
                                      hands_free=hands_free)
             except Unreachable:
                 return None
-            found = search(task, self.time_limit)
+            found = search(task, self.time_limit, cpu_limit=self.cpu_limit)
         seconds = round(time.perf_counter() - started, 3)
+        if found.timed_out and not found.out_of_cpu:
+            raise SearchWallClockError(
+                f"Fast Downward's search for a repair ran {seconds:g} s of wall-clock time without reaching its "
+                f"{self.cpu_limit} s of processor time (the backstop is {self.time_limit:g} s): the machine is too "
+                "loaded to plan on, or Fast Downward is stuck; run again with fewer processes at once, or with "
+                "--no-repair and --no-finish-goals")
         if not found.found or not found.steps:
             return None
         types = {o["objectId"]: o["objectType"] for o in with_future_pieces(self.run.objects)[0]}  # slices to come

@@ -1,0 +1,79 @@
+"""Whether an instruction names what a stated goal is about: the goal check refuses a task for a goal out of the
+team's reach only where the instruction asked for it.
+
+The goal stage states goals from the instruction and the scene; a small model also states goals nobody asked
+for (an object the instruction never names). Refusing a feasible task for one of those is refusing it for the
+model's invention. So a goal out of reach that nobody asked for (no object of it named by the instruction, none in
+a goal that is) is dropped, not refused, where the statement keeps a goal within reach that was asked for (there
+is still something asked to plan for); where a goal out of reach was asked for, or nothing asked for is left, the
+task is refused as before.
+
+Naming is read generously, since a goal wrongly taken as named is refused as before (the cost of the old rule)
+while one wrongly taken as invented is dropped: an object type is named where a word of its name (``DeskLamp``:
+desk, lamp) is a word of the instruction or shares its first :data:`PREFIX` letters with one ("telly" names the
+Television, "keys" the KeyChain). A goal on two objects (``Apple in Fridge``) is named where either is.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+
+from ..scoring import Condition, Goal
+from ..world.object_types import base_type
+
+#: How many first letters a word of the instruction and a word of a type's name must share.
+PREFIX = 3
+_WORD = re.compile(r"[a-z]+")
+_NAME_WORD = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+")
+
+
+def names(instruction: str, object_type: str) -> bool:
+    """Whether the instruction names the object type (or the type it is a slice of)."""
+    said = set(_WORD.findall(instruction.lower()))
+    return any(word == w or (min(len(word), len(w)) >= PREFIX and word[:PREFIX] == w[:PREFIX])
+               for word in said for w in _type_words(object_type))
+
+
+def asks_for(instruction: str, condition: Condition) -> bool:
+    """Whether the instruction names an object of the condition (its subject, or what it holds)."""
+    return names(instruction, condition.subject) or (condition.item is not None and names(instruction, condition.item))
+
+
+def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequence[Condition]) -> list[Condition]:
+    """The goals out of reach to drop rather than refuse for: all of them where none is asked for and some goal
+    within reach is; otherwise none (the task is refused). A goal is asked for where the instruction names one of
+    its objects, or where one of them is in a goal asked for ("make me a coffee": ``Mug in CoffeeMachine`` is
+    named, so ``Mug filled`` is asked for too)."""
+    asked = _asked(instruction, stated)
+    if not out_of_reach or any(c in asked for c in out_of_reach):
+        return []
+    left = [c for c in stated if c not in out_of_reach]
+    return list(out_of_reach) if any(c in asked for c in left) else []
+
+
+def as_goal(condition: Condition) -> Goal:
+    """The condition as a goal of its own (the goal check checks each alone)."""
+    if condition.state is not None:
+        return Goal(condition.subject, state=condition.state)
+    return Goal(condition.subject, contains=(condition.item or "",))
+
+
+def _asked(instruction: str, stated: Sequence[Condition]) -> list[Condition]:
+    """The stated goals asked for: named by the instruction, or sharing an object with one asked for."""
+    asked = [c for c in stated if asks_for(instruction, c)]
+    objects = {base_type(t) for c in asked for t in _objects(c)}
+    while True:
+        more = [c for c in stated if c not in asked and objects & {base_type(t) for t in _objects(c)}]
+        if not more:
+            return asked
+        asked += more
+        objects |= {base_type(t) for c in more for t in _objects(c)}
+
+
+def _objects(condition: Condition) -> list[str]:
+    return [condition.subject] + ([condition.item] if condition.item else [])
+
+
+def _type_words(object_type: str) -> list[str]:
+    return [w.lower() for w in _NAME_WORD.findall(base_type(object_type))]

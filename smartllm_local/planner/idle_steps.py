@@ -1,0 +1,154 @@
+"""Steps that change nothing, taken out of a decomposition before the teams are formed.
+
+A model writes steps in a sub-task that the same sub-task undoes: asked for a coffee and the apple in the fridge,
+the 1.5B opened the fridge in the coffee's sub-task, went to it again and closed it, with nothing put in. Harmless
+to the goals, but the coalition and the allocation take every step as a need: the coffee's sub-task then needed a
+robot that opens fridges besides the one that switches the coffee machine on, both robots went to it, and the
+apple's sub-task, which needs the fridge's robot, waited for it (a transition the reference plan does not make:
+RU 0, by the paper's definition of it, for a plan that met every goal).
+
+So a pair of steps of one sub-task where the later one undoes the earlier (open and close, switch on and off the
+same object), with the GoToObject steps that led to each and the comments right above them, is taken out where the
+dry run shows it was idle: run as the decomposition's world check runs it (a notional robot per sub-task, in the
+order written), no other call fails that did not and the world ends in the same state, every object as it was
+(where the robots stand aside). A switch on and off that filled or cooked something in between changes the end,
+and stays; so does an open and close with something put in between (the put fails without it). A sub-task keeps
+at least one action. Only the model's own plan is read.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass
+
+from ..scene import SceneObjects
+from ..skills import SkillSet
+from .constraints.format import INDENT, MAX_SUBTASKS
+from .constraints.world_check import WorldCheck
+from .constraints.written import CALL_LINE
+
+#: Each AI2-THOR action that a later one in the same sub-task undoes, and that one.
+UNDONE_BY = {"OpenObject": "CloseObject", "ToggleObjectOn": "ToggleObjectOff"}
+
+
+#: An object's fields that say where the robots stand, not what state the world is in (a sub-task's robot is its
+#: own: no other sub-task starts where it ended).
+_WHERE_ROBOTS_STAND = frozenset({"distance", "visible", "isInteractable"})
+
+
+@dataclass(frozen=True)
+class _Step:
+    line: int  # its index among the text's lines
+    function: int
+    skill: str
+    objects: tuple[str, ...]
+
+
+def drop_idle_steps(text: str, scene: SceneObjects, skills: SkillSet) -> tuple[str, list[str]]:
+    """The decomposition without its idle pairs of steps (and the GoToObject steps and comments that served
+    them), and the lines taken out (none: the text as it was). A text with a line this does not know (a helper
+    call) is left as it is."""
+    lines = text.splitlines(keepends=True)
+    steps = _steps(lines, skills)
+    if steps is None:
+        return text, []
+    actions = {name: s.action for name, s in skills.items()}
+    pairs = [(first, second) for a, first in enumerate(steps) for second in steps[a + 1:]
+             if second.function == first.function and _undoes(first, second, actions)]
+    if not pairs:
+        return text, []
+    base = _outcome(steps, set(), scene, skills)
+    dropped: set[int] = set()
+    for first, second in pairs:
+        pair = {first.line, second.line}
+        if not pair & dropped:
+            for trial in (pair | _gotos_before(steps, pair, actions), pair):
+                taken = dropped | trial
+                if _acts(steps, first.function, taken, actions) and _same(base, _outcome(steps, taken, scene, skills)):
+                    dropped = taken
+                    break
+    if not dropped:
+        return text, []
+    dropped |= _sleeps_after(lines, steps, dropped, actions)
+    dropped |= _comments_above(lines, dropped)
+    return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
+
+
+def _steps(lines: Sequence[str], skills: SkillSet) -> list[_Step] | None:
+    """The skill calls of each function's body, in order; None where a body holds a line other than a comment,
+    a sleep or a skill call."""
+    steps: list[_Step] = []
+    function = -1
+    for n, line in enumerate(lines):
+        if line.startswith("def "):
+            function += 1
+            continue
+        if function < 0 or not line.startswith(INDENT):
+            continue
+        body = line.strip()
+        if body.startswith("#") or body.startswith("time.sleep("):
+            continue
+        match = CALL_LINE.match(line.rstrip("\n"))
+        if match is None or match.group(1) not in skills:
+            return None
+        steps.append(_Step(n, function, match.group(1), tuple(o for o in match.group(3, 4) if o is not None)))
+    return steps
+
+
+def _undoes(first: _Step, second: _Step, actions: dict[str, str]) -> bool:
+    undoing = UNDONE_BY.get(actions[first.skill])
+    return undoing is not None and actions[second.skill] == undoing and first.objects[:1] == second.objects[:1]
+
+
+def _gotos_before(steps: Sequence[_Step], pair: Collection[int], actions: dict[str, str]) -> set[int]:
+    """The GoToObject steps right before each step of the pair (in its function): they led there."""
+    gotos = set()
+    for before, step in zip(steps, steps[1:]):
+        if step.line in pair and before.function == step.function and actions[before.skill] == "":
+            gotos.add(before.line)
+    return gotos
+
+
+def _acts(steps: Sequence[_Step], function: int, dropped: Collection[int], actions: dict[str, str]) -> bool:
+    """Whether the function keeps an action (a body of GoToObject steps alone is not a sub-task)."""
+    return any(s.function == function and s.line not in dropped and actions[s.skill] for s in steps)
+
+
+def _outcome(steps: Sequence[_Step], dropped: Collection[int], scene: SceneObjects,
+             skills: SkillSet) -> tuple[set[int], str]:
+    """The lines whose calls fail, and the world's end state, with ``dropped`` left out."""
+    world = WorldCheck(scene, skills, MAX_SUBTASKS)
+    failed = {s.line for s in steps if s.line not in dropped
+              and not world.perform([(None, s.skill, s.objects)], [min(s.function, MAX_SUBTASKS - 1)])}
+    objects = [{k: v for k, v in o.items() if k not in _WHERE_ROBOTS_STAND} for o in world.objects()]
+    return failed, json.dumps(objects, sort_keys=True, default=str)
+
+
+def _same(base: tuple[set[int], str], trial: tuple[set[int], str]) -> bool:
+    return trial[0] <= base[0] and trial[1] == base[1]
+
+
+def _sleeps_after(lines: Sequence[str], steps: Sequence[_Step], dropped: Collection[int],
+                  actions: dict[str, str]) -> set[int]:
+    """The sleeps right after a dropped switch-on (comments aside): they waited for it."""
+    sleeps = set()
+    for step in steps:
+        if step.line in dropped and actions[step.skill] == "ToggleObjectOn":
+            k = step.line + 1
+            while k < len(lines) and lines[k].strip().startswith("#"):
+                k += 1
+            if k < len(lines) and lines[k].strip().startswith("time.sleep("):
+                sleeps.add(k)
+    return sleeps
+
+
+def _comments_above(lines: Sequence[str], dropped: Collection[int]) -> set[int]:
+    """The comment lines right above a dropped line (they said what it would do)."""
+    comments = set()
+    for n in dropped:
+        k = n - 1
+        while k >= 0 and lines[k].startswith(INDENT) and lines[k].strip().startswith("#"):
+            comments.add(k)
+            k -= 1
+    return comments

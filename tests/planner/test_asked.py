@@ -1,0 +1,88 @@
+"""The goal check refuses a task for a goal out of the team's reach only where the instruction asked for it; a goal
+nobody asked for is dropped, and every infeasible task of the benchmark is still refused."""
+
+from __future__ import annotations
+
+import pytest
+
+from smartllm_local.benchmark.tasks import load_tasks
+from smartllm_local.domain import load_domain
+from smartllm_local.goal_language import parse_goal_statement, statement_of
+from smartllm_local.planner import pipeline
+from smartllm_local.planner.asked import as_goal, invented, names
+from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, stated_conditions
+from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
+from smartllm_local.planner.stages import StageRecord
+from smartllm_local.scoring import Condition
+from smartllm_local.worlds import scene_objects
+
+from .fakes import FakeBackend
+
+CATALOGUE = load_domain().catalogue
+MUG_IN = Condition("CoffeeMachine", item="Mug")
+MUG_FILLED = Condition("Mug", state="FILLED")
+APPLE_IN = Condition("Fridge", item="Apple")
+
+
+@pytest.mark.parametrize("instruction, object_type, named", [
+    ("Put the telly on, the match is about to start.", "Television", True),
+    ("Drop the remote and the keys into the box.", "KeyChain", True),
+    ("Drop the remote and the keys into the box.", "RemoteControl", True),
+    ("Switch off the lamp on the side table.", "DeskLamp", True),
+    ("Cut the potato into slices.", "PotatoSliced", True),
+    ("Make me a coffee.", "Apple", False),
+    ("Make me a coffee.", "Fridge", False),
+])
+def test_an_instruction_names_a_type_by_a_word_of_its_name_or_the_first_letters_of_one(instruction, object_type,
+                                                                                         named):
+    assert names(instruction, object_type) == named
+
+
+def test_only_goals_out_of_reach_that_nobody_asked_for_are_dropped():
+    stated = [MUG_IN, MUG_FILLED, APPLE_IN]
+    assert invented("Make me a coffee.", [APPLE_IN], stated) == [APPLE_IN]
+    # The instruction names the apple: refused, as before.
+    assert invented("Make me a coffee and chill the apple.", [APPLE_IN], stated) == []
+    # The mug is in a goal the instruction names (the coffee machine): asked for, so refused.
+    assert invented("Make me a coffee.", [MUG_FILLED], stated) == []
+    # Nothing asked for within reach is left: refused.
+    assert invented("Tidy up.", [APPLE_IN], [APPLE_IN]) == []
+
+
+def test_every_infeasible_benchmark_task_is_still_refused_for_its_own_goals():
+    """On the benchmark's own goals, the goal check names a problem for every infeasible task, and the rule drops
+    none of them."""
+    world = scene_objects(1).world
+    infeasible = [t for t in load_tasks() if not t.feasible]
+    assert len(infeasible) == 7
+    for task in infeasible:
+        conditions = statement_of(task.goals).conditions
+        team = CATALOGUE.team(task.robots)
+        out = [c for c in conditions if world.unattainable([as_goal(c)], team, CATALOGUE.skills, task.floor_plan)]
+        assert out and invented(task.instruction, out, conditions) == [], task.id
+
+
+def _checked(monkeypatch, instruction: str, statement: str) -> tuple[PlanResult, StageRecord]:
+    """The goal check of a statement the model is made to write, for robot 13 (switches things on, opens
+    nothing) in a kitchen."""
+    scene = scene_objects(6)
+
+    def stated(planner, text, floor_plan, refusals=True):
+        record = StageRecord("goal", output=statement)
+        return StatedGoals(record, parse_goal_statement(statement, types=scene.types))
+
+    monkeypatch.setattr(pipeline, "state_goals", stated)
+    planner = Planner(FakeBackend(), CATALOGUE, PlannerConfig(goal_check=True))
+    result = PlanResult(instruction, "FloorPlan6", [13])
+    return result, planner.check_goals(result, planner.scene(6))
+
+
+def test_the_goal_check_drops_a_goal_nobody_asked_for_and_refuses_one_asked_for(monkeypatch):
+    statement = "Mug in CoffeeMachine\nMug filled\nApple in Fridge\n\n"
+    result, record = _checked(monkeypatch, "Make me a coffee.", statement)
+    assert record.refusal is None and result.refusal is None
+    assert record.dropped_goals == ["Apple in Fridge"]
+    assert stated_conditions(result, scene_objects(6), record) == [MUG_IN, MUG_FILLED]
+    result, record = _checked(monkeypatch, "Make me a coffee and put the apple in the fridge.", statement)
+    assert record.refused_by == GOAL_CHECK and "Fridge contains Apple" in record.refusal
+    assert not record.dropped_goals
