@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Callable, Mapping, Sequence
+from functools import cache
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -24,13 +25,14 @@ from .executor.dry_run import DryRun, notional_robot
 from .executor.scheduler import execute
 from .executor.site import SiteDryRun, notional_site_robot
 from .executor.team_actions import Outcome
+from .goal_language import object_states
 from .plan_language import Plan
 from .robots import Robot
-from .scene import AFFORDANCE_NAMES, SceneObjects
-from .scoring import Goal
+from .scene import AFFORDANCE_NAMES, Demand, GoalTerms, GoalVocabulary, SceneObjects
+from .scoring import STATES, Goal
 from .skills import SkillSet, has_affordance
 from .world.controller import open_controller
-from .world.object_types import SLICE_RESULTS, TYPE_PROPERTIES
+from .world.object_types import RECEPTACLE_ONLY_ACCEPTS, SLICE_RESULTS, TYPE_PROPERTIES
 from .world.scenes import floor_plan_name, load_scene
 
 
@@ -81,6 +83,26 @@ class World(Protocol):
     def unattainable(self, goals: Sequence[Goal], team: Sequence[Robot], skills: SkillSet,
                      floor_plan: int | str) -> list[str]:
         """The goal conditions no plan of ``team`` can meet here, each with why (what a planner may refuse on)."""
+
+    # What the planner asks: the world's rules, as its prompts state them and its grammars keep them.
+
+    goto_acts: bool  # whether a move is an end in itself (a site's robots return to base), not only a way to act
+
+    def describe(self, scene: SceneObjects, name: str) -> str:
+        """One of ``scene``'s objects as a prompt lists it: a Python dict of what a plan must know of it."""
+
+    def coalition_rules(self) -> str:
+        """The coalition prompt's rules: what a robot can do alone and what a team pools (lifting, reach)."""
+
+    def goal_terms(self) -> GoalTerms:
+        """How a goal is put here, the same in every scene: what a condition names, and the states it may say."""
+
+    def goal_vocabulary(self, floor_plan: int | str) -> GoalVocabulary:
+        """What a goal may say in a scene: the states the world can give each object, and what it can hold."""
+
+    def call_demand(self, skill: str, objects: Sequence[str]) -> Demand | None:
+        """What a call asks of the robots that make it beyond the skill (None: nothing): where they must get
+        to, and what capacity they must pool there."""
 
 
 class Ai2ThorWorld:
@@ -138,6 +160,60 @@ class Ai2ThorWorld:
         conditions = list(dict.fromkeys(c for g in goals for c in g.conditions()))
         return reach.unattainable(conditions, team, skills, load_scene(floor_plan_name(floor_plan)))
 
+    goto_acts = False  # a robot goes to an object to act on it
+
+    def describe(self, scene: SceneObjects, name: str) -> str:
+        """Its type and the heaviest instance's mass (what lifting it takes)."""
+        return f"{{'name': '{name}', 'mass': {scene.masses[name]:g}}}"
+
+    def coalition_rules(self) -> str:
+        return HOUSEHOLD_COALITION_RULES
+
+    def goal_terms(self) -> GoalTerms:
+        """Objects, in any state the scorer knows, or in a receptacle."""
+        return GoalTerms("object", True, STATES)
+
+    def goal_vocabulary(self, floor_plan: int | str) -> GoalVocabulary:
+        """The floor plan's objects' flags, and the slices they can be cut into."""
+        return _floor_plan_vocabulary(floor_plan_name(floor_plan))
+
+    def call_demand(self, skill: str, objects: Sequence[str]) -> Demand | None:
+        """Nothing: where a robot must be and what it lifts, the executor judges (mass: :mod:`...feasibility`)."""
+        return None
+
+
+HOUSEHOLD_COALITION_RULES = """\
+# For each sub-task of a plan, choose the robot, or the team of robots, that will do it.
+# A robot can only use its own skills and lift up to its mass capacity; a team pools
+# its members' skills and lifts the sum of their capacities. Reason before choosing: say
+# what the sub-task needs (its skills, and the mass of what it lifts), which robots have
+# those skills and that strength, and what is missing; only then, after "so", name the
+# robot or team. Prefer a single robot when one can do the whole sub-task. If no robot or
+# team can do a sub-task, answer with one line: # INFEASIBLE: <why>.
+"""
+
+
+@cache  # a floor plan's objects never change; a benchmark asks for the same few again and again
+def _floor_plan_vocabulary(floor_plan: str) -> GoalVocabulary:
+    flags: dict[str, dict[str, bool]] = {}
+    for obj in load_scene(floor_plan):
+        seen = flags.setdefault(obj["objectType"], {})
+        for name, value in obj.items():
+            if isinstance(value, bool) and value:
+                seen[name] = True
+    for whole in [t for t in flags if t in SLICE_RESULTS]:
+        piece = SLICE_RESULTS[whole][0]
+        flags.setdefault(piece, {p: True for p in TYPE_PROPERTIES[piece]})
+    states = {t: object_states(f, t) for t, f in flags.items()}
+    receptacles = [t for t, f in flags.items() if f.get("receptacle")]
+
+    def can_hold(receptacle: str, item: str) -> bool:
+        only = RECEPTACLE_ONLY_ACCEPTS.get(receptacle)
+        return receptacle != item and (only is None or item in only)
+
+    holders = {t: frozenset(r for r in receptacles if can_hold(r, t)) for t, f in flags.items() if f.get("pickupable")}
+    return GoalVocabulary(states, holders)
+
 
 class SimulatedSite:
     """A site domain's one 2-D site: its entries are the objects, plans run on its simulator in process."""
@@ -154,7 +230,7 @@ class SimulatedSite:
         by_type = {kind: tuple(sorted(p.name for p in domain.places.values() if kind in ("place", p.kind)))
                    for kind in ARGUMENT_TYPES}
         return SceneObjects(floor_plan=domain.site, masses={name: 0.0 for name in domain.places},
-                            by_affordance={"": by_type["place"], **by_type}, world=self, site=domain)
+                            by_affordance={"": by_type["place"], **by_type}, world=self)
 
     def examples_dir(self) -> Path:
         return self.domain.prompts_dir()
@@ -183,6 +259,57 @@ class SimulatedSite:
                      floor_plan: int | str) -> list[str]:
         return site.unattainable(self.domain, goals, team)
 
+    goto_acts = True  # back to base is a step of its own
+
+    def describe(self, scene: SceneObjects, name: str) -> str:
+        """Its kind, a region's area (what a patrol pools) and, where only some kinds of robot get, which."""
+        place = self.domain.places[name]
+        area = f", 'area': {place.area:g}" if place.kind == "region" else ""
+        reach = f", 'reach': {sorted(place.reach)!r}" if place.reach is not None else ""
+        return f"{{'name': '{name}', 'kind': '{place.kind}'{area}{reach}}}"
+
+    def coalition_rules(self) -> str:
+        """A place's reach, and the capacities the domain's pooling skills add up."""
+        pools = ", ".join(f"for {skill} their {capacity}" for skill, capacity in self.domain.pools.items())
+        return f"""\
+# For each sub-task of a plan, choose the robot, or the team of robots, that will do it.
+# A robot can only use its own skills and go only where its kind may (a place's reach); a
+# team pools its members' skills and adds up {pools}. Reason before choosing: say what the
+# sub-task needs (its skills, what it pools, where only some robots go), which robots have
+# that, and what is missing; only then, after "so", name the robot or team. Prefer a single
+# robot when one can do the whole sub-task. If no robot or team can do a sub-task, answer
+# with one line: # INFEASIBLE: <why>.
+"""
+
+    def goal_terms(self) -> GoalTerms:
+        """Places, in the states the domain's skills can give them (nothing is put in anything)."""
+        return GoalTerms("place", False, tuple(self.goal_vocabulary(self.domain.site).state_names()))
+
+    def goal_vocabulary(self, floor_plan: int | str) -> GoalVocabulary:
+        """A region covered, an object photographed, a location the team returns to, each where a skill of
+        the domain has that effect."""
+        effects = set(self.domain.effects.values())
+        return GoalVocabulary({p.name: frozenset({SITE_GOALS[p.kind][1]}) for p in self.domain.places.values()
+                               if SITE_GOALS[p.kind][0] in effects}, {})
+
+    def call_demand(self, skill: str, objects: Sequence[str]) -> Demand | None:
+        """A place's reach; a patrol pools the region's area, a photograph some camera."""
+        domain = self.domain
+        place = domain.place(objects[0]) if objects else None
+        if place is None:
+            return None
+        if domain.effects.get(skill) == "patrol":
+            return Demand(skill, place, domain.pools[skill], place.area)
+        if domain.effects.get(skill) == "photograph":
+            return Demand(skill, place, "camera_range", SOME_CAMERA)
+        return Demand(skill, place) if place.reach is not None else None
+
+
+#: A site entry's kind, the effect a skill must have for the world to give it a state, and that state.
+SITE_GOALS = {"region": ("patrol", "COVERED"), "object": ("photograph", "PHOTOGRAPHED"),
+              "location": ("move", "RETURNED")}
+SOME_CAMERA = 1e-3  # metres: a photograph needs a robot with some camera (how far it sees, the world check asks)
+
 
 def scene_objects(floor_plan: int | str) -> SceneObjects:
     """An AI2-THOR floor plan's scene (:meth:`Ai2ThorWorld.scene`), for callers that only know AI2-THOR."""
@@ -195,9 +322,10 @@ WORLDS: dict[str, Callable[[Domain], World]] = {
     "site": SimulatedSite,
 }
 
-#: The members a world has, each with the arguments it is called with (positional names, then keywords).
-MEMBERS: dict[str, tuple[str, ...] | None] = {
-    "kind": None,
+#: The members a world has: a method with the arguments it is called with (positional names, then keywords),
+#: or an attribute with its type.
+MEMBERS: dict[str, tuple[str, ...] | type] = {
+    "kind": str,
     "scene": ("floor_plan",),
     "examples_dir": (),
     "open": ("floor_plan", "agents", "build"),
@@ -206,6 +334,12 @@ MEMBERS: dict[str, tuple[str, ...] | None] = {
     "dry_run": ("floor_plan", "skills", "robots", "agents"),
     "plan_types": ("floor_plan",),
     "unattainable": ("goals", "team", "skills", "floor_plan"),
+    "goto_acts": bool,
+    "describe": ("scene", "name"),
+    "coalition_rules": (),
+    "goal_terms": (),
+    "goal_vocabulary": ("floor_plan",),
+    "call_demand": ("skill", "objects"),
 }
 
 
@@ -221,9 +355,12 @@ def check_world(world: Any) -> World:
         value = getattr(world, member, None)
         if value is None:
             problems.append(f"it has no {member}")
-        elif arguments is None:
+        elif arguments is str:
             if not isinstance(value, str) or not value:
                 problems.append(f"{member} must be a name (a str), not {value!r}")
+        elif isinstance(arguments, type):
+            if not isinstance(value, arguments):
+                problems.append(f"{member} must be a {arguments.__name__}, not {value!r}")
         elif not callable(value):
             problems.append(f"{member} must be a method")
         else:

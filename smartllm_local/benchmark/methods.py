@@ -16,7 +16,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
-from ..domain import Domain
 from ..errors import UserError
 from ..goal_language import parse_goal_statement, statement_of
 from ..plan_language import parse_plan
@@ -25,6 +24,7 @@ from ..planner.constraints.feasibility import function_needs
 from ..planner.pipeline import Planner, PlanResult
 from ..planner.stages import StageRecord
 from ..robots import Catalogue
+from ..worlds import Ai2ThorWorld, World
 from .reference_plans import default_plans_dir
 from .tasks import Task
 
@@ -115,13 +115,14 @@ class GoalPlanner:
 
     With ``oracle``, the task's own goal conditions are the goal and no model runs
     (``goal-planner-oracle``): it measures the planner alone, what it reaches when the goal is right.
-    ``site``: the site domain the tasks are on (None: AI2-THOR's floor plans).
+    ``world``: the world the tasks are in (none given: the planner's, else AI2-THOR's), whose kind picks the
+    planning model (:func:`~smartllm_local.planner.classical.planning.goal_planning`).
     """
 
     def __init__(self, planner: Planner | None, catalogue: Catalogue, *, time_limit: float, oracle: bool = False,
-                 site: Domain | None = None):
+                 world: World | None = None):
         self.planner, self.catalogue, self.time_limit, self.oracle = planner, catalogue, time_limit, oracle
-        self.site = site
+        self.world = world or (planner.world if planner is not None else Ai2ThorWorld())
         self.name = "goal-planner-oracle" if oracle else "goal-planner"
 
     def stages(self) -> list[Stage]:
@@ -145,7 +146,7 @@ class GoalPlanner:
         else:
             conditions = parse_goal_statement(result.stages[0].output, where="<goal output>").conditions
         record = plan_to_goal(conditions, task.floor_plan, self.catalogue.team(task.robots), self.catalogue.skills,
-                              time_limit=self.time_limit, name=task.id, site=self.site)
+                              time_limit=self.time_limit, name=task.id, world=self.world)
         result.stages.append(record)
         if record.refusal is not None:
             result.refusal = record.refusal
@@ -190,10 +191,10 @@ MODEL_FREE = frozenset({"reference", "goal-planner-oracle"})
 
 
 def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_dir: Path | None = None, *,
-                planner_time_limit: float = DEFAULT_TIME_LIMIT, site: Domain | None = None) -> Method:
+                planner_time_limit: float = DEFAULT_TIME_LIMIT, world: World | None = None) -> Method:
     """The method ``name`` (the reference plans, from ``plans_dir`` or the benchmark's, and the goal-planner
-    on the task's own goals need no model); ``planner_time_limit``: the goal-planner's search, per task, on
-    ``site`` where the tasks are a site domain's."""
+    on the task's own goals need no model); ``planner_time_limit``: the goal-planner's search, per task, in
+    ``world`` (the tasks' world: see :class:`GoalPlanner`)."""
     if name == "reference":
         return Reference(catalogue, plans_dir)
     if name not in METHODS:
@@ -202,7 +203,7 @@ def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_
         if not planner_time_limit > 0:
             raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
         return GoalPlanner(planner, catalogue, time_limit=planner_time_limit, oracle=name == "goal-planner-oracle",
-                           site=site)
+                           world=world)
     assert planner is not None
     if name == "smartllm":
         return SmartLLM(planner, catalogue)

@@ -32,6 +32,7 @@ from ..planner.backends import model_location
 from ..planner.pipeline import Planner
 from ..provenance import run_manifest
 from ..world.controller import check_build
+from ..worlds import world_of
 from .options import (
     CATALOGUE,
     DOMAIN,
@@ -289,7 +290,7 @@ def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: Mo
             seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.world) for p in planners] or [None]
             with RunProgress(f"seed {s}" if labelled else "") as progress:
                 methods = [make_method(method, cat, p, dom.plans_dir(), planner_time_limit=planner_time_limit,
-                                       site=None if dom.is_ai2thor else dom) for p in seeded]
+                                       world=world_of(dom)) for p in seeded]
                 run_benchmark(chosen, methods, cat,
                               out=store.out, store=store, build=str(thor_build) if thor_build else None,
                               progress=progress, domain=dom,

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import PlanError
 from ..goal_language import GoalStatement, parse_goal_statement
 from ..scene import SceneObjects
-from ..scoring import STATES, Condition
+from ..scoring import Condition
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
 from .stages import StageRecord, fit_prompt, run_stage
@@ -68,11 +68,9 @@ def state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, re
     (the grammar offers no refusal unless the scene gives it nothing to state)."""
     scene = planner.scene(floor_plan)
     vocabulary = goal_vocabulary(scene)
-    # The states the prompt names are the domain's, the same for every scene (the examples stay a shared prefix).
-    states = vocabulary.state_names() if scene.site is not None else list(STATES)
     examples = goal_examples(planner)
     record = StageRecord(STAGE, chat_template=planner.chat_status)
-    prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex, states), examples, planner.backend,
+    prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), examples, planner.backend,
                         GOAL_BUDGET, planner.chat)
     constraint = GoalConstraint(vocabulary, allow_refusal=refusals) if planner.config.grammar else None
     from .pipeline import PlanResult  # the pipeline's module imports this one

@@ -7,7 +7,9 @@ import dataclasses
 import pytest
 
 from smartllm_local.domain import builtin_domains, load_domain
-from smartllm_local.worlds import WORLDS, Ai2ThorWorld, SimulatedSite, check_world, world_of
+from smartllm_local.scene import Demand, GoalTerms
+from smartllm_local.scoring import STATES
+from smartllm_local.worlds import MEMBERS, WORLDS, Ai2ThorWorld, SimulatedSite, check_world, world_of
 
 
 @pytest.mark.parametrize("name", builtin_domains())
@@ -25,33 +27,60 @@ def test_each_kind_of_world_is_the_one_its_domains_name():
     assert isinstance(world_of(load_domain("patrol")), SimulatedSite)
 
 
-class _NoDryRun:
+class _Moon:
+    """A world with every member (doing nothing), for the checker."""
+
     kind = "moon"
+    goto_acts = False
 
     def scene(self, floor_plan): ...
     def examples_dir(self): ...
     def open(self, floor_plan, agents, build): ...
     def run(self, plan, floor_plan, team, *, skills, controller=None, build=None): ...
     def run_in_process(self, plan, floor_plan, team, skills): ...
+    def dry_run(self, floor_plan, skills, robots=None, agents=1): ...
     def plan_types(self, floor_plan): ...
     def unattainable(self, goals, team, skills, floor_plan): ...
+    def describe(self, scene, name): ...
+    def coalition_rules(self): ...
+    def goal_terms(self): ...
+    def goal_vocabulary(self, floor_plan): ...
+    def call_demand(self, skill, objects): ...
 
 
-def test_a_world_missing_a_part_is_refused_saying_which():
-    with pytest.raises(TypeError, match=r"_NoDryRun is not a World: it has no dry_run\. A kind of world implements"):
-        check_world(_NoDryRun())
+def test_a_world_with_every_member_passes_the_check():
+    moon = _Moon()
+    assert check_world(moon) is moon and set(MEMBERS) == {m for m in vars(_Moon) if not m.startswith("_")}
+
+
+@pytest.mark.parametrize("member", ["kind", "scene", "examples_dir", "open", "run", "run_in_process", "dry_run",
+                                    "plan_types", "unattainable", "goto_acts", "describe", "coalition_rules",
+                                    "goal_terms", "goal_vocabulary", "call_demand"])
+def test_a_world_missing_a_member_is_refused_saying_which(member):
+    lacking = type("NoPart", (_Moon,), {member: None})
+    with pytest.raises(TypeError, match=rf"NoPart is not a World: it has no {member}\. A kind of world implements"):
+        check_world(lacking())
 
 
 def test_a_world_whose_method_takes_other_arguments_is_refused():
-    class NoKeywords(_NoDryRun):
-        def dry_run(self, floor_plan, skills, robots=None, agents=1): ...
+    class NoKeywords(_Moon):
         def run(self, plan, floor_plan, team): ...
+        def call_demand(self, skill): ...
 
-    with pytest.raises(TypeError, match=r"run must take \(plan, floor_plan, team, skills, controller, build\)"):
+    with pytest.raises(TypeError, match=r"run must take \(plan, floor_plan, team, skills, controller, build\).*"
+                                        r"call_demand must take \(skill, objects\)"):
         check_world(NoKeywords())
     NoKeywords.kind = ""
     with pytest.raises(TypeError, match="kind must be a name"):
         check_world(NoKeywords())
+
+
+def test_an_attribute_of_the_wrong_type_is_refused():
+    class Unsure(_Moon):
+        goto_acts = "sometimes"
+
+    with pytest.raises(TypeError, match="goto_acts must be a bool, not 'sometimes'"):
+        check_world(Unsure())
 
 
 def test_a_domain_of_an_unknown_kind_of_world_is_refused():
@@ -59,3 +88,61 @@ def test_a_domain_of_an_unknown_kind_of_world_is_refused():
     with pytest.raises(TypeError, match=r"world is 'moon', which no kind of world .* implements \(ai2thor, site\)"):
         world_of(moon)
 
+
+
+# ---------------------------------------------------------------- what the planner asks each world
+
+HOUSEHOLD = Ai2ThorWorld()
+PATROL = world_of(load_domain("patrol"))
+
+
+def test_a_floor_plan_lists_its_objects_with_their_mass_and_a_site_its_entries_with_kind_area_and_reach():
+    assert HOUSEHOLD.scene(1).python_list(["Apple", "Fridge"]) == \
+        "[{'name': 'Apple', 'mass': 0.2}, {'name': 'Fridge', 'mass': 0}]"
+    assert PATROL.scene("campus").python_list(["Base", "Courtyard", "WaterTank"]) == \
+        "[{'name': 'Base', 'kind': 'location'}, {'name': 'Courtyard', 'kind': 'region', 'area': 350}, " \
+        "{'name': 'WaterTank', 'kind': 'object', 'reach': ['aerial']}]"
+
+
+def test_the_coalition_rules_speak_of_lifting_in_a_house_and_of_reach_and_pooled_capacities_on_a_site():
+    household, patrol = HOUSEHOLD.coalition_rules(), PATROL.coalition_rules()
+    assert "lift up to its mass capacity" in household and "reach" not in household
+    assert "adds up for Patrol their visibility_area." in patrol and "mass" not in patrol
+    for rules in (household, patrol):
+        assert rules.startswith("# For each sub-task") and rules.endswith("# INFEASIBLE: <why>.\n")
+
+
+def test_a_household_goal_names_objects_in_any_state_or_receptacle_and_a_site_goal_places_in_its_states():
+    assert HOUSEHOLD.goal_terms() == GoalTerms("object", True, STATES)
+    assert PATROL.goal_terms() == GoalTerms("place", False, ("COVERED", "PHOTOGRAPHED", "RETURNED"))
+
+
+def test_the_goal_vocabulary_is_what_the_floor_plan_s_objects_can_become_or_what_the_site_s_skills_do():
+    kitchen = HOUSEHOLD.goal_vocabulary(1)
+    assert kitchen.states["Apple"] == {"COLD", "HOT", "PICKED", "SLICED"}
+    assert kitchen.states["LightSwitch"] == {"ON", "OFF"}
+    assert "Fridge" in kitchen.holders["Apple"] and "Toaster" not in kitchen.holders["Apple"]
+    assert "Toaster" in kitchen.holders["BreadSliced"]  # a piece only slicing makes
+    site = PATROL.goal_vocabulary("campus")
+    assert site.holders == {}
+    assert (site.states["Courtyard"], site.states["MainGate"], site.states["Base"]) == \
+        ({"COVERED"}, {"PHOTOGRAPHED"}, {"RETURNED"})
+    domain = load_domain("patrol")
+    no_camera = SimulatedSite(dataclasses.replace(domain, effects={s: e for s, e in domain.effects.items()
+                                                                   if e != "photograph"}))
+    assert "MainGate" not in no_camera.goal_vocabulary("campus").states
+    assert no_camera.goal_terms().states == ("COVERED", "RETURNED")
+
+
+def test_a_call_asks_nothing_more_in_a_house_and_on_a_site_its_place_s_reach_and_what_it_pools():
+    assert HOUSEHOLD.call_demand("PickupObject", ["Apple"]) is None
+    places = load_domain("patrol").places
+    assert PATROL.call_demand("Patrol", ["Courtyard"]) == Demand("Patrol", places["Courtyard"], "visibility_area", 350)
+    photo = PATROL.call_demand("ClickPicture", ["MainGate"])
+    assert photo is not None and photo.capacity == "camera_range" and 0 < photo.amount < 0.01
+    assert PATROL.call_demand("GoToLocation", ["WaterTank"]) == Demand("GoToLocation", places["WaterTank"])
+    assert PATROL.call_demand("GoToLocation", ["Base"]) is None  # anyone gets there; a move pools nothing
+
+
+def test_only_on_a_site_is_a_move_an_end_in_itself():
+    assert HOUSEHOLD.goto_acts is False and PATROL.goto_acts is True

@@ -47,8 +47,8 @@ def _check_statement(text: str, scene) -> GoalStatement:
     conditions = statement.conditions
     assert 1 <= len(conditions) <= MAX_GOALS and len(set(conditions)) == len(conditions), text
     for c in conditions:
-        if scene.site is not None:
-            kind = scene.site.places[c.subject].kind
+        if scene.world.kind == "site":
+            kind = scene.world.domain.places[c.subject].kind
             assert c.item is None and c.state == {"region": "COVERED", "object": "PHOTOGRAPHED"}.get(kind, "RETURNED")
         elif c.state is not None:
             need = NEEDS[c.state]

@@ -16,13 +16,21 @@ from unified_planning.shortcuts import SequentialSimulator
 
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import Domain, load_domain, starter_domain
+from smartllm_local.errors import UserError
 from smartllm_local.executor import run_site_plan
 from smartllm_local.executor.site import SiteWorld
 from smartllm_local.goal_language import parse_goal_statement, statement_of
-from smartllm_local.planner.classical.planning import plan_to_goal
+from smartllm_local.planner.classical.planning import (
+    GOAL_PLANNING,
+    HouseholdPlanning,
+    SitePlanning,
+    goal_planning,
+    plan_to_goal,
+)
 from smartllm_local.planner.classical.search import pddl
 from smartllm_local.planner.classical.site import EFFECT_TYPES, site_planning_task, teams
 from smartllm_local.scoring import condition_holds
+from smartllm_local.worlds import WORLDS, Ai2ThorWorld, SimulatedSite, world_of
 
 PATROL = load_domain("patrol")
 STARTER = load_domain(starter_domain())
@@ -56,7 +64,7 @@ def _run(domain, task):
     """Plan for the task's own goal and run the allocated plan (its parts in parallel) on the domain's site."""
     team = domain.catalogue.team(task.robots)
     record = plan_to_goal(statement_of(task.goals).conditions, task.floor_plan, team, domain.catalogue.skills,
-                          time_limit=LIMIT, name=task.id, site=domain)
+                          time_limit=LIMIT, name=task.id, world=world_of(domain))
     if record.plan is None or record.refusal is not None:
         return record, None
     execution = run_site_plan(record.plan, domain, team)
@@ -105,8 +113,20 @@ def test_calls_of_different_robots_are_parts_run_in_parallel():
                                        ("Moon photographed", "there is no 'Moon' on the site campus")])
 def test_a_goal_no_call_can_meet_is_refused_before_any_search(goal, why):
     record = plan_to_goal(parse_goal_statement(goal).conditions, "campus", PATROL.catalogue.team([1]),
-                          PATROL.catalogue.skills, time_limit=LIMIT, site=PATROL)
+                          PATROL.catalogue.skills, time_limit=LIMIT, world=world_of(PATROL))
     assert record.refused_by == "planner" and why in record.refusal and not record.prompt, "no PDDL: no search ran"
+
+
+def test_the_world_s_kind_picks_the_planning_model_and_a_kind_without_one_is_refused_by_name():
+    assert set(GOAL_PLANNING) == set(WORLDS)
+    team = PATROL.catalogue.team([1])
+    assert isinstance(goal_planning(world_of(PATROL), "campus", team, PATROL.catalogue.skills), SitePlanning)
+    household = load_domain("household").catalogue
+    assert isinstance(goal_planning(Ai2ThorWorld(), 1, household.team([1]), household.skills), HouseholdPlanning)
+    moon = type("Moon", (SimulatedSite,), {"kind": "moon"})(PATROL)
+    with pytest.raises(UserError, match="no planning model for a world of kind 'moon' .*GOAL_PLANNING"):
+        plan_to_goal(parse_goal_statement("Base returned").conditions, "campus", team, PATROL.catalogue.skills,
+                     time_limit=LIMIT, world=moon)
 
 
 # ------------------------------------------------------------------ random calls: the model against the executor
@@ -205,5 +225,5 @@ def test_a_camera_is_in_range_as_the_executor_measures_it():
     assert world.perform(PATROL.catalogue.skills["GoToLocation"], ["WarehouseRoof"], [0]).success
     assert world.perform(PATROL.catalogue.skills["ClickPicture"], ["WaterTank"], [0]).success
     record = plan_to_goal(parse_goal_statement("WaterTank photographed").conditions, "campus", team,
-                          PATROL.catalogue.skills, time_limit=LIMIT, site=PATROL)
+                          PATROL.catalogue.skills, time_limit=LIMIT, world=world_of(PATROL))
     assert "robot_list[0], 'WarehouseRoof')" in record.output and "[robots[0]]" in record.output

@@ -8,39 +8,113 @@ found, so a run folder keeps what a planning researcher needs to rerun the searc
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
 
-from ...domain import Domain
+from ...domain import AI2THOR
+from ...errors import UserError
 from ...executor.dry_run import DryRun
-from ...executor.site import unattainable
 from ...plan_language import parse_plan
 from ...robots import Robot
 from ...scoring import Condition
 from ...skills import SkillSet
+from ...worlds import Ai2ThorWorld, SimulatedSite, World
 from ..stages import StageRecord
 from .problem import PlanningTask, Unreachable, planning_task
-from .search import SEARCH, UP_LOCK, Search, search
+from .search import SEARCH, UP_LOCK, Search, Step, search
 from .site import goals_of, site_planning_task
-from .threads import parts, plan_text, robot_parts, spread
+from .threads import Part, parts, plan_text, robot_parts, spread
 
 STAGE = "allocation"
 REFUSED_BY = "planner"
 
 
+class GoalPlanning(Protocol):
+    """How one kind of world's rules become a planning task, and its plan threads: what the goal-planner asks
+    a world (the world sits below the planner, so its planning model is here, in :data:`GOAL_PLANNING`)."""
+
+    where: str  # what the world of a task is called in a refusal ("scene", "site")
+
+    def task(self, conditions: Sequence[Condition], name: str) -> PlanningTask: ...
+    def unreachable(self, conditions: Sequence[Condition]) -> list[str]: ...
+    def threads(self, task: PlanningTask, found: Search) -> tuple[list[Step], list[Part], str]: ...
+
+
+class HouseholdPlanning:
+    """AI2-THOR's rules (:mod:`.problem`) on the dry run's copy of the scene: Fast Downward's shortest plan,
+    its steps spread over the team's robots."""
+
+    where = "scene"
+
+    def __init__(self, world: Ai2ThorWorld, floor_plan: str | int, team: Sequence[Robot], skills: SkillSet):
+        self.dry: DryRun = world.dry_run(floor_plan, skills, team)
+        self.team, self.skills = team, skills
+
+    def task(self, conditions: Sequence[Condition], name: str) -> PlanningTask:
+        return planning_task(self.dry, self.team, self.skills, conditions, name=name)
+
+    def unreachable(self, conditions: Sequence[Condition]) -> list[str]:
+        """Nothing beyond Fast Downward's proof."""
+        return []
+
+    def threads(self, task: PlanningTask, found: Search) -> tuple[list[Step], list[Part], str]:
+        split = parts(found.steps, self.dry.objects)
+        _, steps, split = spread(task, found.actions, list(found.steps), split, len(self.team))
+        return steps, split, "shortest plan"
+
+
+class SitePlanning:
+    """A site domain's rules (:mod:`.site`, from its domain file): a call by more robots costs more, so the
+    plan is the cheapest in robot-calls, and steps of different robots commute (a part is the steps that share
+    robots)."""
+
+    where = "site"
+
+    def __init__(self, world: SimulatedSite, floor_plan: str | int, team: Sequence[Robot], skills: SkillSet):
+        self.world, self.floor_plan, self.team, self.skills = world, floor_plan, team, skills
+
+    def task(self, conditions: Sequence[Condition], name: str) -> PlanningTask:
+        return site_planning_task(self.world.domain, self.team, conditions, name=name)
+
+    def unreachable(self, conditions: Sequence[Condition]) -> list[str]:
+        """The goals the team can never meet on the site, each with why (the world's own judgement)."""
+        return self.world.unattainable(goals_of(conditions), self.team, self.skills, self.floor_plan)
+
+    def threads(self, task: PlanningTask, found: Search) -> tuple[list[Step], list[Part], str]:
+        return list(found.steps), robot_parts(found.steps), "plan with the fewest robot-calls"
+
+
+#: Each kind of world's planning model (a world's ``kind``), made for one task's world, scene, team and skills.
+GOAL_PLANNING: dict[str, Callable[[Any, str | int, Sequence[Robot], SkillSet], GoalPlanning]] = {
+    AI2THOR: HouseholdPlanning,
+    "site": SitePlanning,
+}
+
+
+def goal_planning(world: World, floor_plan: str | int, team: Sequence[Robot], skills: SkillSet) -> GoalPlanning:
+    """The planning model of ``world``'s kind for one task.
+
+    Raises:
+        UserError: no planning model is written for the world's kind (the goal-planner cannot plan there).
+    """
+    make = GOAL_PLANNING.get(world.kind)
+    if make is None:
+        raise UserError(f"the goal-planner has no planning model for a world of kind {world.kind!r} (it has "
+                        f"{', '.join(GOAL_PLANNING)}): plan with another --method, or add one to "
+                        "smartllm_local.planner.classical.planning.GOAL_PLANNING")
+    return make(world, floor_plan, team, skills)
+
+
 def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: Sequence[Robot], skills: SkillSet,
-                 *, time_limit: float, name: str = "task", site: Domain | None = None) -> StageRecord:
-    """Plan for ``team`` in ``floor_plan`` (or on ``site``, a site domain) until every condition holds (the
+                 *, time_limit: float, name: str = "task", world: World | None = None) -> StageRecord:
+    """Plan for ``team`` in ``floor_plan`` of ``world`` (default AI2-THOR's) until every condition holds (the
     scorer's conditions)."""
     started = time.perf_counter()
     record = StageRecord(STAGE)
-    dry = DryRun(floor_plan, team, skills) if site is None else None
+    model = goal_planning(world or Ai2ThorWorld(), floor_plan, team, skills)
     with UP_LOCK:
         try:
-            if site is not None:
-                task = site_planning_task(site, team, conditions, name=_problem_name(name))
-            else:
-                assert dry is not None
-                task = planning_task(dry, team, skills, conditions, name=_problem_name(name))
+            task = model.task(conditions, _problem_name(name))
         except Unreachable as exc:
             _refuse(record, f"the planner found no plan: {exc}")
             record.seconds = time.perf_counter() - started
@@ -52,33 +126,19 @@ def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: S
         record.error = (f"the planner's time limit ran out: Fast Downward found no plan in {time_limit:g} s "
                         "(raise it with --planner-time-limit)")
     elif found.unsolvable:
-        why = "; ".join(unattainable(site, goals_of(conditions), team)) if site is not None else ""
-        _refuse(record, f"the planner found no plan: the team cannot reach the goal in this "
-                        f"{'scene' if site is None else 'site'} (Fast Downward proved it: {found.status})"
-                        + (f": {why}" if why else ""))
+        why = "; ".join(model.unreachable(conditions))
+        _refuse(record, f"the planner found no plan: the team cannot reach the goal in this {model.where} "
+                        f"(Fast Downward proved it: {found.status})" + (f": {why}" if why else ""))
     elif not found.steps:
         record.error = "the goal holds already: there is nothing to plan"
     else:
-        record.output = _allocated(task, found, dry, len(team))
+        steps, split, what = model.threads(task, found)
+        record.output = plan_text(steps, split, f"goal-planner: Fast Downward's {what} ({SEARCH}), {len(steps)} "
+                                                f"steps, in {len(split)} part(s) run in parallel\n\n")
         record.plan = parse_plan(record.output, form="allocated", skills=skills, team_size=len(team),
                                  name="<goal-planner allocation>")
     record.seconds = time.perf_counter() - started
     return record
-
-
-def _allocated(task: PlanningTask, found: Search, dry: DryRun | None, team_size: int) -> str:
-    """The plan found as sub-tasks run in parallel. On a site (no dry run) a call by more robots costs more,
-    so the plan is the cheapest in robot-calls, and steps of different robots commute: a part is the steps
-    that share robots."""
-    if dry is None:
-        steps, split = list(found.steps), robot_parts(found.steps)
-        what = "plan with the fewest robot-calls"
-    else:
-        split = parts(found.steps, dry.objects)
-        _, steps, split = spread(task, found.actions, list(found.steps), split, team_size)
-        what = "shortest plan"
-    return plan_text(steps, split, f"goal-planner: Fast Downward's {what} ({SEARCH}), {len(steps)} steps, "
-                                   f"in {len(split)} part(s) run in parallel\n\n")
 
 
 def _refuse(record: StageRecord, why: str) -> None:

@@ -59,8 +59,9 @@ class Candidates:
         self.allocated = allocated
         self.world = world
         self.max_steps = max_steps
-        # On a site, a move is an end in itself (back to base): a function may end with one, or make two.
-        self.goto_acts = scene.site is not None
+        # Where the world says a move is an end in itself (a site's: back to base), a function may end with
+        # one, or make two.
+        self.goto_acts = scene.world.goto_acts
         self._cache: dict[tuple, list[Candidate]] = {}
         self._every = list(self._filtered(None))
         self.action_max = max(self.line_len(c) for c in self._every)

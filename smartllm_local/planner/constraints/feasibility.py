@@ -1,7 +1,8 @@
 """Which robots can do what: the team knowledge the coalition and allocation grammars build on.
 
 A robot can use only its own skills and lift up to its mass capacity; a team
-pools skills and capacities. On a site, a call also asks that its robots get
+pools skills and capacities. A call may ask more, as its world says
+(:meth:`~smartllm_local.worlds.World.call_demand`): on a site, that its robots get
 where it acts (a roof: aerial robots only) and, for a patrol, that the members
 with the skill pool the region's area. The coalition grammar admits, for each sub-task,
 only the teams that have every skill its function uses and can lift the
@@ -21,33 +22,14 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from itertools import combinations, permutations
 
-from ...domain import Place, pooled
+from ...domain import pooled
 from ...plan_language import Plan
 from ...plan_language.ir import Call, SkillCall
 from ...robots import Robot, team_skills
-from ...scene import SceneObjects
+from ...scene import MASS_TOLERANCE, Demand, SceneObjects
 
-MASS_TOLERANCE = 1e-6  # scene masses are float32
-SOME_CAMERA = 1e-3  # metres: a photograph needs a robot with some camera (how far it sees, the world check asks)
 EXACT_COALITIONS = 6  # teams up to this size are enumerated
 EXACT_ALLOCATIONS = 5  # robot lists (ordered) up to this team size are enumerated
-
-
-@dataclass(frozen=True)
-class Demand:
-    """What one call on a site asks of the robots that make it: to get to ``place`` (its reach), and for
-    a pooling skill, ``amount`` of ``capacity`` from the members that have ``skill`` and get there (a
-    camera: some camera_range)."""
-
-    skill: str
-    place: Place
-    capacity: str = ""
-    amount: float = 0.0
-
-    def met_by(self, robots: Sequence[Robot]) -> bool:
-        able = [r for r in robots if self.skill in r.skills and self.place.reachable_by(r)]
-        return bool(able) and (not self.capacity or pooled(able, self.skill, self.capacity)
-                               + MASS_TOLERANCE >= self.amount)
 
 
 @dataclass(frozen=True)
@@ -56,7 +38,7 @@ class Need:
 
     skills: frozenset[str]
     mass: float  # the heaviest object it picks up (kg)
-    demands: frozenset[Demand] = frozenset()  # a site domain's: where its calls go, what they pool
+    demands: frozenset[Demand] = frozenset()  # where its calls go, what they pool (as the world asks)
 
 
 @dataclass(frozen=True)
@@ -66,20 +48,7 @@ class Step:
     slot: int | None
     skill: str
     mass: float  # of the object picked up, else 0
-    demand: Demand | None = None  # on a site: every actor must get there (a team goes together)
-
-
-def call_demand(scene: SceneObjects, skill: str, objects: Sequence[str]) -> Demand | None:
-    """What a call asks on a site (None: nothing beyond the skill, or not a site)."""
-    site = scene.site
-    place = site.place(objects[0]) if site is not None and objects else None
-    if site is None or place is None:
-        return None
-    if site.effects.get(skill) == "patrol":
-        return Demand(skill, place, site.pools[skill], place.area)
-    if site.effects.get(skill) == "photograph":
-        return Demand(skill, place, "camera_range", SOME_CAMERA)
-    return Demand(skill, place) if place.reach is not None else None
+    demand: Demand | None = None  # where the world asks it: every actor must get there (a team goes together)
 
 
 def function_needs(plan: Plan, scene: SceneObjects,
@@ -99,7 +68,7 @@ def function_needs(plan: Plan, scene: SceneObjects,
                     skills.add(step.skill)
                     if step.skill in pickups and step.objects:
                         mass = max(mass, scene.masses.get(step.objects[0], 0.0))
-                    demand = call_demand(scene, step.skill, step.objects)
+                    demand = scene.world.call_demand(step.skill, step.objects)
                     if demand is not None:
                         demands.add(demand)
                 elif isinstance(step, Call):
@@ -163,9 +132,9 @@ class WholeTeam:
         self._memo: dict[tuple[str, str], bool] = {}
 
     def need(self, skill: str, objects: Sequence[str]) -> Need:
-        """What one call asks: its skill, the mass of what it picks up, and on a site where it goes."""
+        """What one call asks: its skill, the mass of what it picks up, and what else its world asks (where it goes)."""
         mass = self.scene.masses.get(objects[0], 0.0) if skill in self.pickups and objects else 0.0
-        demand = call_demand(self.scene, skill, objects)
+        demand = self.scene.world.call_demand(skill, objects)
         return Need(frozenset({skill}), mass, frozenset({demand} if demand else ()))
 
     def can(self, skill: str, objects: Sequence[str]) -> bool:

@@ -10,76 +10,21 @@ one condition; the first line may instead be a refusal. At most :data:`MAX_GOALS
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass
-from functools import cache
 from itertools import count
 
-from ...goal_language import CONTAINMENT, OPPOSITES, STATE_WORDS, object_states, parse_goal_statement
-from ...scene import SceneObjects
+from ...goal_language import CONTAINMENT, OPPOSITES, STATE_WORDS, parse_goal_statement
+from ...scene import GoalVocabulary, SceneObjects
 from ...scoring import Condition
-from ...world.object_types import RECEPTACLE_ONLY_ACCEPTS, SLICE_RESULTS, TYPE_PROPERTIES
-from ...world.scenes import load_scene
 from ..decoding.grammar import Node, Ref, alt, seq
 from ..decoding.protocol import Choose, Constraint, longest
 from .format import refusal_line
 
 MAX_GOALS = 8
-#: A site entry's kind, the effect a skill must have for the world to give it a state, and that state.
-SITE_GOALS = {"region": ("patrol", "COVERED"), "object": ("photograph", "PHOTOGRAPHED"),
-              "location": ("move", "RETURNED")}
-
-
-@dataclass(frozen=True)
-class GoalVocabulary:
-    """What a goal may say about a scene: each type's states, and the receptacles each type can be put in."""
-
-    states: Mapping[str, frozenset[str]]
-    holders: Mapping[str, frozenset[str]]
-
-    @property
-    def types(self) -> tuple[str, ...]:
-        named = set(self.states) | set(self.holders)
-        return tuple(sorted(t for t in named if self.states.get(t) or self.holders.get(t)))
-
-    def state_names(self) -> list[str]:
-        """The states any type of the scene can be in, in the scorer's order."""
-        present = set().union(*self.states.values()) if self.states else set()
-        return [s for s in STATE_WORDS if s in present]
 
 
 def goal_vocabulary(scene: SceneObjects) -> GoalVocabulary:
-    """The goal vocabulary of an AI2-THOR floor plan (its objects' flags, and the slices they can be cut
-    into), or of a site (a region covered, an object photographed, a location the team returns to, each
-    where a skill of the domain has that effect)."""
-    if scene.site is not None:
-        effects = set(scene.site.effects.values())
-        states = {p.name: frozenset({SITE_GOALS[p.kind][1]}) for p in scene.site.places.values()
-                  if SITE_GOALS[p.kind][0] in effects}
-        return GoalVocabulary(states, {})
-    return _floor_plan_vocabulary(scene.floor_plan)
-
-
-@cache  # a floor plan's objects never change; a benchmark asks for the same few again and again
-def _floor_plan_vocabulary(floor_plan: str) -> GoalVocabulary:
-    flags: dict[str, dict[str, bool]] = {}
-    for obj in load_scene(floor_plan):
-        seen = flags.setdefault(obj["objectType"], {})
-        for name, value in obj.items():
-            if isinstance(value, bool) and value:
-                seen[name] = True
-    for whole in [t for t in flags if t in SLICE_RESULTS]:
-        piece = SLICE_RESULTS[whole][0]
-        flags.setdefault(piece, {p: True for p in TYPE_PROPERTIES[piece]})
-    states = {t: object_states(f, t) for t, f in flags.items()}
-    receptacles = [t for t, f in flags.items() if f.get("receptacle")]
-
-    def can_hold(receptacle: str, item: str) -> bool:
-        only = RECEPTACLE_ONLY_ACCEPTS.get(receptacle)
-        return receptacle != item and (only is None or item in only)
-
-    holders = {t: frozenset(r for r in receptacles if can_hold(r, t)) for t, f in flags.items() if f.get("pickupable")}
-    return GoalVocabulary(states, holders)
+    """What a goal may say in ``scene``: the states and holders its world gives the scene's objects."""
+    return scene.world.goal_vocabulary(scene.floor_plan)
 
 
 class GoalConstraint(Constraint):

@@ -44,7 +44,7 @@ from ..decoding.line_ends import COMMENT_NEXT, INDENTED_NEXT
 from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, Rewrite, longest
 from .budget import Budget
 from .candidates import Candidates
-from .feasibility import Step, WholeTeam, call_demand
+from .feasibility import Step, WholeTeam
 from .finish import Finish
 from .format import (
     COMMENT_LEN,
@@ -428,7 +428,7 @@ class PlanConstraint(Orchestration, Constraint):
     def _steps(self, fn: WrittenFunction) -> list[Step]:
         pickups = {s.name for s in self.skills if s.action == "PickupObject"}
         return [Step(slot, skill, self.scene.masses.get(objects[0], 0.0) if skill in pickups else 0.0,
-                     call_demand(self.scene, skill, objects))
+                     self.scene.world.call_demand(skill, objects))
                 for slot, skill, objects in fn.calls]
 
     # --------------------------------------------------------------- feeding

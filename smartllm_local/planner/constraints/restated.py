@@ -29,7 +29,7 @@ from ...skills import Skill, SkillSet
 from ..decoding.grammar import alt, seq
 from ..decoding.protocol import Choose, Forced
 from .candidates import acts_on
-from .feasibility import Step, call_demand, feasible_lists
+from .feasibility import Step, feasible_lists
 from .format import INDENT
 from .plan import STEP_LINE, PlanConstraint
 from .world_check import Call, Thread, WorldCheck
@@ -234,7 +234,8 @@ class RestatedAllocation(PlanConstraint):
                     or acts_on((skill, tuple(objects))) not in (self.candidates.place(fn, slot), None)):
                 continue  # with a world check, robots act on what they went to in this function
             if self.team is not None:
-                steps = self._steps(fn) + [Step(slot, skill.name, mass, call_demand(self.scene, skill.name, objects))]
+                demand = self.scene.world.call_demand(skill.name, objects)
+                steps = self._steps(fn) + [Step(slot, skill.name, mass, demand)]
                 lists = feasible_lists(self.team, steps, max(1, fn.max_index + 1, (slot or 0) + 1))
                 if lists is not None and not lists:
                     continue

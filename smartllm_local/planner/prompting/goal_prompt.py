@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ...errors import UserError
 from ...goal_language import STATE_WORDS
-from ...scene import SceneObjects
+from ...scene import GoalTerms, SceneObjects
 from ..constraints.goal import goal_vocabulary
 from .prompts import Prompt
 
@@ -48,11 +48,11 @@ def load_goal_examples(prompts: Path) -> list[GoalExample]:
     return examples
 
 
-def goal_intro(states: Sequence[str], site: bool) -> str:
-    """The rules, with the states this domain's world knows."""
-    thing = "place" if site else "object"
-    words = ", ".join(STATE_WORDS[s] for s in states)
-    containment = "" if site else ' or "<Object> in <Receptacle>"'
+def goal_intro(terms: GoalTerms) -> str:
+    """The rules, in the terms of the task's world: what a condition names, and the states it knows."""
+    thing = terms.thing
+    words = ", ".join(STATE_WORDS[s] for s in terms.states)
+    containment = f' or "<{thing.capitalize()}> in <Receptacle>"' if terms.containment else ""
     return f"""\
 # For each task below, write what must be true once it is done, one condition per line:
 # "<{thing.capitalize()}> <state>"{containment}, naming only the {thing}s listed.
@@ -66,10 +66,9 @@ def names_list(scene: SceneObjects) -> str:
     return repr(list(goal_vocabulary(scene).types))
 
 
-def goal_prompt(instruction: str, scene: SceneObjects, examples: Sequence[GoalExample],
-                states: Sequence[str]) -> Prompt:
+def goal_prompt(instruction: str, scene: SceneObjects, examples: Sequence[GoalExample]) -> Prompt:
     """The prompt in parts, as the decomposition's: examples, the scene's objects, the task's own words."""
-    parts = [goal_intro(states, scene.site is not None)]
+    parts = [goal_intro(scene.world.goal_terms())]
     for k, ex in enumerate(examples, start=1):
         seen = scene.world.scene(ex.floor_plan)
         parts.append(f"\n# Example {k}\nobjects = {names_list(seen)}\n# Task Description: {ex.instruction}\n"

@@ -199,16 +199,6 @@ DECOMPOSITION_INTRO = """\
 # says what is missing: # INFEASIBLE: <why>.
 """
 
-COALITION_INTRO = """\
-# For each sub-task of a plan, choose the robot, or the team of robots, that will do it.
-# A robot can only use its own skills and lift up to its mass capacity; a team pools
-# its members' skills and lifts the sum of their capacities. Reason before choosing: say
-# what the sub-task needs (its skills, and the mass of what it lifts), which robots have
-# those skills and that strength, and what is missing; only then, after "so", name the
-# robot or team. Prefer a single robot when one can do the whole sub-task. If no robot or
-# team can do a sub-task, answer with one line: # INFEASIBLE: <why>.
-"""
-
 ALLOCATION_INTRO = """\
 # Each plan below is rewritten for its robots: every function takes robot_list, every
 # skill call names the robot (robot_list[0]) or the whole team (robot_list) that acts,
@@ -242,22 +232,6 @@ def plan_object_types(code: str, scene: SceneObjects) -> list[str]:
     return [t for t in dict.fromkeys(_QUOTED.findall(code)) if t in scene.masses]
 
 
-def coalition_intro(scene: SceneObjects) -> str:
-    """The coalition rules as the prompt states them: household's lifting, or a site's reach and pooling."""
-    if scene.site is None:
-        return COALITION_INTRO
-    pools = ", ".join(f"for {skill} their {capacity}" for skill, capacity in scene.site.pools.items())
-    return f"""\
-# For each sub-task of a plan, choose the robot, or the team of robots, that will do it.
-# A robot can only use its own skills and go only where its kind may (a place's reach); a
-# team pools its members' skills and adds up {pools}. Reason before choosing: say what the
-# sub-task needs (its skills, what it pools, where only some robots go), which robots have
-# that, and what is missing; only then, after "so", name the robot or team. Prefer a single
-# robot when one can do the whole sub-task. If no robot or team can do a sub-task, answer
-# with one line: # INFEASIBLE: <why>.
-"""
-
-
 ALLOCATION_GLUE = "# Allocated plan:\n"
 
 TEAM_INTRO = """\
@@ -276,8 +250,8 @@ def coalition_prompt(decomposed: str, team: Sequence[Robot], scene: SceneObjects
     its own. Decompositions appear without their line comments: a coalition weighs what each sub-task
     calls and lifts, not why each step is taken."""
     bare = PromptOptions(comments=False, summary=options.summary)
-    parts = [skills_header(skills), "\n", coalition_intro(scene), TEAM_INTRO] if allocations \
-        else [coalition_intro(scene)]
+    rules = scene.world.coalition_rules()
+    parts = [skills_header(skills), "\n", rules, TEAM_INTRO] if allocations else [rules]
     for k, ex in enumerate(examples, start=1):
         ex_team = [catalogue[i] for i in ex.robots]
         objects = _example_scene(ex, scene).python_list(ex.object_types())
