@@ -56,7 +56,7 @@ def test_a_reference_plan_runs_at_speed_1_and_a_padded_one_slower(tmp_path):
     from smartllm_local.benchmark.tasks import load_tasks
     from smartllm_local.domain import load_domain
     from smartllm_local.plan_language import parse_plan
-    from smartllm_local.planner.pipeline import PlanResult
+    from smartllm_local.planner.result import PlanResult
     from smartllm_local.world.controller import open_controller
 
     catalogue = load_domain().catalogue

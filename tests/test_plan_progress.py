@@ -11,7 +11,7 @@ import pytest
 from rich.console import Console
 
 from smartllm_local.cli.progress import PlanProgress
-from smartllm_local.planner.stages import StageRecord
+from smartllm_local.planner.result import StageRecord
 
 KEPT = "they are now kept in the prefix store /states, and later runs on this model start from them"
 ESCAPE = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")

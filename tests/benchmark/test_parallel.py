@@ -16,7 +16,7 @@ from smartllm_local.benchmark.run import run_benchmark
 from smartllm_local.benchmark.run_store import RunStore
 from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
-from smartllm_local.planner.stages import StageRecord
+from smartllm_local.planner.result import StageRecord
 from tests.benchmark.test_resume import _Recorded
 from tests.test_cli_errors import cli, one_line_error
 

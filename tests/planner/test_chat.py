@@ -16,8 +16,8 @@ from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner import pipeline
 from smartllm_local.planner.backends import load_backend
-from smartllm_local.planner.backends.base import Generated, Sampling
-from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult, write_artifacts
+from smartllm_local.planner.decoding.sampling import Generated, Sampling
+from smartllm_local.planner.pipeline import Planner, PlannerConfig, write_artifacts
 from smartllm_local.planner.prompting.chat import (
     APPLIED,
     BASE_MODEL,
@@ -28,8 +28,8 @@ from smartllm_local.planner.prompting.chat import (
     prompt_tokens,
 )
 from smartllm_local.planner.prompting.prompts import Prompt
-from smartllm_local.planner.stages import STOP_STRINGS, Fitted, StageRecord, fit_prompt, run_stage
-from smartllm_local.worlds import scene_objects
+from smartllm_local.planner.result import PlanResult, StageRecord
+from smartllm_local.planner.stages import STOP_STRINGS, Fitted, fit_prompt, run_stage
 from tests.planner.fakes import FakeBackend
 from tests.test_cli_errors import cli, one_line_error
 
@@ -145,7 +145,7 @@ def first_prompt(backend, config: PlannerConfig, task, monkeypatch) -> tuple[Pla
     monkeypatch.setattr(pipeline, "fit_prompt", fit)
     planner = Planner(recording, load_domain().catalogue, config)
     with pytest.raises(_Seen):
-        planner.decompose(_result(task), scene_objects(task.floor_plan))
+        planner.decompose(_result(task))
     return planner, fitted[0].text, fitted[0].tokens, recording.contexts[0]
 
 
@@ -165,7 +165,8 @@ def test_a_base_model_falls_back_to_the_raw_prompt_and_says_so(kitchen09, monkey
         assert tokens == gemma.tokenize(prompt, bos=True) == context[: len(tokens)]
     finally:
         gemma.close()
-    result = PlanResult("x", "FloorPlan6", [1], stages=[StageRecord("decomposition", chat_template=BASE_MODEL)])
+    record = StageRecord("decomposition", chat_template=BASE_MODEL)
+    result = PlanResult("x", "FloorPlan6", [1], stages={"decomposition": record})
     write_artifacts(result, tmp_path)
     assert json.loads((tmp_path / "decomposition" / "timings.json").read_text())["chat_template"] == BASE_MODEL
 

@@ -10,10 +10,10 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.decoding.grammar import Grammar, chars, rep, seq
 from smartllm_local.planner.decoding.loop import generate
 from smartllm_local.planner.decoding.matcher import Matcher
+from smartllm_local.planner.decoding.sampling import Sampling
 
 #: One token per character, more than the 64 the loop looks at first; the end of sequence last.
 ALPHABET = "\nabc#" + "".join(sorted(set(string.printable) - set("\nabc#\t\r\x0b\x0c")))

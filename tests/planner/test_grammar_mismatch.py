@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 from smartllm_local.errors import GrammarMismatchError
-from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.decoding.grammar import Grammar, alt
-from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+from smartllm_local.planner.decoding.sampling import Generated, Sampling
+from smartllm_local.planner.result import StageRecord
+from smartllm_local.planner.stages import Fitted, run_stage
 
 from .fakes import FakeBackend, Script
 

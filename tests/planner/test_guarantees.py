@@ -22,7 +22,6 @@ from smartllm_local.domain import load_domain
 from smartllm_local.errors import SmartLLMError
 from smartllm_local.executor import run_plan
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.backends.repetition import LoopGuard
 from smartllm_local.planner.constraints.coalition import CoalitionConstraint
 from smartllm_local.planner.constraints.feasibility import function_needs
 from smartllm_local.planner.constraints.format import MAX_SUBTASKS
@@ -31,6 +30,7 @@ from smartllm_local.planner.constraints.restated import RestatedAllocation, rest
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.constraints.written import robots_named
 from smartllm_local.planner.decoding.protocol import Constraint, Forced
+from smartllm_local.planner.decoding.repetition import LoopGuard
 from smartllm_local.planner.decoding.writer import (
     BudgetError,
     GuaranteeError,

@@ -12,12 +12,13 @@ import pytest
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import ModelError
-from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.backends.lanes import open_lanes
-from smartllm_local.planner.backends.repetition import LoopGuard
 from smartllm_local.planner.decoding.grammar import Grammar, GrammarError, alt, chars, rep, seq
 from smartllm_local.planner.decoding.matcher import Matcher
-from smartllm_local.planner.pipeline import Planner, PlanResult
+from smartllm_local.planner.decoding.repetition import LoopGuard
+from smartllm_local.planner.decoding.sampling import Sampling
+from smartllm_local.planner.pipeline import Planner
+from smartllm_local.planner.result import PlanResult
 
 FRUIT = "# a list of fruit:\n"
 WORDS = Grammar({"root": seq("# ", rep(chars("abcdefghijklmnopqrstuvwxyz "), 1, 40), "\n")})
@@ -50,7 +51,7 @@ def decompose(backend, task_id: str):
     planner = Planner(backend, load_domain().catalogue)
     scene = planner.scene(task.floor_plan)
     result = PlanResult(instruction=task.instruction, floor_plan=scene.floor_plan, robots=list(task.robots))
-    return planner.decompose(result, scene)
+    return planner.decompose(result)
 
 
 @pytest.fixture(scope="module")

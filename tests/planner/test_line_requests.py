@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import pytest
 
-from smartllm_local.planner.backends.base import Sampling
-from smartllm_local.planner.backends.repetition import LoopGuard
 from smartllm_local.planner.backends.server.line_requests import LineRequests, WrongLine
 from smartllm_local.planner.constraints.format import COMMENT_CHARS, text_run
 from smartllm_local.planner.decoding.grammar import Grammar, Ref, alt, seq
 from smartllm_local.planner.decoding.matcher import Matcher
+from smartllm_local.planner.decoding.repetition import LoopGuard
+from smartllm_local.planner.decoding.sampling import Sampling
 
 PUT = Grammar({"obj": alt("'Apple'", "'Fridge'"), "root": seq("    PutObject(", Ref("obj"), ", 'Bowl')\n")})
 CONTEXT = [1, 2, 3]

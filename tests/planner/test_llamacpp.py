@@ -10,9 +10,9 @@ import pytest
 
 from smartllm_local.errors import ModelError
 from smartllm_local.planner.backends import load_backend
-from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.decoding.grammar import Grammar, GrammarError, alt, chars, rep, seq
 from smartllm_local.planner.decoding.loop import Choice
+from smartllm_local.planner.decoding.sampling import Sampling
 
 from .test_repetition import check_loop_guard
 
@@ -179,7 +179,7 @@ def test_an_end_of_sequence_far_down_the_models_ranking_is_not_its_choice(smollm
     """Where neither the end of sequence nor any token the grammar admits is among the model's 64 likeliest,
     the model goes on under the grammar, though the end is likelier than what it writes: there the end is
     only the least unlikely token left, and a server, which reports the 64 likeliest, would not see it."""
-    from smartllm_local.planner.backends.base import may_end
+    from smartllm_local.planner.decoding.sampling import may_end
 
     grammar = Grammar({"root": alt("zqxj\n", "monary\n")})
     smollm2.sync(smollm2.tokenize(PROMPT, bos=True))

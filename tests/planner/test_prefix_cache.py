@@ -24,7 +24,8 @@ from smartllm_local.planner.backends.prefix_cache import (
     open_store,
     state_key,
 )
-from smartllm_local.planner.pipeline import Planner, PlanResult
+from smartllm_local.planner.pipeline import Planner
+from smartllm_local.planner.result import PlanResult
 from smartllm_local.worlds import scene_objects
 from tests.test_cli_errors import cli, one_line_error
 
@@ -121,15 +122,17 @@ def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone(
         alone = Planner(alone_backend, catalogue).plan(second.instruction, second.floor_plan, second.robots)
     finally:
         alone_backend.close()
-    assert [r.output for r in after.stages] == [r.output for r in alone.stages] and after.allocated
-    *fresh, allocation = alone.stages
-    assert all(r.reused_tokens == 0 and r.shared_tokens > 0 for r in fresh)
-    decomposition, coalition, _ = zip(before.stages, after.stages)
+    assert list(after.stages) == list(alone.stages) == ["decomposition", "coalition", "allocation"]
+    assert [r.output for r in after.stages.values()] == [r.output for r in alone.stages.values()] and after.allocated
+    assert all(alone.stage(name).reused_tokens == 0 and alone.stage(name).shared_tokens > 0
+               for name in ("decomposition", "coalition"))
+    decomposition, coalition = ((before.stage(name), after.stage(name)) for name in ("decomposition", "coalition"))
     assert decomposition[1].reused_tokens > decomposition[1].shared_tokens > 0
     assert decomposition[1].prompt_tokens - decomposition[1].reused_tokens < 80  # the team's skills and the instruction
     assert coalition[1].reused_tokens == (coalition[1].shared_tokens if coalition[0].examples == coalition[1].examples
                                           else 0)
-    for record, coalition in ((allocation, alone.stages[1]), (after.stages[2], after.stages[1])):
+    for run in (alone, after):
+        record, coalition = run.stage("allocation"), run.stage("coalition")
         # the coalition's context as it was evaluated (what it wrote, not the end of sequence it chose), then
         # the line that opens the allocation, and any lines the coalition's completion forced after that end
         assert record.reused_tokens >= coalition.prompt_tokens + coalition.generated_tokens - 1
@@ -223,8 +226,7 @@ def test_where_keeping_does_not_pay_prompts_are_evaluated_whole_and_plan_the_sam
         dear.keeps_states = dear.stores_states = None  # measured, as where layers are on a GPU
         dear.MEMORY_BYTES_PER_S = 1.0
         planner = Planner(dear, catalogue)
-        record = planner.decompose(PlanResult(task.instruction, task.floor_plan, list(task.robots)),
-                                   scene_objects(task.floor_plan))
+        record = planner.decompose(PlanResult(task.instruction, task.floor_plan, list(task.robots)))
         assert dear.keeps_states is False and dear.stores_states is False
         assert not (tmp_path / "states").exists() or not entries(tmp_path / "states")
         context = list(dear._tokens[:-2])  # the prompt and most of what was written after it
@@ -234,8 +236,8 @@ def test_where_keeping_does_not_pay_prompts_are_evaluated_whole_and_plan_the_sam
         assert len(context) - 3 <= reused < len(context)  # the live cache's prefix: its last token or two again
     finally:
         dear.close()
-    kept = Planner(smollm2, catalogue).decompose(PlanResult(task.instruction, task.floor_plan, list(task.robots)),
-                                                 scene_objects(task.floor_plan))
+    kept = Planner(smollm2, catalogue).decompose(PlanResult(task.instruction, task.floor_plan,
+                                                            list(task.robots)))
     assert record.output == kept.output and record.reused_tokens == 0
 
 

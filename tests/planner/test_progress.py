@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.decoding.grammar import Grammar, alt
-from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+from smartllm_local.planner.decoding.sampling import Sampling
+from smartllm_local.planner.result import StageRecord
+from smartllm_local.planner.stages import Fitted, run_stage
 
 from .fakes import FakeBackend, Script
 

@@ -37,7 +37,7 @@ def plan_with(backend, catalogue, **options):
 
 def test_the_three_prompts_have_their_parts(catalogue):
     result = plan_with(FakeBackend(), catalogue)
-    decomposition, coalition, allocation = (r.prompt for r in result.stages)
+    decomposition, coalition, allocation = (result.stage(name).prompt for name in STAGES)
     assert decomposition.startswith("import threading\nimport time\n")
     own_task = decomposition.split("# Your task")[1]
     assert f"\nfrom skills import {', '.join(catalogue.skills)}\n# Task Description: {INSTRUCTION}\n" in own_task, \
@@ -49,7 +49,7 @@ def test_the_three_prompts_have_their_parts(catalogue):
     assert decomposition.endswith(f"# Task Description: {INSTRUCTION}\n")
     assert len(re.findall(r"^# Example \d$", coalition, re.M)) == in_stage["coalition"]
     own = coalition.split("# Your plan")[1]
-    called = set(re.findall(r"^    (\w+)\(", result.stages[0].output, re.M))
+    called = set(re.findall(r"^    (\w+)\(", result.stage("decomposition").output, re.M))
     for i, robot in enumerate(catalogue.robots[r] for r in (29, 24, 25)):
         skills = sorted(robot.skills & called)
         assert f"'name': 'robots[{i}]', 'id': {robot.id}, 'skills': {skills!r}, 'mass_capacity': 100}}" in own, \
@@ -63,19 +63,20 @@ def test_the_three_prompts_have_their_parts(catalogue):
         "each feasible example's coalition is followed by its allocated plan"
     assert "# INFEASIBLE: SubTask 1 (subtask1_coffee_machine_on): no robot of the team has SwitchOn;" \
         in examples_part
-    assert strip_comments(result.stages[0].output) in coalition and "    # " not in own
-    assert allocation == coalition + result.stages[1].output + "# Allocated plan:\n", \
+    assert strip_comments(result.stage("decomposition").output) in coalition and "    # " not in own
+    assert allocation == coalition + result.stage("coalition").output + "# Allocated plan:\n", \
         "the allocation goes on in the coalition's context"
-    assert result.stages[2].shared_tokens == result.stages[1].shared_tokens > 0
+    assert result.stage("allocation").shared_tokens == result.stage("coalition").shared_tokens > 0
 
 
 def test_a_context_too_short_for_the_shared_prompt_gets_the_papers_two_prompts(catalogue):
     """Where the shared prompt's examples, both budgets and a task's own part do not fit (a 4,096-token
     Llama-2), the coalition has a prompt without allocations and the allocation one of its own, which
     shows each example's coalition cut to its decisions, then the task's."""
-    shared = plan_with(FakeBackend(), catalogue).stages[1].shared_tokens
+    shared = plan_with(FakeBackend(), catalogue).stage("coalition").shared_tokens
     need = shared + 896 + 1280 + OWN_PART
-    _, coalition, allocation = plan_with(FakeBackend(n_ctx=need - 1), catalogue).stages
+    two = plan_with(FakeBackend(n_ctx=need - 1), catalogue)
+    coalition, allocation = two.stage("coalition"), two.stage("allocation")
     assert "# Allocated plan:" not in coalition.prompt and coalition.prompt.endswith("# Coalition:\n")
     examples = load_examples()
     assert coalition.shared_tokens < shared and len(re.findall(r"^# Example \d$", coalition.prompt, re.M)) \
@@ -87,22 +88,25 @@ def test_a_context_too_short_for_the_shared_prompt_gets_the_papers_two_prompts(c
         "robots[1] and robots[2]\n# Allocated plan:" in allocation.prompt, "the examples' coalitions without reasoning"
     # At exactly that context the two share a prompt (it may keep fewer examples where this task's own part,
     # the fake model's random plan, is longer than OWN_PART).
-    _, coalition, allocation = plan_with(FakeBackend(n_ctx=need), catalogue).stages
+    one = plan_with(FakeBackend(n_ctx=need), catalogue)
+    coalition, allocation = one.stage("coalition"), one.stage("allocation")
     assert allocation.prompt.startswith(coalition.prompt) and "# Allocated plan:" in coalition.prompt
 
 
 def test_ablations_change_the_prompts(catalogue):
     full = plan_with(FakeBackend(), catalogue)
     bare = plan_with(FakeBackend(), catalogue, comments=False, summary=False, coalition=False)
-    assert [r.stage for r in bare.stages] == ["decomposition", "allocation"]
-    examples_part = bare.stages[0].prompt.split("# Your task")[0]
-    assert "# SubTask 1:" not in examples_part and "# SubTask 1:" in full.stages[0].prompt
-    assert not re.search(r"^    #", examples_part, re.M) and re.search(r"^    #", full.stages[0].prompt, re.M)
-    assert "# Coalition:" not in bare.stages[1].prompt
-    assert "robots = [" in bare.stages[1].prompt
-    assert len(re.findall(r"^# Example \d$", bare.stages[1].prompt, re.M)) == sum(
+    assert list(bare.stages) == ["decomposition", "allocation"]
+    examples_part = bare.stage("decomposition").prompt.split("# Your task")[0]
+    full_prompt = full.stage("decomposition").prompt
+    assert "# SubTask 1:" not in examples_part and "# SubTask 1:" in full_prompt
+    assert not re.search(r"^    #", examples_part, re.M) and re.search(r"^    #", full_prompt, re.M)
+    allocation = bare.stage("allocation").prompt
+    assert "# Coalition:" not in allocation
+    assert "robots = [" in allocation
+    assert len(re.findall(r"^# Example \d$", allocation, re.M)) == sum(
         "allocation" in e.stages for e in load_examples()), "the allocation's own examples"
-    assert bare.stages[1].prompt.endswith("# Allocated plan:\n")
+    assert allocation.endswith("# Allocated plan:\n")
 
 
 def test_strip_helpers():
@@ -115,9 +119,9 @@ def test_strip_helpers():
 def test_examples_are_dropped_from_the_last_when_the_context_is_short(catalogue):
     """So the examples kept are the first of the file, and their text begins every prompt that keeps as many."""
     full = plan_with(FakeBackend(), catalogue)
-    squeezed = plan_with(FakeBackend(n_ctx=full.stages[0].prompt_tokens + 1024 - 300), catalogue)
-    first = squeezed.stages[0]
-    assert first.dropped and first.examples + first.dropped == full.stages[0].examples
+    squeezed = plan_with(FakeBackend(n_ctx=full.stage("decomposition").prompt_tokens + 1024 - 300), catalogue)
+    first = squeezed.stage("decomposition")
+    assert first.dropped and first.examples + first.dropped == full.stage("decomposition").examples
     assert "dropped example(s)" in squeezed.notices[0]
     with pytest.raises(UserError, match="raise --n-ctx"):
         plan_with(FakeBackend(n_ctx=1500), catalogue)
@@ -128,7 +132,8 @@ def test_output_budgets_follow_the_task(catalogue):
     one's is estimated from the decomposition."""
     budgets = {"decomposition": 1024, "coalition": 512, "allocation": 9000}
     free = Planner(FakeBackend(n_ctx=16384), catalogue, PlannerConfig(budgets=budgets, restate=False))
-    decomposition, _, allocation = free.plan(INSTRUCTION, 6, [29, 24, 25]).stages
+    planned = free.plan(INSTRUCTION, 6, [29, 24, 25])
+    decomposition, allocation = planned.stage("decomposition"), planned.stage("allocation")
     written = decomposition.generated_tokens + decomposition.forced_tokens
     functions = len(decomposition.plan.functions)
     assert written and functions
@@ -137,7 +142,8 @@ def test_output_budgets_follow_the_task(catalogue):
     assert allocation.generated_tokens + allocation.forced_tokens <= allocation.output_budget
 
     restated = Planner(FakeBackend(n_ctx=16384), catalogue, PlannerConfig(budgets=budgets))
-    decomposition, _, allocation = restated.plan(INSTRUCTION, 6, [29, 24, 25]).stages
+    planned = restated.plan(INSTRUCTION, 6, [29, 24, 25])
+    decomposition, allocation = planned.stage("decomposition"), planned.stage("allocation")
     assert len(allocation.output) <= allocation.output_budget < len(allocation.output) + 64 * functions + 400
 
 
@@ -145,7 +151,7 @@ def test_a_refusal_stops_the_pipeline_and_becomes_the_plan(catalogue, tmp_path):
     """Robots 24 and 25 switch, and carry, and do nothing else: a decomposition for them may refuse, and its
     reason names skills neither has."""
     result = Planner(FakeBackend(refuse=True), catalogue).plan(INSTRUCTION, 6, [24, 25])
-    assert result.refusal and [r.stage for r in result.stages] == ["decomposition"]
+    assert result.refusal and list(result.stages) == ["decomposition"]
     assert result.refused_by == "model"
     lacking = result.refusal.removeprefix("no robot of the team has ").split(", ")
     assert lacking and not set(lacking) & (catalogue.robots[24].skills | catalogue.robots[25].skills)
@@ -160,24 +166,29 @@ def test_artifacts_hold_every_stage(catalogue, tmp_path):
     for stage in ("decomposition", "coalition", "allocation"):
         for name in ("prompt.txt", "grammar.gbnf", "raw_output.txt", "timings.json"):
             assert (tmp_path / stage / name).stat().st_size > 0, (stage, name)
-    assert (tmp_path / "decomposed.py").read_text() == result.stages[0].output
-    assert (tmp_path / "coalition.txt").read_text() == result.stages[1].output
+    assert (tmp_path / "decomposed.py").read_text() == result.stage("decomposition").output
+    assert (tmp_path / "coalition.txt").read_text() == result.stage("coalition").output
     assert (tmp_path / "allocated.py").read_text() == result.allocated
     assert "root ::=" in (tmp_path / "allocation" / "grammar.gbnf").read_text()
 
 
 def _record(stage, output, grammars=("root ::= x",)):
-    from smartllm_local.planner.stages import StageRecord
+    from smartllm_local.planner.result import StageRecord
 
     return StageRecord(stage=stage, prompt=f"{stage} prompt", grammars=list(grammars), raw=output, output=output)
 
 
-def test_artifacts_of_stages_not_run_again_are_removed(tmp_path):
-    from smartllm_local.planner.pipeline import PlanResult
+def _stages(*records):
+    """A result's stages: the records by name."""
+    return {record.stage: record for record in records}
 
-    first = PlanResult("Put the apple in the fridge", "FloorPlan6", [1, 2], stages=[
+
+def test_artifacts_of_stages_not_run_again_are_removed(tmp_path):
+    from smartllm_local.planner.result import PlanResult
+
+    first = PlanResult("Put the apple in the fridge", "FloorPlan6", [1, 2], stages=_stages(
         _record("decomposition", "def f():\n    pass\n"), _record("coalition", "# SubTask 1 (f): robots[0]\n"),
-        _record("allocation", "f(robots[0])\n")], allocated="f(robots[0])\n")
+        _record("allocation", "f(robots[0])\n")), allocated="f(robots[0])\n")
     write_artifacts(first, tmp_path)
     assert (tmp_path / "coalition.txt").is_file() and (tmp_path / "coalition" / "prompt.txt").is_file()
     (tmp_path / "notes.txt").write_text("mine")  # the user's own files are never touched
@@ -185,8 +196,8 @@ def test_artifacts_of_stages_not_run_again_are_removed(tmp_path):
     (tmp_path / "allocation" / "mine").mkdir()
 
     # the same folder again, with --no-coalition and no grammar for the decomposition
-    second = PlanResult("Put the apple in the fridge", "FloorPlan6", [1, 2], stages=[
-        _record("decomposition", "def g():\n    pass\n", grammars=()), _record("allocation", "g(robots[1])\n")],
+    second = PlanResult("Put the apple in the fridge", "FloorPlan6", [1, 2], stages=_stages(
+        _record("decomposition", "def g():\n    pass\n", grammars=()), _record("allocation", "g(robots[1])\n")),
         allocated="g(robots[1])\n")
     write_artifacts(second, tmp_path)
     assert not (tmp_path / "coalition.txt").exists()
@@ -199,7 +210,8 @@ def test_artifacts_of_stages_not_run_again_are_removed(tmp_path):
 
     # a refusal at the decomposition: only its stage, the refusal as the plan, and result.json
     (tmp_path / "coalition" / "mine.txt").unlink()
-    refusal = PlanResult("Lift the fridge", "FloorPlan6", [1], stages=[_record("decomposition", "# INFEASIBLE: x\n")],
+    refusal = PlanResult("Lift the fridge", "FloorPlan6", [1],
+                         stages=_stages(_record("decomposition", "# INFEASIBLE: x\n")),
                          allocated="# INFEASIBLE: x\n", refusal="x")
     write_artifacts(refusal, tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == [
@@ -208,7 +220,8 @@ def test_artifacts_of_stages_not_run_again_are_removed(tmp_path):
     assert (tmp_path / "allocated.py").read_text() == "# INFEASIBLE: x\n"
 
     # no plan at all (a failed decomposition): no allocated.py left from before
-    failed = PlanResult("x", "FloorPlan6", [1], stages=[_record("decomposition", "")], error="decomposition: bad")
+    failed = PlanResult("x", "FloorPlan6", [1], stages=_stages(_record("decomposition", "")),
+                        error="decomposition: bad")
     write_artifacts(failed, tmp_path)
     assert not (tmp_path / "allocated.py").exists() and (tmp_path / "decomposed.py").read_text() == ""
 

@@ -12,14 +12,15 @@ from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.executor.dry_run import DryRun, notional_robot
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.constraints.format import MAX_SUBTASKS
 from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.repair import Repairer, effect
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.protocol import Constraint, Rewrite
+from smartllm_local.planner.decoding.sampling import Sampling
 from smartllm_local.planner.decoding.writer import REWRITTEN, run_constraint, run_tokens, shortest_line
-from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+from smartllm_local.planner.result import StageRecord
+from smartllm_local.planner.stages import Fitted, run_stage
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
 

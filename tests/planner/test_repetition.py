@@ -10,8 +10,6 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from smartllm_local.domain import load_domain
-from smartllm_local.planner.backends.base import Generated, Sampling
-from smartllm_local.planner.backends.repetition import LoopGuard, current_line, draw
 from smartllm_local.planner.constraints.coalition import CoalitionConstraint
 from smartllm_local.planner.constraints.format import COMMENT_CHARS, MAX_SUBTASKS, text_run
 from smartllm_local.planner.constraints.plan import PlanConstraint
@@ -19,7 +17,10 @@ from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.grammar import Grammar, alt, opt, seq
 from smartllm_local.planner.decoding.matcher import Matcher
 from smartllm_local.planner.decoding.protocol import Choose
-from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+from smartllm_local.planner.decoding.repetition import LoopGuard, current_line, draw
+from smartllm_local.planner.decoding.sampling import Generated, Sampling
+from smartllm_local.planner.result import StageRecord
+from smartllm_local.planner.stages import Fitted, run_stage
 from smartllm_local.worlds import scene_objects
 
 from .fakes import FakeBackend

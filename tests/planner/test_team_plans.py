@@ -16,8 +16,8 @@ from smartllm_local.planner.constraints.format import MAX_SUBTASKS
 from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import accepts, run_constraint, run_tokens
-from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.stages import StageRecord
+from smartllm_local.planner.pipeline import Planner
+from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.robots import Robot, team_skills
 from smartllm_local.worlds import scene_objects
 
@@ -192,8 +192,7 @@ def test_the_planner_records_the_catalogues_reason_for_a_coalition_refusal():
                   "    PutObject('Knife', 'CounterTop')\n\nsubtask1_slice()\n")
     plan = parse_plan(decomposed, form="decomposed")
     result = PlanResult("Cut the potato into slices.", "FloorPlan6", task_robots,
-                        stages=[StageRecord("decomposition", output=decomposed, plan=plan)])
-    Planner(FakeBackend(refuse=True), CATALOGUE).form_coalition(result, plan, CATALOGUE.team(task_robots),
-                                                                scene_objects(6))
+                        stages={"decomposition": StageRecord("decomposition", output=decomposed, plan=plan)})
+    Planner(FakeBackend(refuse=True), CATALOGUE).form_coalition(result)
     assert result.refusal == "SubTask 1 (subtask1_slice): no robot of the team has SliceObject"
     assert result.refused_by == "grammar"

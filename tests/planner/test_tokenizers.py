@@ -21,12 +21,12 @@ import pytest
 
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
-from smartllm_local.planner.backends.base import Generated, Sampling
 from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
 from smartllm_local.planner.backends.server.vocabulary import end_tokens_by_rule
 from smartllm_local.planner.decoding.grammar import Grammar, alt, seq
 from smartllm_local.planner.decoding.loop import forced_tokens
 from smartllm_local.planner.decoding.matcher import Matcher
+from smartllm_local.planner.decoding.sampling import Generated, Sampling
 from smartllm_local.planner.models import embedded_model_path
 from smartllm_local.planner.prompting.chat import prompt_tokens
 from smartllm_local.planner.prompting.prompts import (
@@ -37,7 +37,8 @@ from smartllm_local.planner.prompting.prompts import (
     examples_for,
     load_examples,
 )
-from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+from smartllm_local.planner.result import StageRecord
+from smartllm_local.planner.stages import Fitted, run_stage
 from smartllm_local.worlds import scene_objects
 
 from .fakes import Script

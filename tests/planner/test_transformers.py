@@ -12,12 +12,12 @@ import torch
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import BackendUnavailableError
 from smartllm_local.planner.backends import load_backend
-from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.backends.transformers import _placement, _quiet_loading
 from smartllm_local.planner.decoding.grammar import Grammar, alt
+from smartllm_local.planner.decoding.sampling import Sampling
 from smartllm_local.planner.models import embedded_model_path
-from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
-from smartllm_local.worlds import scene_objects
+from smartllm_local.planner.pipeline import Planner, PlannerConfig
+from smartllm_local.planner.result import PlanResult
 
 from .conftest import LOAD_STDERR
 from .test_repetition import check_loop_guard
@@ -42,7 +42,7 @@ def test_constraints_bite_through_llguidance(hf_smollm2):
 def test_an_end_of_sequence_far_down_the_models_ranking_is_not_its_choice(hf_smollm2):
     """As in the llama.cpp backend: the end of sequence, likelier than anything this grammar admits but not among
     the model's 64 likeliest tokens (at the start of its answer), does not end the line."""
-    from smartllm_local.planner.backends.base import may_end
+    from smartllm_local.planner.decoding.sampling import may_end
     from smartllm_local.planner.prompting.chat import chat_format, prompt_tokens
 
     chat, _ = chat_format(hf_smollm2, "auto")
@@ -64,9 +64,9 @@ def test_a_decomposition_is_a_valid_plan_and_its_prompt_state_is_kept(hf_smollm2
     cache. Every stage is in the heavy suite."""
     planner = Planner(hf_smollm2, load_domain().catalogue, PlannerConfig(budgets={"decomposition": 400}))
     result = PlanResult("Turn off the light.", "FloorPlan6", [1])
-    first = planner.decompose(result, scene_objects(6))
-    assert not first.error and (first.refusal is not None or result.stages[0].plan is not None), first.error
-    again = planner.decompose(PlanResult("Turn off the light.", "FloorPlan6", [1]), scene_objects(6))
+    first = planner.decompose(result)
+    assert not first.error and (first.refusal is not None or first.plan is not None), first.error
+    again = planner.decompose(PlanResult("Turn off the light.", "FloorPlan6", [1]))
     assert again.reused_tokens > again.shared_tokens == first.shared_tokens > 0
     assert again.prompt_tokens - again.reused_tokens < 80
     assert first.reused_tokens == 0 and again.output == first.output
@@ -79,15 +79,15 @@ def test_a_task_planned_through_all_stages(hf_smollm2):
     result = planner.plan("Turn off the light.", 6, [1])
     assert not result.error, result.error
     assert result.plan is not None
-    stages = [r.stage for r in result.stages]
-    assert result.refusal is not None or stages == ["decomposition", "coalition", "allocation"]
+    assert result.refusal is not None or list(result.stages) == ["decomposition", "coalition", "allocation"]
     # the examples' and the scene's states are kept in memory: decomposing again evaluates only what follows
     # the scene (the team's skills and the instruction, in its chat turn), and writes what it wrote from an
     # empty cache
-    again = planner.decompose(PlanResult("Turn off the light.", "FloorPlan6", [1]), scene_objects(6))
-    assert again.reused_tokens > again.shared_tokens == result.stages[0].shared_tokens > 0
+    again = planner.decompose(PlanResult("Turn off the light.", "FloorPlan6", [1]))
+    assert again.reused_tokens > again.shared_tokens == result.stage("decomposition").shared_tokens > 0
     assert again.prompt_tokens - again.reused_tokens < 80
-    assert result.stages[0].reused_tokens == 0 and again.output == result.stages[0].output
+    decomposition = result.stage("decomposition")
+    assert decomposition.reused_tokens == 0 and again.output == decomposition.output
 
 
 # ------------------------------------------------------------------ loading quietly, failing clearly

@@ -17,7 +17,7 @@ from ...plan_language import parse_plan
 from ...robots import Robot
 from ...scoring import Condition
 from ...skills import SkillSet
-from ..stages import StageRecord
+from ..result import StageRecord
 from .problem import PlanningTask, Unreachable, planning_task
 from .search import SEARCH, UP_LOCK, Search, search
 from .site import goals_of, site_planning_task
