@@ -15,8 +15,7 @@ from smartllm_local.domain import load_domain, starter_domain
 from smartllm_local.planner.pipeline import Planner
 from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.planner.steps import run_steps
-
-from .conftest import benchmark_run
+from tests.conftest import benchmark_run
 
 HOUSEHOLD = load_domain("household")
 CATALOGUE = HOUSEHOLD.catalogue

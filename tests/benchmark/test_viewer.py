@@ -16,8 +16,7 @@ import pytest
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 from smartllm_local.report.viewer import load_view, render_page, write_viewer
-
-from .conftest import benchmark_run
+from tests.conftest import benchmark_run
 
 CLI = [sys.executable, "-m", "smartllm_local"]
 DOMAIN = load_domain()

@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from smartllm_local.report.viewer import write_viewer
+from tests.conftest import benchmark_run
 
-from .conftest import benchmark_run
 from .test_viewer import _tasks_file
 
 pytestmark = pytest.mark.heavy
