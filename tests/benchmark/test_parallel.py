@@ -123,13 +123,13 @@ class _Overlapping(_Recorded):
         super().__init__()
         self.scored, self.waited = scored, False
 
-    def _run(self, stage):
-        noted = super()._run(stage)
+    def _run(self, stage, task):
+        noted = super()._run(stage, task)
 
-        def run(task, result):
+        def run(result):
             if (stage, task.id) == ("coalition", "kitchen-05"):
                 self.waited = self.scored.wait(TIMEOUT)
-            noted(task, result)
+            noted(result)
         return run
 
 
