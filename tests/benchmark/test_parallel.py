@@ -18,7 +18,7 @@ from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.planner.result import StageRecord
 from tests.benchmark.test_resume import _Recorded
-from tests.test_cli_errors import cli, one_line_error
+from tests.cli.test_cli_errors import cli, one_line_error
 
 TIMEOUT = 60  # seconds a scheduler test may take before it is called hung
 

@@ -1,5 +1,5 @@
 """A stage tells its progress as it runs: started, prompt evaluated, its tokens so far, ended (the events the CLI
-shows; tests/test_plan_progress.py shows them, tests/planner/test_end_to_end.py has the real planner's)."""
+shows; tests/cli/test_plan_progress.py shows them, tests/planner/test_end_to_end.py has the real planner's)."""
 
 from __future__ import annotations
 

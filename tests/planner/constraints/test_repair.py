@@ -23,8 +23,7 @@ from smartllm_local.planner.result import StageRecord
 from smartllm_local.planner.stages import Fitted, run_stage
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
-
-from .writers import TokenAdversary
+from tests.planner.writers import TokenAdversary
 
 CATALOGUE = load_domain().catalogue
 SKILLS = CATALOGUE.skills

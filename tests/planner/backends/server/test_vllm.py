@@ -21,8 +21,8 @@ import pytest
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.backends.server.backend import connect
-from tests.planner.test_server_backend import Server, lines
-from tests.test_cli_errors import cli, one_line_error
+from tests.cli.test_cli_errors import cli, one_line_error
+from tests.planner.backends.server.test_server_backend import Server, lines
 from tests.vllm_server import ENVIRONMENT, SERVE, smollm2_checkpoint, vllm_python
 
 TASKS = ("kitchen-01", "living-01")
@@ -106,7 +106,7 @@ def test_vllms_grammar_engine_reads_every_grammar_the_planner_sends_as_the_plann
     """XGrammar (vLLM's grammar engine) is given the grammar of what may follow every third cut of every line
     adversarial writers write through three tasks' stages, with the rest of the line and texts that almost
     follow: it admits exactly what the planner's own grammar admits."""
-    from tests.planner import test_guarantees as guarantees
+    from tests.planner.constraints import test_guarantees as guarantees
 
     rng = random.Random(11)
     cases = []

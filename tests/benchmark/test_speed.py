@@ -9,7 +9,7 @@ import pytest
 
 from smartllm_local.benchmark.speed import later_prompt_costs
 from smartllm_local.benchmark.tasks import load_tasks
-from tests.test_cli_errors import cli, one_line_error
+from tests.cli.test_cli_errors import cli, one_line_error
 
 
 @pytest.mark.heavy

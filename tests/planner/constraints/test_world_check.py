@@ -20,8 +20,7 @@ from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import accepts, run_constraint
 from smartllm_local.world.controller import open_controller
 from smartllm_local.worlds import scene_objects
-
-from .writers import writer
+from tests.planner.writers import writer
 
 CATALOGUE = load_domain().catalogue
 PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObject"]

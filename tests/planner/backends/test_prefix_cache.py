@@ -27,7 +27,7 @@ from smartllm_local.planner.backends.prefix_cache import (
 from smartllm_local.planner.pipeline import Planner
 from smartllm_local.planner.result import PlanResult
 from smartllm_local.worlds import scene_objects
-from tests.test_cli_errors import cli, one_line_error
+from tests.cli.test_cli_errors import cli, one_line_error
 
 PREFIX = [1, 5, 9, 200]
 

@@ -20,9 +20,8 @@ from smartllm_local.planner.pipeline import Planner
 from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.robots import Robot, team_skills
 from smartllm_local.worlds import scene_objects
-
-from .fakes import FakeBackend
-from .writers import WRITERS, TokenAdversary, writer
+from tests.planner.fakes import FakeBackend
+from tests.planner.writers import WRITERS, TokenAdversary, writer
 
 CATALOGUE = load_domain().catalogue
 SKILLS = CATALOGUE.skills

@@ -18,9 +18,9 @@ from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import run_constraint, run_tokens
 from smartllm_local.scoring import Condition, condition_holds, containment
 from smartllm_local.worlds import scene_objects
+from tests.planner.writers import TokenAdversary
 
 from .test_repair import CATALOGUE, SKILLS, _scripted
-from .writers import TokenAdversary
 
 SLICE_BREAD = ["def subtask1_slice_bread():\n", "    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
                "    GoToObject('Bread')\n", "    SliceObject('Bread')\n", "    GoToObject('CounterTop')\n",

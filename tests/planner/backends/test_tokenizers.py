@@ -40,10 +40,9 @@ from smartllm_local.planner.prompting.prompts import (
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.planner.stages import Fitted, run_stage
 from smartllm_local.worlds import scene_objects
+from tests.planner.fakes import Script
 
-from .fakes import Script
-
-VOCAB_DIR = Path(__file__).parent.parent / "fixtures" / "vocab"
+VOCAB_DIR = Path(__file__).parents[2] / "fixtures" / "vocab"
 #: family -> whether its models start a sequence with a BOS token
 FAMILIES = {"llama-spm": True, "phi-3": True, "llama-bpe": True, "qwen2": False, "deepseek-coder": True,
             "smollm2": False, "gemma3-270m": True}

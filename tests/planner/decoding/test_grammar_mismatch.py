@@ -11,8 +11,7 @@ from smartllm_local.planner.decoding.grammar import Grammar, alt
 from smartllm_local.planner.decoding.sampling import Generated, Sampling
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.planner.stages import Fitted, run_stage
-
-from .fakes import FakeBackend, Script
+from tests.planner.fakes import FakeBackend, Script
 
 
 class Diverging(Grammar):

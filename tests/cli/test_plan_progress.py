@@ -1,6 +1,6 @@
 """``plan``'s progress display: a live line per stage on a terminal, a plain line per stage elsewhere, nothing
 with --quiet; the examples' first evaluation explained once. The real command's lines on a pipe, and --quiet's
-silence, are tested on real runs (tests/planner/test_end_to_end.py, tests/planner/test_prefix_cache.py)."""
+silence, are tested on real runs (tests/planner/test_end_to_end.py, tests/planner/backends/test_prefix_cache.py)."""
 
 from __future__ import annotations
 

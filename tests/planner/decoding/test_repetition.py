@@ -22,10 +22,9 @@ from smartllm_local.planner.decoding.sampling import Generated, Sampling
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.planner.stages import Fitted, run_stage
 from smartllm_local.worlds import scene_objects
+from tests.planner.fakes import FakeBackend
 
-from .fakes import FakeBackend
-
-DOMAINS = Path(__file__).resolve().parents[2] / "domains"
+DOMAINS = Path(__file__).resolve().parents[3] / "domains"
 GUARD = LoopGuard()
 
 

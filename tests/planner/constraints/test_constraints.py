@@ -16,8 +16,7 @@ from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
 from smartllm_local.planner.prompting.prompts import load_examples
 from smartllm_local.skills import DEFAULT_SKILL_SET
 from smartllm_local.worlds import scene_objects
-
-from .writers import WRITERS, writer
+from tests.planner.writers import WRITERS, writer
 
 SCENES = [1, 6, 201, 212, 301, 320, 401, 410]
 

@@ -13,8 +13,7 @@ from smartllm_local.planner.backends import load_backend
 from smartllm_local.planner.decoding.grammar import Grammar, GrammarError, alt, chars, rep, seq
 from smartllm_local.planner.decoding.loop import Choice
 from smartllm_local.planner.decoding.sampling import Sampling
-
-from .test_repetition import check_loop_guard
+from tests.planner.decoding.test_repetition import check_loop_guard
 
 PROMPT = "The capital of France is"
 

@@ -19,8 +19,7 @@ from smartllm_local.planner.prompting.prompts import (
     strip_summary,
 )
 from smartllm_local.worlds import scene_objects
-
-from .fakes import FakeBackend
+from tests.planner.fakes import FakeBackend
 
 INSTRUCTION = "Put the apple in the fridge and turn off the light."
 

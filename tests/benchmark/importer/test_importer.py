@@ -13,7 +13,7 @@ from smartllm_local.benchmark.tasks import check_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
 
-FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "smartllm_final_test"
+FIXTURE = Path(__file__).resolve().parents[2] / "fixtures" / "smartllm_final_test"
 FINAL_TEST = FIXTURE / "data" / "final_test"
 
 # Every note the fixture must produce, in order: one per repaired, guessed or skipped line or file.

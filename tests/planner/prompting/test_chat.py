@@ -30,8 +30,8 @@ from smartllm_local.planner.prompting.chat import (
 from smartllm_local.planner.prompting.prompts import Prompt
 from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.planner.stages import STOP_STRINGS, Fitted, fit_prompt, run_stage
+from tests.cli.test_cli_errors import cli, one_line_error
 from tests.planner.fakes import FakeBackend
-from tests.test_cli_errors import cli, one_line_error
 
 
 def _result(task):

@@ -43,10 +43,9 @@ from smartllm_local.robots import team_skills
 from smartllm_local.skills import DEFAULT_SKILL_SET, SkillSet
 from smartllm_local.world.controller import open_controller
 from smartllm_local.worlds import scene_objects
+from tests.planner.writers import WRITERS, Booker, Cycler, TokenAdversary, writer
 
-from .writers import WRITERS, Booker, Cycler, TokenAdversary, writer
-
-FIXTURE = Path(__file__).parent.parent / "fixtures" / "smartllm_final_test"
+FIXTURE = Path(__file__).parents[2] / "fixtures" / "smartllm_final_test"
 CATALOGUE = load_domain().catalogue
 PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObject"]
 

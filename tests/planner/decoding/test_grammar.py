@@ -114,7 +114,7 @@ def test_after_real_stage_lines_llama_cpp_reads_the_grammar_and_forces_the_same_
     rest of the line must be is the same in the grammar after the cut as in the whole grammar, and
     llama.cpp's grammar engine reads the grammar a server is sent."""
     from smartllm_local.planner.decoding.matcher import Matcher
-    from tests.planner import test_guarantees as guarantees
+    from tests.planner.constraints import test_guarantees as guarantees
 
     lines = guarantees.collect_lines(random.Random(7), ["kitchen-01", "living-01", "bathroom-01"])
     assert len(lines) > 100

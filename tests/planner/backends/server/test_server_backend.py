@@ -23,8 +23,8 @@ import pytest
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.models import resolve_gguf
+from tests.cli.test_cli_errors import cli, one_line_error
 from tests.llama_server import llama_server
-from tests.test_cli_errors import cli, one_line_error
 
 TASKS = ("kitchen-01", "living-01")
 

@@ -18,9 +18,8 @@ from smartllm_local.planner.decoding.sampling import Sampling
 from smartllm_local.planner.models import embedded_model_path
 from smartllm_local.planner.pipeline import Planner, PlannerConfig
 from smartllm_local.planner.result import PlanResult
-
-from .conftest import LOAD_STDERR
-from .test_repetition import check_loop_guard
+from tests.planner.conftest import LOAD_STDERR
+from tests.planner.decoding.test_repetition import check_loop_guard
 
 
 def test_loads_on_the_cpu_in_float32_without_a_progress_bar(hf_smollm2):
