@@ -32,15 +32,15 @@ import numpy as np
 
 from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
-from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.backends.llamacpp import LlamaCppBackend
 from smartllm_local.planner.backends.llamacpp_decoding import LlamaGrammar
 from smartllm_local.planner.backends.llguidance_grammar import LLGuidanceGrammar
 from smartllm_local.planner.decoding.grammar import Grammar
 from smartllm_local.planner.decoding.loop import Choice
+from smartllm_local.planner.decoding.sampling import Sampling
 from smartllm_local.planner.models import resolve_gguf
-from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.worlds import scene_objects
+from smartllm_local.planner.pipeline import Planner
+from smartllm_local.planner.result import PlanResult
 
 
 class Timed:
@@ -174,7 +174,7 @@ def measure(model: str, task_ids: list[str]) -> dict:
         planner = Planner(backend, catalogue)
         for task in (find_task(load_tasks(), t) for t in task_ids):
             result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
-            planner.decompose(result, scene_objects(task.floor_plan))
+            planner.decompose(result)
     finally:
         backend.close()
     per = lambda key, n: round(1e6 * backend.times[key] / max(1, n), 1)  # noqa: E731

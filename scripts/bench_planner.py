@@ -31,9 +31,8 @@ from collections.abc import Sequence
 from smartllm_local.benchmark.tasks import Task, find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.planner.backends import BACKENDS, Sampling, load_backend
-from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
-from smartllm_local.planner.stages import StageRecord
-from smartllm_local.worlds import scene_objects
+from smartllm_local.planner.pipeline import Planner, PlannerConfig
+from smartllm_local.planner.result import PlanResult, StageRecord
 
 
 def raw_speed(args: argparse.Namespace, prompt: str, n: int = 64) -> tuple[float, float, int]:
@@ -58,25 +57,20 @@ def load(args: argparse.Namespace):
 
 def free_stages(planner: Planner, task: Task, guided: PlanResult) -> list[StageRecord]:
     """Each stage the grammar run reached, run free on the grammar run's outputs of the earlier stages."""
-    catalogue = planner.catalogue
-    team = catalogue.team(task.robots)
-    scene = scene_objects(task.floor_plan)
-    done = {record.stage: record for record in guided.stages}
-    records = []
+    done = guided.stages
+    scene = planner.scene(task.floor_plan)
 
-    def fresh(*earlier: StageRecord) -> PlanResult:
+    def fresh(*earlier: str) -> PlanResult:
         return PlanResult(instruction=task.instruction, floor_plan=scene.floor_plan, robots=list(task.robots),
-                          stages=list(earlier))
+                          stages={name: done[name] for name in earlier if name in done})
 
-    if "decomposition" in done:
-        records.append(planner.decompose(fresh(), scene))
+    steps = {"decomposition": (planner.decompose, ()), "coalition": (planner.form_coalition, ("decomposition",)),
+             "allocation": (planner.allocate, ("decomposition", "coalition"))}
     decomposition = done.get("decomposition")
-    if decomposition is not None and decomposition.plan is not None:
-        if "coalition" in done:
-            records.append(planner.form_coalition(fresh(decomposition), decomposition.plan, team, scene))
-        if "allocation" in done:
-            coalition = done.get("coalition")
-            records.append(planner.allocate(fresh(decomposition), decomposition.plan, coalition, team, scene))
+    records = []
+    for name, (run, earlier) in steps.items():
+        if name in done and (name == "decomposition" or (decomposition is not None and decomposition.plan is not None)):
+            records.append(run(fresh(*earlier)))
     return records
 
 
@@ -121,7 +115,7 @@ def main() -> None:
                                                                                task.robots)
     finally:
         backend.close()
-    print_table(f"with grammar ({args.backend}, {backend.model})", guided.stages)
+    print_table(f"with grammar ({args.backend}, {backend.model})", list(guided.stages.values()))
 
     backend = load(args)
     try:
@@ -129,14 +123,14 @@ def main() -> None:
     finally:
         backend.close()
     print_table("without grammar (each stage fed the grammar run's outputs of the earlier stages)", free,
-                guided.stages)
+                list(guided.stages.values()))
     missing = [stage for stage in ("decomposition", "coalition", "allocation")
-               if stage not in {record.stage for record in guided.stages}]
+               if stage not in guided.stages]
     if missing:
         print(f"  not run: {', '.join(missing)} (the grammar run stopped before them: "
               f"{guided.refusal and 'refusal' or guided.error or 'no coalition stage'})")
 
-    prompt_rate, decode_rate, decoded = raw_speed(args, guided.stages[0].prompt)
+    prompt_rate, decode_rate, decoded = raw_speed(args, guided.stage("decomposition").prompt)
     print(f"\nraw speed on the decomposition prompt: "
           f"prompt evaluation {prompt_rate:.0f} tok/s, decoding {decode_rate:.1f} tok/s ({decoded} tokens)")
 

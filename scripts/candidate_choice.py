@@ -19,8 +19,7 @@ from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.goal_stage import stated_conditions
-from smartllm_local.planner.pipeline import PlanResult
-from smartllm_local.planner.stages import StageRecord
+from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.planner.verifier import Weights, check_decomposition, choose, score
 from smartllm_local.worlds import scene_objects
 
@@ -39,7 +38,7 @@ def task_rows(run: Path) -> list[list[dict]]:
         scene = scene_objects(task.floor_plan)
         goal = StageRecord("goal", output=(path.parent.parent / "goals.txt").read_text()) \
             if (path.parent.parent / "goals.txt").is_file() else None
-        stated = stated_conditions(PlanResult("", "", [], stages=[goal] if goal else []), scene)
+        stated = stated_conditions(PlanResult("", "", [], stages={goal.stage: goal} if goal else {}), scene)
         truth = [c for g in task.goals for c in g.conditions()]
         found = []
         for candidate in json.loads(path.read_text()):

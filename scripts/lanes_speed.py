@@ -30,13 +30,14 @@ import time
 from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.planner.backends import Sampling, load_backend
-from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
+from smartllm_local.planner.pipeline import Planner, PlannerConfig
+from smartllm_local.planner.result import PlanResult
 
 
 def decompose(backend, task, sampling: Sampling):
     planner = Planner(backend, load_domain().catalogue, PlannerConfig(sampling=sampling))
     scene = planner.scene(task.floor_plan)
-    return planner.decompose(PlanResult(task.instruction, scene.floor_plan, list(task.robots)), scene)
+    return planner.decompose(PlanResult(task.instruction, scene.floor_plan, list(task.robots)))
 
 
 def setting(backend, n: int, tasks: list, temperature: float, unified: bool) -> dict:

@@ -95,3 +95,98 @@ def test_the_check_finds_an_import_upwards(tmp_path):
     (fake / "bad.py").write_text("def f():\n    from ..planner import pipeline\n", encoding="utf-8")
     assert violations(tmp_path / "smartllm_local") == [
         "smartllm_local/world/bad.py:2 (world) imports smartllm_local.planner (planner)"]
+
+
+def cycles(root: Path) -> list[str]:
+    """For every package under ``root`` whose rooms (its modules and sub-packages) import one another in a
+    circle, one such circle, each import in it named by its file and line. A room's own imports count from
+    every file inside it; imports of the package's ``__init__`` do not (it only re-exports)."""
+    found = []
+    for init in sorted(root.rglob("__init__.py")):
+        package = ".".join(init.parent.relative_to(root.parent).parts)
+        edges: dict[str, dict[str, str]] = {}
+        for path in sorted(init.parent.rglob("*.py")):
+            room = _room(".".join(path.relative_to(root.parent).with_suffix("").parts), package)
+            for line, target in _imports(path, root) if room else ():
+                other = _room(target, package)
+                if other and other != room:
+                    edges.setdefault(room, {}).setdefault(other, f"{path.relative_to(root.parent)}:{line}")
+        for circle in _circles(edges):
+            found.append(f"{package}: " + " -> ".join(circle) + " (" + ", ".join(
+                edges[a][b] for a, b in zip(circle, circle[1:])) + ")")
+    return found
+
+
+def _circles(edges: dict[str, dict[str, str]]) -> list[list[str]]:
+    """A circle in each group of rooms that all reach one another (so every tangle is named, not only the first)."""
+    reach = {room: _reachable(edges, room) for room in edges}
+    groups: list[list[str]] = []
+    for room in sorted(edges):
+        group = sorted(r for r in reach[room] if room in reach.get(r, ()))
+        if group and group not in groups:
+            groups.append(group)
+    return [_circle({a: {b: w for b, w in edges[a].items() if b in group} for a in group}) for group in groups]
+
+
+def _reachable(edges: dict[str, dict[str, str]], room: str) -> set[str]:
+    """The rooms ``room`` reaches by one import or more (itself only where it lies on a circle)."""
+    seen: set[str] = set()
+    todo = list(edges.get(room, {}))
+    while todo:
+        other = todo.pop()
+        if other not in seen:
+            seen.add(other)
+            todo += edges.get(other, {})
+    return seen
+
+
+def _room(module: str, package: str) -> str | None:
+    """The room of ``package`` that the dotted ``module`` lies in (None: outside it, or its ``__init__``)."""
+    if not module.startswith(package + "."):
+        return None
+    room = module[len(package) + 1:].split(".")[0]
+    return None if room == "__init__" else room
+
+
+def _circle(edges: dict[str, dict[str, str]]) -> list[str]:
+    """One circle of the graph ``edges`` (its first room repeated at its end), or none: a depth-first search
+    that meets a room still open on its path."""
+    state: dict[str, str] = {}
+    path: list[str] = []
+
+    def visit(room: str) -> list[str]:
+        state[room] = "open"
+        path.append(room)
+        for other in edges.get(room, {}):
+            if state.get(other) == "open":
+                return path[path.index(other):] + [other]
+            if other not in state and (circle := visit(other)):
+                return circle
+        state[room] = "done"
+        path.pop()
+        return []
+
+    for room in sorted(edges):
+        if room not in state and (circle := visit(room)):
+            return circle
+    return []
+
+
+def test_no_package_s_rooms_import_one_another_in_a_circle():
+    """Inside a part as between the parts: the planner's rooms (backends, decoding, constraints, prompting,
+    classical and its modules) form layers too, so each can be read, and tested, with only those below it."""
+    found = cycles(ROOT)
+    assert not found, "\n".join(found)
+
+
+def test_the_check_finds_a_circle_through_a_lazy_import(tmp_path):
+    """Not vacuous: two rooms of the planner that import each other, one of them inside a function, are found."""
+    fake = tmp_path / "smartllm_local" / "planner"
+    (fake / "decoding").mkdir(parents=True)
+    for init in (tmp_path / "smartllm_local", fake, fake / "decoding"):
+        (init / "__init__.py").write_text("", encoding="utf-8")
+    (fake / "decoding" / "loop.py").write_text("from ..backends import Sampling\n", encoding="utf-8")
+    (fake / "backends.py").write_text("def f():\n    from .decoding.loop import g\n", encoding="utf-8")
+    assert cycles(tmp_path / "smartllm_local") == [
+        "smartllm_local.planner: backends -> decoding -> backends "
+        "(smartllm_local/planner/backends.py:2, smartllm_local/planner/decoding/loop.py:1)"]

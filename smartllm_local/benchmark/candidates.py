@@ -10,7 +10,7 @@ from typing import Any
 
 from ..errors import PlanError
 from ..plan_language import parse_plan
-from ..planner.pipeline import PlanResult
+from ..planner.result import PlanResult
 from ..planner.verifier import check_decomposition
 from ..scene import SceneObjects
 from ..skills import SkillSet
@@ -23,7 +23,7 @@ _KEPT = ("candidate", "temperature", "seed", "mean_logprob", "check", "score", "
 def candidate_measures(result: PlanResult, task: Task, skills: SkillSet, scene: SceneObjects) -> dict[str, Any]:
     """A results line's ``candidates`` (each one's check, score and whether its dry run meets the task's goals)
     and ``pass_at_n`` (whether any does; None for an infeasible task); nothing where one candidate was written."""
-    record = next((r for r in result.stages if r.stage == "decomposition"), None)
+    record = result.stages.get("decomposition")
     if record is None or not record.candidates:
         return {}
     conditions = [c for g in task.goals for c in g.conditions()]

@@ -1,18 +1,18 @@
 """Planning methods as plug-ins: SMART-LLM, the paper's baselines, and the reference plans.
 
-A method is a sequence of named stages, each of which adds one StageRecord to a
-task's PlanResult. The benchmark runner takes every task through one stage
-before the next (so a model keeps each stage's examples in its cache), except
-that a stage which goes on in its predecessor's context runs right after it for
-each task. It saves each finished stage, and never needs to know which method
-it runs: a new method is a new class here, not a branch in the runner.
+A method is a list of steps (:class:`~..planner.steps.Step`), each of which adds one StageRecord, under its
+stage's name, to a task's PlanResult; SMART-LLM's are the planner's own (:meth:`Planner.steps`), which the
+``plan`` command runs too. The benchmark runner takes every task through one step before the next (so a model
+keeps each stage's examples in its cache), except that a step which goes on in its predecessor's context runs
+right after it for each task, always through :func:`~..planner.steps.run_steps`. It saves each finished
+stage, and never needs to know which method it runs: a new method is a new class here, not a branch in the
+runner.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Protocol
 
@@ -21,8 +21,9 @@ from ..goal_language import parse_goal_statement, statement_of
 from ..plan_language import parse_plan
 from ..planner.baselines import allocate_by, random_chooser, rule_chooser
 from ..planner.constraints.feasibility import function_needs
-from ..planner.pipeline import Planner, PlanResult
-from ..planner.stages import StageRecord
+from ..planner.pipeline import Planner
+from ..planner.result import PlanResult, StageRecord
+from ..planner.steps import Step
 from ..robots import Catalogue
 from ..worlds import Ai2ThorWorld, World
 from .reference_plans import default_plans_dir
@@ -31,70 +32,42 @@ from .tasks import Task
 DEFAULT_TIME_LIMIT = 60.0  # seconds of search per task for the goal-planner (the household tasks need far less)
 
 
-@dataclass(frozen=True)
-class Stage:
-    """One step of a method: it adds the record named ``name`` to the task's result. A stage that
-    ``follows`` goes on in the context of the stage before it: a runner runs it for a task right
-    after that stage, on the same worker, before the next task's."""
-
-    name: str
-    run: Callable[[Task, PlanResult], None]
-    follows: bool = False
-
-
 class Method(Protocol):
     name: str
 
-    def stages(self) -> Sequence[Stage]: ...
+    def steps(self, task: Task) -> Sequence[Step]:
+        """The steps that plan ``task``, in order (the same stages, by name, for every task of a run)."""
+        ...
 
 
 class SmartLLM:
-    """SMART-LLM's three stages on the model: decomposition, coalition formation, allocation."""
+    """SMART-LLM's three stages on the model: decomposition, coalition formation, allocation (the planner's
+    steps, as its configuration has them)."""
 
     name = "smartllm"
 
     def __init__(self, planner: Planner, catalogue: Catalogue):
         self.planner, self.catalogue = planner, catalogue
 
-    def stages(self) -> list[Stage]:
-        config = self.planner.config
-        goal = [Stage("goal", self.check_goals)] if config.goal_check and config.grammar else []
-        if not config.prompts.coalition:
-            return [*goal, Stage("decomposition", self.decompose), Stage("allocation", self.allocate)]
-        return [*goal, Stage("decomposition", self.decompose), Stage("coalition", self.coalition),
-                Stage("allocation", self.allocate, follows=True)]
-
-    def check_goals(self, task: Task, result: PlanResult) -> None:
-        self.planner.check_goals(result, self.planner.scene(task.floor_plan))
-
-    def decompose(self, task: Task, result: PlanResult) -> None:
-        self.planner.decompose(result, self.planner.scene(task.floor_plan))
-
-    def coalition(self, task: Task, result: PlanResult) -> None:
-        self.planner.form_coalition(result, result.stage("decomposition").plan, self.catalogue.team(task.robots),  # type: ignore[arg-type]
-                                    self.planner.scene(task.floor_plan))
-
-    def allocate(self, task: Task, result: PlanResult) -> None:
-        coalition = next((r for r in result.stages if r.stage == "coalition"), None)
-        self.planner.allocate(result, result.stage("decomposition").plan, coalition, self.catalogue.team(task.robots),  # type: ignore[arg-type]
-                              self.planner.scene(task.floor_plan))
+    def steps(self, task: Task) -> list[Step]:
+        return self.planner.steps()
 
 
-class DecompositionThenRule(SmartLLM):
-    """The model's decomposition; robots by a rule (``decomp-rule``) or at random (``decomp-random``)."""
+class DecompositionThenRule:
+    """The model's decomposition (the planner's step); robots by a rule (``decomp-rule``) or at random
+    (``decomp-random``)."""
 
     def __init__(self, planner: Planner, catalogue: Catalogue, rule: str):
-        super().__init__(planner, catalogue)
-        self.rule = rule
+        self.planner, self.catalogue, self.rule = planner, catalogue, rule
         self.name = f"decomp-{rule}"
 
-    def stages(self) -> list[Stage]:
-        return [Stage("decomposition", self.decompose), Stage("allocation", self.allocate)]
+    def steps(self, task: Task) -> list[Step]:
+        return [Step("decomposition", self.planner.decompose), Step("allocation", self.allocate)]
 
-    def allocate(self, task: Task, result: PlanResult) -> None:
+    def allocate(self, result: PlanResult) -> None:
         started = time.perf_counter()
-        team = self.catalogue.team(task.robots)
-        scene = self.planner.scene(task.floor_plan)
+        team = self.catalogue.team(result.robots)
+        scene = self.planner.scene(result.floor_plan)
         decomposed = result.stage("decomposition").plan
         pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
         choose = rule_chooser(team) if self.rule == "rule" else \
@@ -107,7 +80,7 @@ class DecompositionThenRule(SmartLLM):
         if record.plan.is_refusal:
             record.refusal, record.refused_by = record.plan.refusal, "rule"
             result.refusal = record.refusal
-        result.stages.append(record)
+        result.add(record)
 
 
 class GoalPlanner:
@@ -125,14 +98,14 @@ class GoalPlanner:
         self.world = world or (planner.world if planner is not None else Ai2ThorWorld())
         self.name = "goal-planner-oracle" if oracle else "goal-planner"
 
-    def stages(self) -> list[Stage]:
-        search = Stage("allocation", self.allocate)
-        return [search] if self.oracle else [Stage("goal", self.state_goals), search]
+    def steps(self, task: Task) -> list[Step]:
+        search = Step("allocation", lambda result: self.allocate(task, result))
+        return [search] if self.oracle else [Step("goal", self.state_goals), search]
 
-    def state_goals(self, task: Task, result: PlanResult) -> None:
+    def state_goals(self, result: PlanResult) -> None:
         assert self.planner is not None
-        stated = self.planner.goals(task.instruction, task.floor_plan)
-        result.stages.append(stated.record)
+        stated = self.planner.goals(result.instruction, result.floor_plan)
+        result.add(stated.record)
         if stated.refusal is not None:
             result.refusal = stated.refusal
         elif stated.error:
@@ -144,10 +117,10 @@ class GoalPlanner:
         if self.oracle:
             conditions = statement_of(task.goals).conditions
         else:
-            conditions = parse_goal_statement(result.stages[0].output, where="<goal output>").conditions
+            conditions = parse_goal_statement(result.stage("goal").output, where="<goal output>").conditions
         record = plan_to_goal(conditions, task.floor_plan, self.catalogue.team(task.robots), self.catalogue.skills,
                               time_limit=self.time_limit, name=task.id, world=self.world)
-        result.stages.append(record)
+        result.add(record)
         if record.refusal is not None:
             result.refusal = record.refusal
         elif record.error:
@@ -163,8 +136,8 @@ class Reference:
         self.catalogue = catalogue
         self.plans_dir = plans_dir or default_plans_dir()
 
-    def stages(self) -> list[Stage]:
-        return [Stage("allocation", self.allocate)]
+    def steps(self, task: Task) -> list[Step]:
+        return [Step("allocation", lambda result: self.allocate(task, result))]
 
     def allocate(self, task: Task, result: PlanResult) -> None:
         path = self.plans_dir / f"{task.id}.py"
@@ -182,7 +155,7 @@ class Reference:
         if record.plan.is_refusal:
             record.refusal, record.refused_by = record.plan.refusal, "rule"
             result.refusal = record.refusal
-        result.stages.append(record)
+        result.add(record)
 
 
 METHODS = ("smartllm", "decomp-random", "decomp-rule", "goal-planner", "goal-planner-oracle", "reference")

@@ -24,12 +24,14 @@ from ..domain import Domain, load_domain
 from ..errors import SmartLLMError
 from ..executor import Execution
 from ..files import write_atomic
-from ..planner.pipeline import Planner, PlanResult, restore_stage, write_artifacts
+from ..planner.pipeline import Planner, restore_stage, write_artifacts
+from ..planner.result import PlanResult, StageRecord
+from ..planner.steps import Step, run_steps
 from ..robots import Catalogue
 from ..scoring import Goal, Scores, score_execution
 from ..worlds import Ai2ThorWorld, World, world_of
 from .candidates import candidate_measures
-from .methods import Method, SmartLLM, Stage
+from .methods import Method, SmartLLM
 from .parallel import plan_and_execute
 from .reference_plans import reference_ticks
 from .results import metric_mean, summary_table
@@ -76,7 +78,7 @@ class TaskOutcome:
                                             "ended_at_goals": r.ended_at_goals, "finished": r.finish is not None,
                                             "idle_steps": len(r.idle_steps)}
                                            if r.stage == "decomposition" else {})}
-                              for r in self.result.stages}
+                              for r in self.result.stages.values()}
             if self.result.notices:
                 data["notices"] = self.result.notices
         if self.error:
@@ -176,10 +178,10 @@ def run_benchmark(
         task = outcome.task
         outcome.result = PlanResult(instruction=task.instruction, floor_plan=task.floor_plan, robots=list(task.robots))
         if store is not None:
-            _restore(store, catalogue, outcome, venue.world, methods[0].stages())
+            _restore(store, catalogue, outcome, venue.world, methods[0].steps(task))
         if _goes_on(outcome):
             live.append(outcome)
-    counts = _Counts(len(methods[0].stages()), len(outcomes), progress)
+    counts = _Counts(len(methods[0].steps(outcomes[0].task)) if outcomes else 0, len(outcomes), progress)
     if len(methods) == 1:
         _plan_all(outcomes, live, methods[0], store, counts)
         _execute_all(outcomes, catalogue, venue, build, out, store, counts)
@@ -212,45 +214,48 @@ class _Counts:
 
 def _plan_all(outcomes: list[TaskOutcome], live: list[TaskOutcome], method: Method, store: RunStore | None,
               counts: _Counts) -> None:
-    """Take the live tasks through the method's stages, a pass of stages at a time; a failure costs its task
+    """Take the live tasks through the method's steps, a pass of steps at a time; a failure costs its task
     (recorded as its error), and each finished stage is saved at once."""
-    for group in _passes(method.stages()):
+    passes = {id(o): _passes(method.steps(o.task)) for o in live}
+    for k, group in enumerate(next(iter(passes.values()), [])):
         # Where each stage's progress count starts: after the tasks done before, or out of the run.
-        order = {number: itertools.count(len(outcomes) - sum(not _has(o, stage.name) for o in live))
-                 for number, stage in group}
+        order = {number: itertools.count(len(outcomes) - sum(not _has(o, step.name) for o in live))
+                 for number, step in group}
 
-        def report(number: int, stage: Stage, outcome: TaskOutcome) -> None:
-            counts.step(stage.name, outcome.task.id, number * len(outcomes) + next(order[number]))
+        def report(number: int, step: Step, outcome: TaskOutcome) -> None:
+            counts.step(step.name, outcome.task.id, number * len(outcomes) + next(order[number]))
 
         for outcome in live:
-            if not all(_has(outcome, stage.name) for _, stage in group):
-                _plan_pass(method, outcome, group, store, report)
+            if not all(_has(outcome, step.name) for _, step in group):
+                _plan_pass(outcome, passes[id(outcome)][k], store, report)
         live = [o for o in live if _goes_on(o)]
 
 
-def _plan_pass(method: Method, outcome: TaskOutcome, group: Sequence[tuple[int, Stage]], store: RunStore | None,
-               report: Callable[[int, Stage, TaskOutcome], None], lock: threading.Lock | None = None) -> None:
-    """Run one task's pass of stages (those not done yet) on ``method``; a failure becomes the task's error, and
-    each finished stage is saved at once (``lock``: what the run's threads share, the store and the progress)."""
+def _plan_pass(outcome: TaskOutcome, group: Sequence[tuple[int, Step]], store: RunStore | None,
+               report: Callable[[int, Step, TaskOutcome], None], lock: threading.Lock | None = None) -> None:
+    """Run one task's pass of steps (those not done yet, :func:`run_steps`); a failure becomes the task's error,
+    and each finished stage is saved at once (``lock``: what the run's threads share, the store and the
+    progress)."""
     result = outcome.result
     assert result is not None
     shared = lock or contextlib.nullcontext()
-    for number, stage in group:
-        if _has(outcome, stage.name):
-            continue
-        if not _goes_on(outcome):
-            return
+    numbers = {step.name: number for number, step in group}
+
+    def starting(step: Step) -> None:
         with shared:
-            report(number, stage, outcome)
-        try:
-            method.stages()[number].run(outcome.task, result)
-        except SmartLLMError as exc:
-            outcome.error = f"{stage.name}: {exc}"
-        except Exception as exc:  # a bug or a backend failure costs this task, not the run
-            outcome.error = f"{stage.name}: {type(exc).__name__}: {exc}"
-        if store is not None and not outcome.error and result.stages and result.stages[-1].stage == stage.name:
+            report(numbers[step.name], step, outcome)
+
+    def finished(record: StageRecord) -> None:
+        if store is not None:
             with shared:
-                store.save_stage(outcome.task.id, result.stages[-1])
+                store.save_stage(outcome.task.id, record)
+
+    def failed(step: Step, exc: Exception) -> None:
+        # a bug or a backend failure costs this task, not the run
+        why = str(exc) if isinstance(exc, SmartLLMError) else f"{type(exc).__name__}: {exc}"
+        outcome.error = f"{step.name}: {why}"
+
+    run_steps([step for _, step in group], result, starting=starting, finished=finished, failed=failed)
 
 
 def _plan_and_execute(outcomes: list[TaskOutcome], live: list[TaskOutcome], methods: Sequence[Method],
@@ -258,18 +263,17 @@ def _plan_and_execute(outcomes: list[TaskOutcome], live: list[TaskOutcome], meth
                       store: RunStore | None, counts: _Counts, interrupt: Callable[[], None]) -> None:
     """Plan the live tasks on every worker at once and execute each, in the run's order, once it is planned
     (:func:`.parallel.plan_and_execute`); progress counts each stage and execution as it starts."""
-    groups = _passes(methods[0].stages())
     going = {id(o) for o in live}
-    todo = [[n for n, group in enumerate(groups) if not all(_has(o, stage.name) for _, stage in group)]
-            if id(o) in going else [] for o in outcomes]
-    left = sum(not _has(o, stage.name) for o in live for stage in methods[0].stages()) + len(outcomes)
+    todo = [[n for n, group in enumerate(_passes(methods[0].steps(o.task)))
+             if not all(_has(o, step.name) for _, step in group)] if id(o) in going else [] for o in outcomes]
+    left = sum(not _has(o, step.name) for o in live for step in methods[0].steps(o.task)) + len(outcomes)
     done = itertools.count(counts.total - left)
     lock = threading.Lock()
     controller: list[Any] = [None]  # the one Controller of the executions, replaced after a failure
 
     def plan(method: Method, outcome: TaskOutcome, number: int) -> None:
-        _plan_pass(method, outcome, groups[number], store,
-                   lambda _, stage, o: counts.step(stage.name, o.task.id, next(done)), lock)
+        _plan_pass(outcome, _passes(method.steps(outcome.task))[number], store,
+                   lambda _, step, o: counts.step(step.name, o.task.id, next(done)), lock)
 
     def execute(_: int, outcome: TaskOutcome) -> None:
         with lock:
@@ -316,7 +320,7 @@ def _execute_one(outcome: TaskOutcome, catalogue: Catalogue, venue: _Venue, buil
         controller = _execute(outcome, catalogue, venue, build, controller)
     scene = venue.world.scene(outcome.task.floor_plan)
     outcome.extra.update(candidate_measures(result, outcome.task, catalogue.skills, scene))
-    outcome.seconds = time.perf_counter() - started + sum(r.seconds for r in result.stages)
+    outcome.seconds = time.perf_counter() - started + sum(r.seconds for r in result.stages.values())
     if out is not None:
         write_artifacts(result, out / outcome.task.id, {"outcome": outcome.as_json()})
         _write_trace(out / outcome.task.id, outcome)
@@ -356,19 +360,19 @@ def _write_trace(folder: Path, outcome: TaskOutcome) -> None:
         (folder / TRACE).unlink(missing_ok=True)
 
 
-def _passes(stages: Sequence[Stage]) -> list[list[tuple[int, Stage]]]:
-    """The stages, numbered, in passes over the tasks: a stage that follows another joins its pass."""
-    passes: list[list[tuple[int, Stage]]] = []
-    for number, stage in enumerate(stages):
-        if stage.follows and passes:
-            passes[-1].append((number, stage))
+def _passes(steps: Sequence[Step]) -> list[list[tuple[int, Step]]]:
+    """The steps, numbered, in passes over the tasks: a step that follows another joins its pass."""
+    passes: list[list[tuple[int, Step]]] = []
+    for number, step in enumerate(steps):
+        if step.follows and passes:
+            passes[-1].append((number, step))
         else:
-            passes.append([(number, stage)])
+            passes.append([(number, step)])
     return passes
 
 
 def _has(outcome: TaskOutcome, stage: str) -> bool:
-    return any(r.stage == stage for r in outcome.result.stages)  # type: ignore[union-attr]
+    return stage in outcome.result.stages  # type: ignore[union-attr]
 
 
 def _goes_on(outcome: TaskOutcome) -> bool:
@@ -377,7 +381,7 @@ def _goes_on(outcome: TaskOutcome) -> bool:
 
 
 def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome, world: World,
-             stages: Sequence[Stage]) -> None:
+             steps: Sequence[Step]) -> None:
     """Put back the stages an interrupted run finished for this task (a damaged one is run again, and
     so is one that the next stage goes on from, when that one is not done: the context they share is not saved)."""
     task, result = outcome.task, outcome.result
@@ -390,7 +394,7 @@ def _restore(store: RunStore, catalogue: Catalogue, outcome: TaskOutcome, world:
         except SmartLLMError:
             store.forget_stages(task.id, record.stage)
             break
-    for before, stage in zip(stages, stages[1:]):
-        if stage.follows and _has(outcome, before.name) and not _has(outcome, stage.name) and _goes_on(outcome):
+    for before, step in zip(steps, steps[1:]):
+        if step.follows and _has(outcome, before.name) and not _has(outcome, step.name) and _goes_on(outcome):
             store.forget_stages(task.id, before.name)
-            result.stages = [r for r in result.stages if r.stage != before.name]
+            del result.stages[before.name]

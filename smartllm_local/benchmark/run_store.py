@@ -21,7 +21,7 @@ from typing import Any
 
 from ..errors import UserError
 from ..files import json_text, write_atomic
-from ..planner.stages import StageRecord
+from ..planner.result import StageRecord
 from .results import parse_results
 
 RUN_FILE = "run.json"

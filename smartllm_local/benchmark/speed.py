@@ -39,8 +39,9 @@ from typing import Any
 from ..errors import SmartLLMError
 from ..executor import run_plan
 from ..planner.backends import Backend, Sampling
-from ..planner.pipeline import Planner, PlannerConfig, PlanResult
+from ..planner.pipeline import Planner, PlannerConfig
 from ..planner.prompting.prompts import STAGES
+from ..planner.result import PlanResult
 from ..provenance import versions
 from ..robots import Catalogue
 from ..world.controller import open_controller
@@ -114,7 +115,7 @@ def decode_speed(load: Load, config: PlannerConfig, catalogue: Catalogue, tasks:
             seconds = 0.0
             for task in tasks:
                 result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
-                record = planner.decompose(result, scene_objects(task.floor_plan))
+                record = planner.decompose(result)
                 generated, forced = generated + record.generated_tokens, forced + record.forced_tokens
                 seconds += record.seconds - record.prompt_seconds
             found[name] = {"tasks": len(tasks), "generated_tokens": generated, "forced_tokens": forced,
@@ -129,7 +130,7 @@ def decode_speed(load: Load, config: PlannerConfig, catalogue: Catalogue, tasks:
 def _costs(result: PlanResult) -> dict[str, dict[str, float]]:
     return {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens,
                       "evaluated": r.prompt_tokens - r.reused_tokens,
-                      "ttft_s": round(r.prompt_seconds, 3)} for r in result.stages}
+                      "ttft_s": round(r.prompt_seconds, 3)} for r in result.stages.values()}
 
 
 def prefix_reuse(load: Load, config: PlannerConfig, catalogue: Catalogue, tasks: Sequence[Task]) -> dict[str, Any]:

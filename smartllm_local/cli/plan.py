@@ -21,8 +21,9 @@ from ..files import check_output_folder
 from ..planner.backends import Backend
 from ..planner.goal_stage import StatedGoals, restated_goals
 from ..planner.models import default_model
-from ..planner.pipeline import Planner, PlanResult, write_artifacts
+from ..planner.pipeline import Planner, write_artifacts
 from ..planner.prompting.goal_prompt import load_goal_examples
+from ..planner.result import PlanResult
 from ..robots import Catalogue, Robot, parse_robot_ids
 from ..scoring import Scores
 from ..world.controller import check_build
@@ -133,10 +134,10 @@ def _plan(options: ModelOptions, dom: Domain, instruction: str, scene: str, team
             result = planner.plan(instruction, scene, team_ids)
             stated = None
             if goals:  # the goal check's statement where it ran; else the goal stage now, written to --out too
-                ran = next((r for r in result.stages if r.stage == "goal"), None)
+                ran = result.stages.get("goal")
                 stated = restated_goals(ran, planner.scene(scene)) if ran else planner.goals(instruction, scene)
                 if ran is None:
-                    result.stages.append(stated.record)
+                    result.add(stated.record)
             return planner, result, stated
         finally:
             planner.backend.close()

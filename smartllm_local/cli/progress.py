@@ -24,7 +24,7 @@ from rich.progress import (
 from rich.table import Column
 
 from ..benchmark.run import Progress as Step
-from ..planner.stages import StageRecord
+from ..planner.result import StageRecord
 
 
 class RunProgress:

@@ -12,8 +12,9 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
-from .backends.base import Backend, Sampling
+from .backends.base import Backend
 from .backends.lanes import open_lanes
+from .decoding.sampling import Sampling
 from .verifier import SELECTORS, WEIGHTS, Weights
 
 #: The temperature of candidates 1 and on (measured on the development half: docs/measurements.md).

@@ -18,10 +18,11 @@ from ..scene import SceneObjects
 from ..scoring import Condition
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
-from .stages import StageRecord, fit_prompt, run_stage
+from .result import PlanResult, StageRecord
+from .stages import fit_prompt, run_stage
 
 if TYPE_CHECKING:
-    from .pipeline import Planner, PlanResult
+    from .pipeline import Planner
 
 STAGE = "goal"
 #: Who refused a task whose stated goals its team cannot meet.
@@ -73,8 +74,6 @@ def state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, re
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), examples, planner.backend,
                         GOAL_BUDGET, planner.chat)
     constraint = GoalConstraint(vocabulary, allow_refusal=refusals) if planner.config.grammar else None
-    from .pipeline import PlanResult  # the pipeline's module imports this one
-
     # No team: the goal is what the instruction asks, whoever reaches it.
     task = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=[])
     run_stage(record, planner.backend, prompt, constraint, output_budget=GOAL_BUDGET,
@@ -105,7 +104,7 @@ def restated_goals(record: StageRecord, scene: SceneObjects) -> StatedGoals:
 def stated_conditions(result: PlanResult, scene: SceneObjects, record: StageRecord | None = None) -> list[Condition]:
     """The conditions the goal stage stated for a task (its ``record``, or the one in ``result``); none where it
     did not run, refused or wrote no statement."""
-    record = record or next((r for r in result.stages if r.stage == STAGE), None)
+    record = record or result.stages.get(STAGE)
     if record is None or record.error or not record.output.strip():
         return []
     try:

@@ -1,10 +1,11 @@
 """SMART-LLM's three stages on a local model: decomposition, coalition formation, allocation.
 
-Each stage is a plain method, so a benchmark run can take every task through
-one stage before the next (the examples at the head of a stage's prompt then
-stay in the model's cache from one task to the next). Coalition and allocation
-share a prompt where the model's context holds it: a task's allocation goes on
-in the context its coalition left, right after it.
+Each stage is a plain method of one argument, the task's result, and :meth:`Planner.steps` lists them as
+this planner's configuration has them: :func:`.steps.run_steps` takes a task through them, for the ``plan``
+command, and a benchmark run takes every task through one stage before the next (the examples at the head of
+a stage's prompt then stay in the model's cache from one task to the next). Coalition and allocation share a
+prompt where the model's context holds it: a task's allocation goes on in the context its coalition left,
+right after it.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from ..scene import SceneObjects
 from ..skills import SkillSet
 from ..worlds import Ai2ThorWorld, World
 from .asked import as_goal, invented
-from .backends.base import Backend, Sampling
+from .backends.base import Backend
 from .candidates import Candidates, mean_logprob, write_all
 from .constraints.coalition import LINE as COALITION_LINE
 from .constraints.coalition import CoalitionConstraint
@@ -40,6 +41,7 @@ from .constraints.repair import Repairer
 from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
+from .decoding.sampling import Sampling
 from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
 from .idle_steps import drop_idle_steps
 from .progress import SILENT, StageProgress
@@ -55,7 +57,9 @@ from .prompting.prompts import (
     examples_for,
     load_examples,
 )
-from .stages import Fitted, StageRecord, check_output, fit_prompt, run_stage
+from .result import PlanResult, StageRecord
+from .stages import Fitted, check_output, fit_prompt, run_stage
+from .steps import Step, run_steps
 from .verifier import check_decomposition, choose, score
 
 DEFAULT_BUDGETS = {"decomposition": 1024, "coalition": 896, "allocation": 1280}
@@ -103,44 +107,6 @@ class PlannerConfig:
     drop_idle: bool = True
 
 
-@dataclass
-class PlanResult:
-    """A task's way through the stages."""
-
-    instruction: str
-    floor_plan: str
-    robots: list[int]
-    stages: list[StageRecord] = field(default_factory=list)
-    allocated: str = ""
-    plan: Plan | None = None
-    refusal: str | None = None
-    error: str = ""
-
-    def stage(self, name: str) -> StageRecord:
-        """The record of the stage ``name`` (a KeyError where it has not run)."""
-        found = next((r for r in self.stages if r.stage == name), None)
-        if found is None:
-            raise KeyError(f"the stage {name!r} has not run for this task")
-        return found
-
-    @property
-    def refused_by(self) -> str | None:
-        """Who refused: "grammar" (no team can do a sub-task the model wrote: it admitted nothing else),
-        "rule" (a rule-based allocation found no team), "planner" (the goal-planner's search found no plan),
-        "model", or None."""
-        if self.refusal is None:
-            return None
-        return next((r.refused_by for r in self.stages if r.refusal is not None and r.refused_by), "model")
-
-    @property
-    def notices(self) -> list[str]:
-        dropped = [f"{r.stage}: dropped example(s) {', '.join(r.dropped)} to fit the context"
-                   for r in self.stages if r.dropped]
-        capped = [f"{r.stage}: the output budget ({r.output_budget} tokens) left no room for {', '.join(r.capped)}"
-                  for r in self.stages if r.capped]
-        return dropped + capped
-
-
 class Planner:
     """Plans tasks with one backend; keeps nothing between tasks but the backend's cache."""
 
@@ -179,10 +145,21 @@ class Planner:
         return fit_prompt(lambda ex: decomposition_prompt(instruction, scene, self.catalogue, team, ex, opts),
                           examples, self.backend, self.config.budgets["decomposition"], self.chat)
 
-    def decompose(self, result: PlanResult, scene: SceneObjects) -> StageRecord:
+    def steps(self) -> list[Step]:
+        """SMART-LLM's stages as this planner's configuration has them, for :func:`~.steps.run_steps`: the goal
+        stage where the goal check is on (with the grammar), the decomposition, the coalition unless it is off,
+        and the allocation, which goes on in the coalition's context."""
+        config = self.config
+        goal = [Step("goal", self.check_goals)] if config.goal_check and config.grammar else []
+        coalition = [Step("coalition", self.form_coalition)] if config.prompts.coalition else []
+        return [*goal, Step("decomposition", self.decompose), *coalition,
+                Step("allocation", self.allocate, follows=bool(coalition))]
+
+    def decompose(self, result: PlanResult) -> StageRecord:
         """The decomposed plan, written for the task's team: its prompt and its grammar offer the team's
         skills, and only the calls the team can make (a step for several robots together included). With
         several candidates, the one the verifier (or the likelihood) chooses, the others in its record."""
+        scene = self.scene(result.floor_plan)
         team = self.catalogue.team(result.robots)
         prompt = self.decomposition_prompt(result.instruction, scene, team)
         count = self.config.candidates.count
@@ -199,7 +176,7 @@ class Planner:
             record.output, record.idle_steps = drop_idle_steps(record.output, scene, self.catalogue.skills)
             if record.idle_steps:
                 record.plan = None  # parsed again below, from the text the coalition and the allocation read
-        result.stages.append(record)
+        result.add(record)
         self._finish_plan_stage(record, result, form="decomposed", scene=scene, parsed=record.plan)
         return record
 
@@ -259,9 +236,9 @@ class Planner:
         chosen.candidates = summaries
         return chosen
 
-    def form_coalition(self, result: PlanResult, decomposed: Plan, team: Sequence[Robot],
-                       scene: SceneObjects) -> StageRecord:
+    def form_coalition(self, result: PlanResult) -> StageRecord:
         """The coalition, in a context that leaves room for the allocation to go on in it."""
+        decomposed, team, scene = self._decomposed(result)
         opts = self.config.prompts
         record = StageRecord("coalition", chat_template=self.chat_status)
         decomposition = result.stage("decomposition").output
@@ -293,13 +270,14 @@ class Planner:
         if record.refusal is not None:
             result.refusal = record.refusal
             record.refused_by = "grammar" if constraint is not None and constraint.must_refuse else "model"
-        result.stages.append(record)
+        result.add(record)
         return record
 
-    def allocate(self, result: PlanResult, decomposed: Plan, coalition: StageRecord | None, team: Sequence[Robot],
-                 scene: SceneObjects) -> StageRecord:
-        """The allocated plan: in the context ``coalition`` left, where the two share a prompt; otherwise
-        from a prompt of its own."""
+    def allocate(self, result: PlanResult) -> StageRecord:
+        """The allocated plan: in the context the coalition left, where the two share a prompt; otherwise
+        from a prompt of its own (with the coalition's output, where it ran)."""
+        decomposed, team, scene = self._decomposed(result)
+        coalition = result.stages.get("coalition")
         record = StageRecord("allocation", chat_template=self.chat_status)
         constraint, budget = self._allocation_setup(result, decomposed, team, scene)
         if coalition is not None and self._shares_context(scene):
@@ -313,8 +291,13 @@ class Planner:
         run_stage(record, self.backend, prompt, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.stage_rng(result, record.stage), progress=self.progress)
         self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))
-        result.stages.append(record)
+        result.add(record)
         return record
+
+    def _decomposed(self, result: PlanResult) -> tuple[Plan, list[Robot], SceneObjects]:
+        """What the stages after the decomposition start from: its plan, the task's team and its scene."""
+        return (result.stage("decomposition").plan, self.catalogue.team(result.robots),  # type: ignore[return-value]
+                self.scene(result.floor_plan))
 
     def _allocation_setup(self, result: PlanResult, decomposed: Plan, team: Sequence[Robot],
                           scene: SceneObjects) -> tuple[Constraint | None, int]:
@@ -396,12 +379,13 @@ class Planner:
             result.error = record.error
         record.plan = plan
 
-    def check_goals(self, result: PlanResult, scene: SceneObjects) -> StageRecord:
+    def check_goals(self, result: PlanResult) -> StageRecord:
         """The goal stage for a task, and the check of what it stated against the team: a stated condition no
         plan of this team can meet (a state no robot's skill gives, a closed fridge nobody can open, a load too
         heavy for every lifter together) refuses the task, with that reason. The model may not refuse here (it
         refused feasible tasks for untrue reasons, measured): a task is refused for what the world shows. A goal
         out of reach that nobody asked for is dropped instead, where a goal asked for is left (:mod:`.asked`)."""
+        scene = self.scene(result.floor_plan)
         stated = state_goals(self, result.instruction, scene.floor_plan, refusals=False)
         record = stated.record
         conditions = stated_conditions(result, scene, record)
@@ -417,7 +401,7 @@ class Planner:
             record.refusal, record.refused_by = "; ".join(p for why in problems.values() for p in why), GOAL_CHECK
         if record.refusal is not None:
             result.refusal = record.refusal
-        result.stages.append(record)
+        result.add(record)
         return record
 
     def goals(self, instruction: str, floor_plan: str | int) -> StatedGoals:
@@ -428,36 +412,25 @@ class Planner:
     # ------------------------------------------------------------------ task
 
     def plan(self, instruction: str, floor_plan: str | int, robot_ids: Sequence[int]) -> PlanResult:
-        """All stages for one task; the allocated plan (or the refusal) is in the result."""
-        team = self.catalogue.team(robot_ids)
+        """All stages for one task (:meth:`steps`); the allocated plan (or the refusal) is in the result."""
+        self.catalogue.team(robot_ids)  # an unknown robot fails here, before any stage runs
         scene = self.scene(floor_plan)
         result = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=list(robot_ids))
-        if self.config.goal_check and self.config.grammar:
-            self.check_goals(result, scene)
-        first = self.decompose(result, scene) if result.refusal is None else None
-        if first is not None and self.continue_after(result, first):
-            decomposed = first.plan
-            coalition = self.form_coalition(result, decomposed, team, scene) if self.config.prompts.coalition else None
-            if result.refusal is None and not result.error:
-                self.allocate(result, decomposed, coalition, team, scene)
+        run_steps(self.steps(), result)
         self.conclude(result)
         return result
 
     @staticmethod
-    def continue_after(result: PlanResult, record: StageRecord) -> bool:
-        return result.refusal is None and not result.error and record.plan is not None
-
-    @staticmethod
     def conclude(result: PlanResult) -> None:
-        """Set the allocated plan text: the last stage's plan, or the refusal."""
+        """Set the allocated plan text: the allocation's plan, or the refusal."""
         if result.refusal is not None:
             result.allocated = f"{REFUSAL_PREFIX}{result.refusal}\n"
             result.plan = parse_plan(result.allocated, form="allocated")
             return
-        last = result.stages[-1] if result.stages else None
-        if last is not None and last.stage == "allocation" and not last.error:
-            result.allocated = last.output
-            result.plan = last.plan  # type: ignore[assignment]
+        allocation = result.stages.get("allocation")
+        if allocation is not None and not allocation.error:
+            result.allocated = allocation.output
+            result.plan = allocation.plan  # type: ignore[assignment]
 
 
 STAGE_FILES = ("prompt.txt", "grammar.gbnf", "raw_output.txt", "timings.json", "candidates.json")
@@ -479,7 +452,7 @@ def write_artifacts(result: PlanResult, out: Path, extra: dict | None = None) ->
         write_atomic(path, text)
         written.add(path)
 
-    for record in result.stages:
+    for record in result.stages.values():
         folder = out / record.stage
         write(folder / "prompt.txt", record.prompt)
         if record.grammars:
@@ -494,11 +467,11 @@ def write_artifacts(result: PlanResult, out: Path, extra: dict | None = None) ->
     summary = {
         "instruction": result.instruction, "floor_plan": result.floor_plan, "robots": result.robots,
         "refusal": result.refusal, "error": result.error or None, "notices": result.notices,
-        "stages": {r.stage: r.timings() for r in result.stages},
+        "stages": {name: r.timings() for name, r in result.stages.items()},
         **(extra or {}),
     }
     write(out / "result.json", json_text(summary))
-    if result.allocated and not any(r.stage == "allocation" for r in result.stages):
+    if result.allocated and "allocation" not in result.stages:
         write(out / "allocated.py", result.allocated)
     _remove_stale_artifacts(out, written)
 
@@ -537,4 +510,4 @@ def restore_stage(result: PlanResult, record: StageRecord, skills: SkillSet, sce
         result.refusal = record.refusal
     if record.error and record.stage in ("decomposition", "allocation"):
         result.error = record.error
-    result.stages.append(record)
+    result.add(record)

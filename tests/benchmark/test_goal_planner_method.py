@@ -12,10 +12,10 @@ import pytest
 from smartllm_local.benchmark.methods import GoalPlanner, make_method
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain, starter_domain
-from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.stages import StageRecord
-
-from .conftest import benchmark_run
+from smartllm_local.planner.pipeline import Planner
+from smartllm_local.planner.result import PlanResult, StageRecord
+from smartllm_local.planner.steps import run_steps
+from tests.conftest import benchmark_run
 
 HOUSEHOLD = load_domain("household")
 CATALOGUE = HOUSEHOLD.catalogue
@@ -27,16 +27,17 @@ def _lines(out) -> dict[str, dict]:
 
 
 def test_the_methods_stages_and_options():
-    assert [s.name for s in make_method("goal-planner-oracle", CATALOGUE, None).stages()] == ["allocation"]
+    task = TASKS["kitchen-05"]
+    assert [s.name for s in make_method("goal-planner-oracle", CATALOGUE, None).steps(task)] == ["allocation"]
     method = make_method("goal-planner", CATALOGUE, None, planner_time_limit=5)
     assert isinstance(method, GoalPlanner) and method.time_limit == 5
-    assert [s.name for s in method.stages()] == ["goal", "allocation"]
+    assert [s.name for s in method.steps(task)] == ["goal", "allocation"]
 
 
 def _stated(text: str) -> PlanResult:
     task = TASKS["kitchen-05"]
     result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
-    result.stages.append(StageRecord("goal", output=text))
+    result.add(StageRecord("goal", output=text))
     return result
 
 
@@ -46,8 +47,8 @@ def test_the_planner_plans_for_the_goal_the_goal_stage_stated():
     method = GoalPlanner(None, CATALOGUE, time_limit=300)
     result = _stated("Apple in Fridge\n")
     method.allocate(task, result)
-    record = result.stages[-1]
-    assert record.stage == "allocation" and record.plan is not None and result.refusal is None, record.raw[-2000:]
+    record = result.stage("allocation")
+    assert record.plan is not None and result.refusal is None, record.raw[-2000:]
     assert "'Apple|" in record.output and "'Tomato|" not in record.output and "'Lettuce|" not in record.output
 
 
@@ -93,13 +94,11 @@ def test_the_goal_stage_on_smollm2_then_the_planner(tmp_path, smollm2):
     planner = Planner(smollm2, CATALOGUE)
     method = GoalPlanner(planner, CATALOGUE, time_limit=600)
     result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
-    method.state_goals(task, result)
-    stated = result.stages[0]
-    assert stated.stage == "goal" and stated.output
-    if result.refusal is None and not result.error:
-        method.allocate(task, result)
-        record = result.stages[-1]
-        assert record.stage == "allocation"
+    run_steps(method.steps(task), result)  # the goal stage, then the search on what it stated
+    stated = result.stage("goal")
+    assert stated.output
+    if stated.refusal is None and not stated.error:
+        record = result.stage("allocation")
         assert record.plan is not None or record.refused_by == "planner" or "holds already" in record.error
 
 

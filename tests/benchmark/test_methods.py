@@ -14,8 +14,7 @@ from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.baselines import allocate_by, random_chooser, rule_chooser
 from smartllm_local.planner.constraints.feasibility import function_needs
 from smartllm_local.worlds import scene_objects
-
-from .conftest import SAMPLE
+from tests.conftest import SAMPLE
 
 CATALOGUE = load_domain().catalogue
 PICKUPS = [s.name for s in CATALOGUE.skills.values() if s.action == "PickupObject"]

@@ -16,9 +16,9 @@ from smartllm_local.benchmark.run import run_benchmark
 from smartllm_local.benchmark.run_store import RunStore
 from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
-from smartllm_local.planner.stages import StageRecord
+from smartllm_local.planner.result import StageRecord
 from tests.benchmark.test_resume import _Recorded
-from tests.test_cli_errors import cli, one_line_error
+from tests.cli.test_cli_errors import cli, one_line_error
 
 TIMEOUT = 60  # seconds a scheduler test may take before it is called hung
 
@@ -123,13 +123,13 @@ class _Overlapping(_Recorded):
         super().__init__()
         self.scored, self.waited = scored, False
 
-    def _run(self, stage):
-        noted = super()._run(stage)
+    def _run(self, stage, task):
+        noted = super()._run(stage, task)
 
-        def run(task, result):
+        def run(result):
             if (stage, task.id) == ("coalition", "kitchen-05"):
                 self.waited = self.scored.wait(TIMEOUT)
-            noted(task, result)
+            noted(result)
         return run
 
 

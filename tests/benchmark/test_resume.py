@@ -20,9 +20,9 @@ from smartllm_local.benchmark.run_store import RunStore
 from smartllm_local.benchmark.tasks import find_task, load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import SmartLLMError
-from smartllm_local.planner.pipeline import Planner, PlanResult
-from smartllm_local.planner.stages import StageRecord
-from smartllm_local.worlds import scene_objects
+from smartllm_local.planner.pipeline import Planner
+from smartllm_local.planner.result import PlanResult, StageRecord
+from smartllm_local.planner.steps import Step
 
 TASKS = ("living-01", "bedroom-inf-01", "bathroom-01")  # tasks no other test plans with these settings
 # The model decomposes; robots are the rule's (every stage through the model resumes alike, and costs minutes).
@@ -117,10 +117,10 @@ def test_ctrl_c_stops_cleanly_and_leaves_no_process(tmp_path):
 class _Exploding(Planner):
     """A planner that meets a bug (not a SmartLLMError) in one task's decomposition."""
 
-    def decompose(self, result: PlanResult, scene):
+    def decompose(self, result: PlanResult):
         if result.floor_plan == "FloorPlan6" and "bread" in result.instruction.lower():
             raise RuntimeError("llama_decode returned -3")
-        return super().decompose(result, scene)
+        return super().decompose(result)
 
 
 def test_any_exception_in_a_task_is_that_tasks_error_and_the_run_goes_on(smollm2, tmp_path):
@@ -147,7 +147,7 @@ def test_a_task_planned_alone_samples_what_it_samples_after_others(smollm2):
 
     def decomposition(planner: Planner, task) -> str:
         result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
-        return planner.decompose(result, scene_objects(task.floor_plan)).output
+        return planner.decompose(result).output
 
     after_other = Planner(smollm2, catalogue, config)
     decomposition(after_other, first)
@@ -185,7 +185,7 @@ def test_a_saved_plan_that_does_not_parse_is_forgotten(smollm2, tmp_path):
     store = RunStore(tmp_path, {"identity": {}, "started": "now"})
     store.save_stage(task.id, StageRecord("decomposition", output="def broken(:\n"))
     outcomes = run_benchmark([task], Planner(smollm2, catalogue), catalogue, out=tmp_path, store=store)
-    assert outcomes[0].result.stages[0].output != "def broken(:\n" and not outcomes[0].error
+    assert outcomes[0].result.stage("decomposition").output != "def broken(:\n" and not outcomes[0].error
 
 
 class _Recorded:
@@ -196,15 +196,14 @@ class _Recorded:
     def __init__(self):
         self.calls: list[tuple[str, str]] = []
 
-    def stages(self):
-        from smartllm_local.benchmark.methods import Stage
+    def steps(self, task):
+        return [Step("coalition", self._run("coalition", task)),
+                Step("allocation", self._run("allocation", task), follows=True)]
 
-        return [Stage("coalition", self._run("coalition")), Stage("allocation", self._run("allocation"), follows=True)]
-
-    def _run(self, stage):
-        def run(task, result):
+    def _run(self, stage, task):
+        def run(result):
             self.calls.append((stage, task.id))
-            result.stages.append(StageRecord(stage, output=f"{stage} of {task.id}\n"))
+            result.add(StageRecord(stage, output=f"{stage} of {task.id}\n"))
         return run
 
 

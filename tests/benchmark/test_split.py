@@ -18,8 +18,7 @@ from smartllm_local.benchmark.split import HALVES, draw, load_split, split_probl
 from smartllm_local.benchmark.tasks import SMARTLLM_CATEGORIES
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
-
-from .conftest import benchmark_run
+from tests.conftest import benchmark_run
 
 CLI = [sys.executable, "-m", "smartllm_local"]
 

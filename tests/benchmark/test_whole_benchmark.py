@@ -7,7 +7,8 @@ import json
 
 import pytest
 
-from .conftest import benchmark_run
+from tests.conftest import benchmark_run
+
 from .test_methods import check_every_task
 
 pytestmark = pytest.mark.heavy

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import random
 
-from smartllm_local.planner.backends.base import Generated
 from smartllm_local.planner.decoding.grammar import Grammar
 from smartllm_local.planner.decoding.protocol import Choose, Constraint, Forced
+from smartllm_local.planner.decoding.sampling import Generated
 
 
 class FakeBackend:

@@ -11,8 +11,8 @@ from smartllm_local.goal_language import parse_goal_statement, statement_of
 from smartllm_local.planner import pipeline
 from smartllm_local.planner.asked import as_goal, invented, names
 from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, stated_conditions
-from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
-from smartllm_local.planner.stages import StageRecord
+from smartllm_local.planner.pipeline import Planner, PlannerConfig
+from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
 
@@ -74,7 +74,7 @@ def _checked(monkeypatch, instruction: str, statement: str) -> tuple[PlanResult,
     monkeypatch.setattr(pipeline, "state_goals", stated)
     planner = Planner(FakeBackend(), CATALOGUE, PlannerConfig(goal_check=True))
     result = PlanResult(instruction, "FloorPlan6", [13])
-    return result, planner.check_goals(result, planner.scene(6))
+    return result, planner.check_goals(result)
 
 
 def test_the_goal_check_drops_a_goal_nobody_asked_for_and_refuses_one_asked_for(monkeypatch):

@@ -18,7 +18,7 @@ from smartllm_local.planner import pipeline
 from smartllm_local.planner.candidates import Candidates
 from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals
 from smartllm_local.planner.pipeline import Planner, PlannerConfig, write_artifacts
-from smartllm_local.planner.stages import StageRecord
+from smartllm_local.planner.result import StageRecord
 
 HOUSEHOLD = load_domain("household")
 CATALOGUE = HOUSEHOLD.catalogue
@@ -89,7 +89,7 @@ def test_a_stated_goal_the_team_cannot_reach_refuses_the_task_before_any_plan(sm
     monkeypatch.setattr(pipeline, "state_goals", _stating("Potato sliced\n"))
     planner = Planner(smollm2, CATALOGUE, replace(PlannerConfig(), goal_check=True))
     result = planner.plan(task.instruction, task.floor_plan, task.robots)
-    assert [r.stage for r in result.stages] == ["goal"]
+    assert list(result.stages) == ["goal"]
     assert result.refused_by == GOAL_CHECK
     assert result.refusal == "Potato is SLICED needs SliceObject, which no robot of the team has"
     assert result.allocated == f"# INFEASIBLE: {result.refusal}\n"
@@ -99,7 +99,7 @@ def test_stated_goals_within_reach_go_on_to_the_plan_and_the_verifier_checks_the
     monkeypatch.setattr(pipeline, "state_goals", _stating("Apple in Fridge\n"))
     config = replace(PlannerConfig(), goal_check=True, candidates=Candidates(count=2))
     result = Planner(smollm2, CATALOGUE, config).plan(TASK.instruction, TASK.floor_plan, TASK.robots)
-    assert result.refusal is None and [r.stage for r in result.stages][:2] == ["goal", "decomposition"]
+    assert result.refusal is None and list(result.stages)[:2] == ["goal", "decomposition"]
     checks = [c["check"] for c in result.stage("decomposition").candidates if c["check"]]
     assert checks and all(c["goals"] == 1 for c in checks)
 

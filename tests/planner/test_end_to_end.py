@@ -61,10 +61,7 @@ def test_the_plan_command_shows_a_line_per_stage_on_stderr_and_only_the_plan_on_
 def test_a_refusal_the_grammar_forces_is_told_from_one_the_model_chose(smollm2):
     """kitchen-inf-02's team cannot slice: once the model writes a SliceObject step, the coalition
     grammar admits only a refusal, and the result says the grammar refused, not the model."""
-    from smartllm_local.planner.pipeline import PlanResult
-    from smartllm_local.planner.stages import StageRecord
-    from smartllm_local.worlds import scene_objects
-
+    from smartllm_local.planner.result import PlanResult, StageRecord
     catalogue = load_domain().catalogue
     task = next(t for t in load_tasks() if t.id == "kitchen-inf-02")
     decomposed = ("# SubTask 1: slice the potato (skills: GoToObject, PickupObject, SliceObject, PutObject)\n"
@@ -73,7 +70,6 @@ def test_a_refusal_the_grammar_forces_is_told_from_one_the_model_chose(smollm2):
                   "    PutObject('Knife', 'CounterTop')\n\nsubtask1_slice()\n")
     plan = parse_plan(decomposed, form="decomposed")
     result = PlanResult(task.instruction, task.floor_plan, list(task.robots),
-                        stages=[StageRecord("decomposition", output=decomposed, plan=plan)])
-    Planner(smollm2, catalogue).form_coalition(result, plan, catalogue.team(task.robots),
-                                               scene_objects(task.floor_plan))
+                        stages={"decomposition": StageRecord("decomposition", output=decomposed, plan=plan)})
+    Planner(smollm2, catalogue).form_coalition(result)
     assert result.refusal is not None and result.refused_by == "grammar"

@@ -208,7 +208,8 @@ def test_the_goal_stage_states_the_same_goals_without_the_task_s_goals(goals_run
 
 
 def test_plan_without_goals_writes_no_goal_stage_and_removes_a_stale_one(goals_run, tmp_path):
-    from smartllm_local.planner.pipeline import PlanResult, write_artifacts
+    from smartllm_local.planner.pipeline import write_artifacts
+    from smartllm_local.planner.result import PlanResult
 
     out = tmp_path / "run"
     shutil.copytree(goals_run[0], out)

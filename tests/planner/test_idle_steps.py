@@ -137,8 +137,8 @@ def test_a_plan_with_a_line_it_does_not_know_is_left_as_it_is():
 def test_the_planner_hands_the_coalition_the_decomposition_without_its_idle_steps(monkeypatch):
     """The decomposition's record keeps the lines taken out; its output and parsed plan, which the coalition and
     the allocation read, are without them; --keep-idle-steps leaves the model's plan as it wrote it."""
-    from smartllm_local.planner.pipeline import Planner, PlannerConfig, PlanResult
-    from smartllm_local.planner.stages import StageRecord
+    from smartllm_local.planner.pipeline import Planner, PlannerConfig
+    from smartllm_local.planner.result import PlanResult, StageRecord
 
     from .fakes import FakeBackend
 
@@ -152,7 +152,7 @@ def test_the_planner_hands_the_coalition_the_decomposition_without_its_idle_step
     for drop in (True, False):
         planner = Planner(FakeBackend(), CATALOGUE, PlannerConfig(drop_idle=drop))
         result = PlanResult("Make me a coffee and put the apple in the fridge.", "FloorPlan6", [13, 18])
-        record = planner.decompose(result, planner.scene(6))
+        record = planner.decompose(result)
         steps = [step.skill for fn in record.plan.functions for step in fn.body if hasattr(step, "skill")]
         assert (record.output == COFFEE.replace(IDLE, "")) == drop
         assert record.idle_steps == (IDLE.splitlines(keepends=True) if drop else [])

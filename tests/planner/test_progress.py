@@ -1,13 +1,14 @@
 """A stage tells its progress as it runs: started, prompt evaluated, its tokens so far, ended (the events the CLI
-shows; tests/test_plan_progress.py shows them, tests/planner/test_end_to_end.py has the real planner's)."""
+shows; tests/cli/test_plan_progress.py shows them, tests/planner/test_end_to_end.py has the real planner's)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from smartllm_local.planner.backends.base import Sampling
 from smartllm_local.planner.decoding.grammar import Grammar, alt
-from smartllm_local.planner.stages import Fitted, StageRecord, run_stage
+from smartllm_local.planner.decoding.sampling import Sampling
+from smartllm_local.planner.result import StageRecord
+from smartllm_local.planner.stages import Fitted, run_stage
 
 from .fakes import FakeBackend, Script
 

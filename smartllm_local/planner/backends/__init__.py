@@ -8,9 +8,10 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import SmartLLMError, UserError
+from ..decoding.repetition import LoopGuard
+from ..decoding.sampling import Generated, Sampling
 from ..models import checkpoint_folder, resolve_gguf
-from .base import Backend, Generated, Sampling
-from .repetition import LoopGuard
+from .base import Backend
 
 BACKENDS = ("llamacpp", "transformers", "server")
 

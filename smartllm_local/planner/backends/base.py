@@ -8,41 +8,13 @@ an optional grammar for the text it may write next.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
 from ...errors import ModelError
 from ..decoding.grammar import Grammar
-from .repetition import LoopGuard
-
-
-@dataclass(frozen=True)
-class Sampling:
-    """Decoding settings; temperature 0 is greedy, the seed makes sampling reproducible, and
-    ``loop_guard`` (None: off) keeps a line from ending in text said three times over (and, where a stage is
-    written line by line, a block of lines from being begun a third time). ``aligned``: forced
-    text ends with the model's own token, line ends are open and the end of sequence is always the model's
-    choice (off, for measuring its effect: forced text is written whole, a line ends at its newline, and
-    the model may end only where the grammar may)."""
-
-    temperature: float = 0.0
-    seed: int = 0
-    loop_guard: LoopGuard | None = LoopGuard()
-    aligned: bool = True
-
-
-@dataclass
-class Generated:
-    tokens: list[int]
-    text: str
-    stop: str  # "line" (a grammar line completed), "eos", "stop" (a stop string), "length"
-    loops: int = 0  # loops the loop guard ended
-    forced: int = 0  # of ``tokens``, those the backend wrote itself (text the grammar forces), not the model
-    choices: int = 0  # tokens the model chose (the end of sequence included)
-    refused: int = 0  # of those, the ones where its likeliest token was one the grammar refused
-    logprob: float = 0.0  # the sum of the chosen tokens' log-probabilities under the model, unconstrained
+from ..decoding.sampling import Generated, Sampling
 
 
 class Backend(Protocol):
@@ -95,18 +67,6 @@ class Backend(Protocol):
 
     def close(self) -> None:
         """Free the model."""
-
-
-#: The end of sequence is the model's choice where it is among its ``END_RANK`` likeliest next tokens (and, greedy,
-#: likelier than every token the grammar admits): there the model means to stop. Further down it is only the least
-#: unlikely of what the grammar leaves, and the model goes on under the grammar instead. A server reports as many of
-#: its likeliest tokens (llama-server's ``n_probs``), so that it decides the same.
-END_RANK = 64
-
-
-def may_end(logits: Any, token: int) -> bool:
-    """Whether the end-of-sequence ``token`` is among the model's ``END_RANK`` likeliest (numpy or torch scores)."""
-    return int((logits > logits[token]).sum()) < END_RANK
 
 
 def shared_prefix(cached: Sequence[int], context: Sequence[int]) -> int:

@@ -46,7 +46,8 @@ import numpy as np
 
 from ...errors import ModelError
 from ..decoding.grammar import Grammar
-from .base import Backend, Generated, Sampling, continuation_tokens
+from ..decoding.sampling import Generated, Sampling
+from .base import Backend, continuation_tokens
 from .llamacpp_decoding import LlamaDecoding
 
 _ONE_STREAM = struct.pack("<I", 1)  # the stream count of a state from a cache of one stream of cells

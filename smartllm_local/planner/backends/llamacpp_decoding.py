@@ -24,7 +24,7 @@ import numpy as np
 
 from ..decoding import loop
 from ..decoding.grammar import Grammar, GrammarError
-from .base import END_RANK, Generated, Sampling
+from ..decoding.sampling import END_RANK, Generated, Sampling
 
 _DATA = [("id", np.intc), ("logit", np.single), ("p", np.single)]  # llama_token_data
 

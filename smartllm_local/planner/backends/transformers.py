@@ -39,8 +39,9 @@ import numpy as np
 from ...errors import BackendUnavailableError, ModelError
 from ..decoding import loop
 from ..decoding.grammar import Grammar
+from ..decoding.sampling import Generated, Sampling
 from ..models import EMBEDDED, default_model, embedded_model_path, is_gguf
-from .base import Generated, Sampling, shared_prefix
+from .base import shared_prefix
 from .hf_vocabulary import EXTRA as _EXTRA
 from .hf_vocabulary import HFVocabulary
 from .llguidance_grammar import LLGuidanceGrammar

@@ -19,7 +19,7 @@ from ...robots import Robot
 from ...scoring import Condition
 from ...skills import SkillSet
 from ...worlds import Ai2ThorWorld, SimulatedSite, World
-from ..stages import StageRecord
+from ..result import StageRecord
 from .problem import PlanningTask, Unreachable, planning_task
 from .search import SEARCH, UP_LOCK, Search, Step, search
 from .site import goals_of, site_planning_task

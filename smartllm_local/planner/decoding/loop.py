@@ -38,10 +38,10 @@ from typing import Protocol
 import numpy as np
 
 from ...errors import GrammarMismatchError, ModelError
-from ..backends.base import END_RANK, Generated, Sampling, may_end
-from ..backends.repetition import TRIES, current_line, draw
 from .grammar import Grammar, GrammarError
 from .matcher import Matcher
+from .repetition import TRIES, current_line, draw
+from .sampling import END_RANK, Generated, Sampling, may_end
 
 _TOP = END_RANK  # the candidates looked at before the whole vocabulary is masked
 

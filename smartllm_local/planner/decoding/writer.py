@@ -10,7 +10,7 @@ and goes on from there. A writer that ends the sequence before the output is com
 the constraint's shortest way, and the count of lines so completed is reported.
 
 A line that would begin a third copy in a row of a block of lines (a ``guard``'s rule: see
-:class:`~..backends.repetition.LoopGuard`) is taken back from the writer, and the constraint's shortest way out
+:class:`~.repetition.LoopGuard`) is taken back from the writer, and the constraint's shortest way out
 of the block is written instead: its shortest lines (a blank line where one ends something, none that begins
 the copy) up to the next blank line, which in a plan ends the function; the model goes on from there.
 
@@ -48,7 +48,7 @@ Forcer = Callable[[str], int]
 
 
 class CycleGuard(Protocol):
-    """A rule for loops of whole lines (:class:`~..backends.repetition.LoopGuard` is one)."""
+    """A rule for loops of whole lines (:class:`~.repetition.LoopGuard` is one)."""
 
     def cycles(self, lines: Sequence[str]) -> bool:
         """Whether the last of ``lines`` (an output's lines so far) begins a loop."""

@@ -30,7 +30,8 @@ import numpy as np
 
 from ....errors import ModelError, UserError
 from ...decoding.grammar import Grammar
-from ..base import END_RANK, Generated, Sampling, shared_prefix
+from ...decoding.sampling import END_RANK, Generated, Sampling
+from ..base import shared_prefix
 from .connection import DEFAULT_TIMEOUT, Connection, ServerError
 from .dialects import Dialect, Reply, probe
 from .line_requests import LineRequests, WrongLine

@@ -19,8 +19,8 @@ from collections.abc import Callable, Sequence
 from ...decoding.grammar import Grammar
 from ...decoding.loop import forced_tokens
 from ...decoding.matcher import Matcher
-from ..base import Generated, Sampling
-from ..repetition import TRIES, current_line
+from ...decoding.repetition import TRIES, current_line
+from ...decoding.sampling import Generated, Sampling
 from .dialects import TokenProbs
 
 #: Asks the server to go on: (context, the grammar of what may come next, at most this many tokens, tokens

@@ -1,0 +1,211 @@
+"""Repair inside the SMART-LLM method: a call the model writes that fails where the function stands is written
+after the planner's steps that enable it, or taken back; and a decomposition stops at the goals it was given."""
+
+from __future__ import annotations
+
+import random
+
+import numpy as np
+import pytest
+
+from smartllm_local.benchmark.tasks import load_tasks
+from smartllm_local.domain import load_domain
+from smartllm_local.executor.dry_run import DryRun, notional_robot
+from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.classical.problem import planning_task
+from smartllm_local.planner.classical.search import search
+from smartllm_local.planner.constraints.format import MAX_SUBTASKS
+from smartllm_local.planner.constraints.plan import PlanConstraint
+from smartllm_local.planner.constraints.repair import TIME_LIMIT, Repairer, SearchWallClockError, effect
+from smartllm_local.planner.constraints.world_check import WorldCheck
+from smartllm_local.planner.decoding.protocol import Constraint, Rewrite
+from smartllm_local.planner.decoding.sampling import Sampling
+from smartllm_local.planner.decoding.writer import REWRITTEN, run_constraint, run_tokens, shortest_line
+from smartllm_local.planner.result import StageRecord
+from smartllm_local.planner.stages import Fitted, run_stage
+from smartllm_local.scoring import Condition
+from smartllm_local.worlds import scene_objects
+from tests.planner.writers import TokenAdversary
+
+CATALOGUE = load_domain().catalogue
+SKILLS = CATALOGUE.skills
+
+
+def _scripted(lines: list[str]):
+    """A writer that writes ``lines`` in order, each where it is offered, and the shortest line elsewhere."""
+    todo = list(lines)
+
+    def write(choose, remaining):
+        text = todo.pop(0) if todo and choose.grammar.matches(todo[0]) else shortest_line(choose)
+        return text, len(text)
+
+    return write
+
+
+def _decomposer(floor_plan: int, *, repair: bool = True, goals=()) -> PlanConstraint:
+    world = WorldCheck(scene_objects(floor_plan), SKILLS, MAX_SUBTASKS)
+    return PlanConstraint(scene_objects(floor_plan), SKILLS, world=world, summary=False, comments=False,
+                          repairer=Repairer(world, SKILLS) if repair else None, goals=goals)
+
+
+def _body(text: str, name: str) -> list[str]:
+    lines = text.split(f"def {name}():\n", 1)[1].split("\n\n", 1)[0].splitlines()
+    return [line.strip() for line in lines]
+
+
+def _all_succeed(text: str, floor_plan: int) -> list[tuple[str, tuple[str, ...]]]:
+    """The calls of a decomposition that fail when each sub-task's robot runs them in order (none, if sound)."""
+    plan = parse_plan(text, form="decomposed", skills=SKILLS, scene_types=scene_objects(floor_plan).types)
+    dry = DryRun(floor_plan, [notional_robot(SKILLS)] * MAX_SUBTASKS, SKILLS)
+    return [(step.skill, tuple(step.objects)) for k, fn in enumerate(plan.functions) for step in fn.body
+            if hasattr(step, "skill") and not dry.apply([k], step.skill, step.objects).success]
+
+
+def test_a_slice_without_a_knife_is_written_after_the_knife_is_fetched():
+    """The model goes to the bread and slices it with empty hands: the planner's steps fetch the knife first,
+    as the decomposition writes steps (each action where the function last went), and every step succeeds."""
+    decomposer = _decomposer(6)
+    text = run_constraint(decomposer, _scripted(["def subtask1_slice_bread():\n", "    GoToObject('Bread')\n",
+                                                 "    SliceObject('Bread')\n"]), len, 3000)
+    body = _body(text, "subtask1_slice_bread")
+    assert body[:5] == ["GoToObject('Bread')", "GoToObject('Knife')", "PickupObject('Knife')", "GoToObject('Bread')",
+                        "SliceObject('Bread')"], text
+    assert decomposer.repairs.made[0]["line"] == "    SliceObject('Bread')\n"
+    assert decomposer.repairs.made[0]["before"] == ["    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
+                                               "    GoToObject('Bread')\n"]
+    assert not _all_succeed(text, 6)
+
+
+def test_without_a_repairer_the_failing_call_is_not_offered():
+    """Off (--no-repair), the slice with empty hands is not a line the grammar admits, as before."""
+    decomposer = _decomposer(6, repair=False)
+    text = run_constraint(decomposer, _scripted(["def subtask1_slice_bread():\n", "    GoToObject('Bread')\n",
+                                                 "    SliceObject('Bread')\n"]), len, 3000)
+    assert "SliceObject" not in text and decomposer.repairs is None
+
+
+def test_a_call_the_planner_cannot_enable_is_taken_back_and_not_offered_again():
+    """A laptop does not go into a mug in this world: no plan enables the put, so the line is taken back, the
+    writer writes another line there, and the refused line is remembered for that step."""
+    decomposer = _decomposer(301)
+    line = "    PutObject('Laptop', 'Mug')\n"
+    text = run_constraint(decomposer, _scripted(["def subtask1_a():\n", "    GoToObject('Laptop')\n",
+                                                 "    PickupObject('Laptop')\n", line, line]), len, 3000)
+    assert "PutObject('Laptop', 'Mug')" not in text
+    assert (0, 2, line) in decomposer.repairs.missed and not decomposer.repairs.made
+    assert not _all_succeed(text, 301)
+
+
+def test_a_repair_uses_only_what_the_team_can_do():
+    """A robot that can only go, pick up and put cannot open the cabinet a put into it needs: the planner's steps
+    never call a skill the team lacks (the coalition would refuse the plan), so the put is taken back."""
+    team = CATALOGUE.team([25])
+    world = WorldCheck(scene_objects("FloorPlan402"), SKILLS, MAX_SUBTASKS)
+    decomposer = PlanConstraint(scene_objects("FloorPlan402"), SKILLS, world=world, summary=False, comments=False,
+                                repairer=Repairer(world, SKILLS), for_team=team)
+    put = "    PutObject('Cloth', 'Cabinet')\n"
+    text = run_constraint(decomposer, _scripted(["def subtask1_a():\n", "    GoToObject('Cloth')\n",
+                                                 "    PickupObject('Cloth')\n", put]), len, 3000)
+    assert "OpenObject" not in text and put not in text
+    assert all(line.split("(")[0].strip() in team[0].skills for r in decomposer.repairs.made for line in r["before"])
+
+
+def _slice_with_empty_hands(repairer: Repairer):
+    """The planner's steps that let a robot by the bread, with empty hands, slice it."""
+    return repairer.enable(0, "Bread", SKILLS["SliceObject"], ["Bread"])
+
+
+def test_a_repairs_search_is_bounded_by_processor_time_and_reaching_the_bound_finds_no_repair():
+    """The bound that decides a repair is Fast Downward's own processor time, which the machine's load does not
+    change: reaching it (a bound of 0 s, reached at once) gives no repair, not an error; the default bound finds
+    the knife."""
+    world = WorldCheck(scene_objects(6), SKILLS, MAX_SUBTASKS)
+    assert _slice_with_empty_hands(Repairer(world, SKILLS, cpu_limit=0)) is None
+    assert _slice_with_empty_hands(Repairer(world, SKILLS)) is not None
+    task = planning_task(world.run, [world.run.team[0]], SKILLS, [Condition("Bread", state="SLICED")],
+                         name="repair", members=[0])
+    ended = search(task, TIME_LIMIT, cpu_limit=0)
+    assert ended.timed_out and ended.out_of_cpu and not ended.found
+
+
+def test_a_search_past_its_wall_clock_backstop_is_an_error_not_a_missing_repair():
+    """Where the wall clock ran out first, how far the search got depends on the load: the plan would differ from
+    run to run, so it is an error that says so, never a silent "no repair"."""
+    world = WorldCheck(scene_objects(6), SKILLS, MAX_SUBTASKS)
+    with pytest.raises(SearchWallClockError, match="wall-clock"):
+        _slice_with_empty_hands(Repairer(world, SKILLS, time_limit=0.01))
+
+
+def test_an_effect_is_the_scorers_condition():
+    assert effect(SKILLS["SliceObject"], ["Bread"]) == Condition("Bread", state="SLICED")
+    assert effect(SKILLS["PutObject"], ["Apple", "Fridge"]) == Condition("Fridge", item="Apple")
+    assert effect(SKILLS["GoToObject"], ["Apple"]) is None
+
+
+def test_no_sub_task_is_begun_once_the_stated_goals_hold():
+    """Given the goal "Bread sliced", a plan that has sliced the bread is ended: no second sub-task is offered;
+    without goals the same writer goes on to write one."""
+    script = ["def subtask1_slice_bread():\n", "    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
+              "    GoToObject('Bread')\n", "    SliceObject('Bread')\n", "    GoToObject('CounterTop')\n",
+              "    PutObject('Knife', 'CounterTop')\n", "\n", "def subtask2_more():\n"]
+    goal = _decomposer(6, repair=False, goals=[Condition("Bread", state="SLICED")])
+    text = run_constraint(goal, _scripted(script), len, 3000)
+    assert "subtask2" not in text and goal.ended_at_goals
+    free = _decomposer(6, repair=False)
+    assert "def subtask2_more():" in run_constraint(free, _scripted(script), len, 3000)
+    assert not free.ended_at_goals
+
+
+@pytest.mark.parametrize("kind, tasks", [("random", 2), pytest.param("longest", 6, marks=pytest.mark.heavy)])
+def test_writers_that_write_as_models_do_keep_every_guarantee_with_repair(kind, tasks):
+    """Adversarial writers (ending mid-line, running past line ends, taking repairable lines where they are
+    offered) in kitchens: the output parses and keeps its budget, and every call succeeds where no dead end was
+    reported; repairs were made."""
+    rng = random.Random(11)
+    repairs = 0
+    for task in [t for t in load_tasks() if t.id.startswith("kitchen")][:tasks]:
+        decomposer = _decomposer(task.floor_plan)
+        text = run_tokens(decomposer, TokenAdversary(kind, rng), 900)
+        parse_plan(text, form="decomposed", skills=SKILLS, scene_types=scene_objects(task.floor_plan).types)
+        if decomposer.world_counts()[1] == 0:
+            assert not _all_succeed(text, task.floor_plan), (task.id, text)
+        repairs += len(decomposer.repairs.made)
+    assert repairs > 0
+
+
+class _RewritesItsLine(Constraint):
+    """Offers one line, of the kind a writer may have taken back, and writes the planner's line before it."""
+
+    def __init__(self, line: str, before: str):
+        super().__init__()
+        self.line, self.before, self.phase = line, before, "line"
+
+    def next(self, remaining):
+        if self.phase == "line":
+            return self._choose({}, {REWRITTEN: self.line})
+        if self.phase == "rewrite":
+            self.phase = "rewriting"
+            return Rewrite(self.before + self.line)
+        return None
+
+    def _advance(self, kind, piece):
+        if kind == REWRITTEN:
+            self.text = self.text[: len(self.text) - len(piece)]
+            self.phase = "rewrite"
+        else:
+            self.phase = "done"
+
+    def minimum_budget(self):
+        return len(self.before + self.line)
+
+
+def test_a_rewritten_line_leaves_the_models_context_as_the_output_says(smollm2):
+    """On llama.cpp, the line the model wrote is taken out of its context and the rewrite written in its place:
+    the stage's context is the prompt and the output, token for token as the backend spells them."""
+    prompt = smollm2.tokenize("def subtask1_slice_bread():\n    GoToObject('Bread')\n", bos=True)
+    record = StageRecord("decomposition")
+    line, before = "    SliceObject('Bread')\n", "    PickupObject('Knife')\n"
+    run_stage(record, smollm2, Fitted("", prompt), _RewritesItsLine(line, before), output_budget=200,
+              sampling=Sampling(), rng=np.random.default_rng(0))
+    assert record.output == before + line
+    assert smollm2.detokenize(record.context[len(prompt):]) == record.raw == before + line
