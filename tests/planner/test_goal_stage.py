@@ -59,6 +59,8 @@ def _check_statement(text: str, scene) -> GoalStatement:
     said = {(c.subject, c.state) for c in conditions if c.state}
     for a, b in (("ON", "OFF"), ("OPENED", "CLOSED"), ("HOT", "COLD"), ("CLEAN", "DIRTY")):
         assert not any((s, a) in said and (s, b) in said for s, _ in said), text
+    holding = {c.subject for c in conditions if c.state is None}
+    assert not any((holder, "EMPTY") in said for holder in holding), text
     return statement
 
 
@@ -77,6 +79,14 @@ def test_adversarial_writers_state_only_scene_objects_in_states_they_can_have(ki
             else:
                 text = run_constraint(constraint, writer(kind, random.Random(seed), refusals=0.1), len, budget)
             _check_statement(text, scene)
+
+
+def test_a_holder_is_never_said_to_be_empty_and_to_hold_something():
+    vocabulary = goal_vocabulary(scene_objects(6))
+    for text in ("Apple in Fridge\nFridge empty\n\n", "Fridge empty\nApple in Fridge\n\n"):
+        assert not accepts(GoalConstraint(vocabulary), text), text
+    for text in ("Fridge empty\n\n", "Apple in Fridge\nBowl empty\n\n", "Fridge empty\nApple in Bowl\n\n"):
+        assert accepts(GoalConstraint(vocabulary), text), text
 
 
 def test_the_world_decides_which_states_and_receptacles_a_type_is_offered():

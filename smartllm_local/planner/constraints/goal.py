@@ -3,9 +3,10 @@
 Each line is a condition (see :mod:`smartllm_local.goal_language`): ``<Type> <state>`` offers only the
 states the world can give that type in this scene (a LightSwitch on or off, never sliced), and ``<Item>
 in <Receptacle>`` only receptacles that can hold the item (a Toaster only bread slices, nothing in
-itself). A condition already stated, or one that contradicts it (``on`` after ``off``), is not offered
-again, so a statement never repeats or contradicts itself. A blank line ends the statement after at least
-one condition; the first line may instead be a refusal. At most :data:`MAX_GOALS` conditions.
+itself). A condition already stated, or one that contradicts it (``on`` after ``off``; ``Desk empty`` and
+``Pen in Desk``, in either order), is not offered again, so a statement never repeats or contradicts
+itself. A blank line ends the statement after at least one condition; the first line may instead be a
+refusal. At most :data:`MAX_GOALS` conditions.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from ..decoding.protocol import Choose, Constraint, longest
 from .format import refusal_line
 
 MAX_GOALS = 8
+EMPTY = "EMPTY"
 
 
 def goal_vocabulary(scene: SceneObjects) -> GoalVocabulary:
@@ -70,15 +72,19 @@ class GoalConstraint(Constraint):
         may be followed by the same things share a rule."""
         said_states: dict[str, set[str]] = {}
         said_in: dict[str, set[str]] = {}
+        emptied: set[str] = set()  # holders said to be empty: nothing may be said to be in them
         for c in self.said:
             if c.state is not None:
                 said_states.setdefault(c.subject, set()).update({c.state, OPPOSITES.get(c.state, c.state)})
+                if c.state == EMPTY:
+                    emptied.add(c.subject)
             else:
                 said_in.setdefault(c.item or "", set()).add(c.subject)
+                said_states.setdefault(c.subject, set()).add(EMPTY)  # a holder with a thing in it is not empty
         groups: dict[tuple[frozenset[str], frozenset[str]], list[str]] = {}
         for kind in self.vocabulary.types:
             states = self.vocabulary.states.get(kind, frozenset()) - said_states.get(kind, set())
-            holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set())
+            holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set()) - emptied
             if states or holders:
                 groups.setdefault((frozenset(states), frozenset(holders)), []).append(kind)
         rules: dict[str, Node] = {}
