@@ -26,6 +26,12 @@ def _lines(out) -> dict[str, dict]:
     return {line["id"]: line for line in map(json.loads, (out / "results.jsonl").read_text().splitlines())}
 
 
+def _run(out, *args: str) -> dict[str, dict]:
+    """A benchmark run through the CLI into ``out``; its results lines by task id."""
+    benchmark_run(out, *args)
+    return _lines(out)
+
+
 def test_the_methods_stages_and_options():
     task = TASKS["kitchen-05"]
     assert [s.name for s in make_method("goal-planner-oracle", CATALOGUE, None).steps(task)] == ["allocation"]
@@ -62,9 +68,8 @@ def test_a_stated_goal_the_scene_cannot_meet_is_the_planner_s_refusal():
 def test_the_oracle_s_plans_run_in_the_executor_with_sr_1(tmp_path):
     # a light and a lettuce (two parts in parallel); a laptop two light robots lift together
     out = tmp_path / "oracle"
-    benchmark_run(out, "--method", "goal-planner-oracle", "--task", "kitchen-08", "--task", "living-07",
-                  "--task", "kitchen-inf-01", "--planner-time-limit", "600")
-    lines = _lines(out)
+    lines = _run(out, "--method", "goal-planner-oracle", "--task", "kitchen-08", "--task", "living-07",
+                 "--task", "kitchen-inf-01", "--planner-time-limit", "600")
     for task_id in ("kitchen-08", "living-07"):
         assert lines[task_id]["SR"] == 1.0 and lines[task_id]["Exe"] == 1.0, lines[task_id]
     assert lines["kitchen-inf-01"]["refused"] and lines["kitchen-inf-01"]["refused_by"] == "planner"
@@ -75,9 +80,8 @@ def test_the_oracle_s_plans_run_in_the_executor_with_sr_1(tmp_path):
 
 
 def test_the_time_limit_fails_the_task_with_its_error(tmp_path):
-    out = tmp_path / "limited"
-    benchmark_run(out, "--method", "goal-planner-oracle", "--task", "kitchen-12", "--planner-time-limit", "0.001")
-    line = _lines(out)["kitchen-12"]
+    line = _run(tmp_path / "limited", "--method", "goal-planner-oracle", "--task", "kitchen-12",
+                "--planner-time-limit", "0.001")["kitchen-12"]
     assert "time limit" in line["error"] and "--planner-time-limit" in line["error"] and not line["refused"]
 
 
@@ -106,9 +110,8 @@ def test_the_oracle_plans_on_a_site_domain_and_its_plans_run_on_the_site(tmp_pat
     # a region four robots patrol together, then a picture; a picture from the roof only drones reach; a region
     # too large for the team (refused, with the executor's reason)
     out = tmp_path / "patrol"
-    benchmark_run(out, "--domain", "patrol", "--method", "goal-planner-oracle", "--task", "patrol-11",
-                  "--task", "patrol-07", "--task", "patrol-inf-02")
-    lines = _lines(out)
+    lines = _run(out, "--domain", "patrol", "--method", "goal-planner-oracle", "--task", "patrol-11",
+                 "--task", "patrol-07", "--task", "patrol-inf-02")
     for task_id in ("patrol-11", "patrol-07"):
         assert lines[task_id]["SR"] == 1.0 and lines[task_id]["Exe"] == 1.0, lines[task_id]
     refused = lines["patrol-inf-02"]
@@ -120,9 +123,7 @@ def test_the_oracle_plans_on_a_site_domain_and_its_plans_run_on_the_site(tmp_pat
 @pytest.mark.heavy
 @pytest.mark.parametrize("domain", ["patrol", str(starter_domain())], ids=["patrol", "starter"])
 def test_the_oracle_meets_every_feasible_site_task_and_refuses_every_infeasible_one(domain, tmp_path):
-    out = tmp_path / "site"
-    benchmark_run(out, "--domain", domain, "--method", "goal-planner-oracle")
-    for task_id, line in _lines(out).items():
+    for task_id, line in _run(tmp_path / "site", "--domain", domain, "--method", "goal-planner-oracle").items():
         if line["feasible"]:
             assert line["SR"] == 1.0, (task_id, line)
         else:
