@@ -9,16 +9,19 @@
 #                                      plan kitchen-01 and run `bench` (the prompt path against llama.cpp alone,
 #                                      decoding, prefix reuse); on the first shape, run the whole household
 #                                      benchmark with K tasks planned at once (`benchmark run --parallel K`, K in
-#                                      GPU_CHECK_PARALLEL, default "1 4 16 47"); print the tables (scripts/gpu_table.py)
+#                                      GPU_CHECK_PARALLEL, default "47 16 4 1"); print the tables (scripts/gpu_table.py)
 #   scripts/gpu_check.sh run --cpu     the same on this machine's CPU with a tiny shape, two tasks and K 1 and 2, and
 #                                      the installed llama-cpp-python: how the script itself is tested where no GPU is
 #                                      lent
 #
 # Each run first loads a model in processes that import numpy before llama_cpp (the order that crashed a CUDA
 # build), in variants that tell its causes apart, with a native backtrace (cuda-gdb) where one crashes.
-# GPU_CHECK_SHAPES (default "7b 70b") names the shapes, in order; GPU_CHECK_SECONDS (default 480) bounds the run:
-# a shape's bench, or a K's benchmark run, is left out when it would not fit. GPU_CHECK_TASKS (default: every task;
-# with --cpu "kitchen-01 kitchen-02") names the tasks of the benchmark runs.
+# GPU_CHECK_SHAPES (default "7b"; "7b 70b" adds the 70B shape) names the shapes, in order; GPU_CHECK_SECONDS
+# (default 560) bounds the run: a shape's bench, or a K's benchmark run, is left out when it would not fit, and a
+# run that would pass it is cut, counting the tasks it scored. The largest K comes first: on an H200 the CUDA
+# build takes 200 s and the benchmark one task at a time about 240 s (2026-11-27), so one call of the device tool
+# (at most 600 s) holds the build and a few K. GPU_CHECK_TASKS (default: every task; with --cpu
+# "kitchen-01 kitchen-02") names the tasks of the benchmark runs.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -153,10 +156,10 @@ parallel_runs() {
 }
 
 run() {
-    local cpu=0 layers=-1 work site deadline=${GPU_CHECK_SECONDS:-480}
+    local cpu=0 layers=-1 work site deadline=${GPU_CHECK_SECONDS:-560}
     local -a shapes
-    read -r -a shapes <<<"${GPU_CHECK_SHAPES:-7b 70b}"
-    PARALLEL=${GPU_CHECK_PARALLEL:-1 4 16 47}
+    read -r -a shapes <<<"${GPU_CHECK_SHAPES:-7b}"
+    PARALLEL=${GPU_CHECK_PARALLEL:-47 16 4 1}
     if [[ ${1:-} == --cpu ]]; then
         cpu=1; layers=0; shapes=(tiny); PARALLEL=${GPU_CHECK_PARALLEL:-1 2}
         GPU_CHECK_TASKS=${GPU_CHECK_TASKS:-kitchen-01 kitchen-02}
