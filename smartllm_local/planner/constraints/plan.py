@@ -143,6 +143,15 @@ class PlanConstraint(Orchestration, Constraint):
         self.rewrite: str | None = None  # the text that replaces the line just written
         self.rewriting = False  # that text is being fed
         self.phase = "start"
+        self._offer_skills(skills, for_team)
+        if not self.must_refuse:
+            self._start_writing(repairer if world is not None and not self.allocated else None, repair, finish)
+
+    def _offer_skills(self, skills: SkillSet, for_team: Sequence[Robot] | None) -> None:
+        """The skills the plan may call (those that act on this scene, and for a decomposition written for a
+        team, those the team can make), and the refusal line: with a team, one of the reasons the catalogue
+        gives (none: it cannot refuse); a team that can make no call here can only refuse."""
+        scene = self.scene
         usable = [s for s in skills.values() if all(scene.types_for(a) for a in s.arguments[: s.required])]
         if not _acts(usable):
             raise ValueError("the skills cannot act on any object of this scene")
@@ -153,23 +162,22 @@ class PlanConstraint(Orchestration, Constraint):
         self.skill_actions = {s.name: s.action for s in self.skills}
         self.by_name = {s.name: s for s in skills.values()}
         reasons = self._reasons(usable)
-        # With a team, a refusal states one of the reasons the catalogue gives (none: it cannot refuse).
         self.refusal_line = seq(REFUSAL_PREFIX, alt(*reasons), "\n") if reasons else None
         self.refusal_len = longest(self.refusal_line, {}) if self.refusal_line is not None else 0
-        # A team that can make no call here can only refuse (and says why).
         self.must_refuse = not _acts(self.skills)
-        if self.must_refuse:
-            return
+
+    def _start_writing(self, repairer: Repairer | None, repair: bool, finish: bool) -> None:
+        """The grammar's shared rules, the calls on offer, the budget and the empty plan being written."""
         self.rules: dict[str, Node] = {"skills": ordered_subset(self.skill_names, ", ")}
         self.robot_args = ["robot_list", *(f"robot_list[{i}]" for i in range(self.team_size))] if self.allocated else []
         self.robot_arg_len = max((len(a) + 2 for a in self.robot_args), default=0)  # with its ", "
         self.sleep_len = len(INDENT) + len("time.sleep(9)\n")
         self._lists: dict[tuple[str, int, int], list[tuple[int, ...]] | None] = {}
-        self.candidates = Candidates(scene, self.skills, robot_arg_len=self.robot_arg_len, allocated=self.allocated,
-                                     world=world, max_steps=self.max_steps,
+        self.candidates = Candidates(self.scene, self.skills, robot_arg_len=self.robot_arg_len,
+                                     allocated=self.allocated, world=self.world, max_steps=self.max_steps,
                                      allows=self.whole.can if self.whole is not None else None)
         self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
-        self._plan_with(repairer if world is not None and not self.allocated else None, repair, finish)
+        self._plan_with(repairer, repair, finish)
         self.budget = Budget(allocated=self.allocated, team_size=self.team_size, fixed_names=self.fixed_names,
                              fresh_action=self.fresh_action, body_cost=self._body_cost)
         self.skills_len = longest(Ref("skills"), self.rules)
