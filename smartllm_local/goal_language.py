@@ -4,10 +4,14 @@ The goal stage writes them; the benchmark's ground truth states the same things 
 is small enough to read at a glance and to parse one way only::
 
     Apple in Fridge         an object of the first type inside one of the second (nested counts)
+    Laptop on Bed           the same, for a thing on a surface ("on" and "in" both say what holds it)
     LightSwitch off         an object of the type in a state, written in lower case
     # INFEASIBLE: <why>     the one line of a refusal
 
-A blank line ends a statement. Each line becomes one :class:`~smartllm_local.scoring.Goal` (``Apple in
+A blank line ends a statement. Where the scene's types are known, a type may also be named by a word of
+its name that no other type of the scene has (:func:`aliases`: ``Phone`` is the ``CellPhone``); a small
+model that means the phone then writes it, rather than the first listed name the grammar lets it start.
+Each line becomes one :class:`~smartllm_local.scoring.Goal` (``Apple in
 Fridge`` is ``{"name": "Fridge", "contains": ["Apple"]}``, ``LightSwitch off`` is ``{"name":
 "LightSwitch", "state": "OFF"}``), so a stated goal is scored by the scorer that scores the benchmark's.
 
@@ -32,7 +36,12 @@ _WORD_STATES = {word: state for state, word in STATE_WORDS.items()}
 OPPOSITES: dict[str, str] = {"ON": "OFF", "OFF": "ON", "OPENED": "CLOSED", "CLOSED": "OPENED", "HOT": "COLD",
                              "COLD": "HOT", "CLEAN": "DIRTY", "DIRTY": "CLEAN"}
 CONTAINMENT = " in "
-_LINE = re.compile(r"^([A-Za-z][A-Za-z0-9]*)(?: in ([A-Za-z][A-Za-z0-9]*)| ([a-z]+))$")
+#: The ways a statement may say that one thing holds another: in a receptacle, on a surface.
+PREPOSITIONS = (CONTAINMENT, " on ")
+_LINE = re.compile(r"^([A-Za-z][A-Za-z0-9]*)(?: (?:in|on) ([A-Za-z][A-Za-z0-9]*)| ([a-z]+))$")
+_NAME_WORD = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+")
+#: The shortest word of a type's name that names it alone.
+ALIAS_LETTERS = 3
 _REFUSAL = re.compile(r"^#\s*INFEASIBLE\s*:\s*(.*?)\s*$")
 
 #: An AI2-THOR object's flag that lets the world give it each state (see scoring's state tests).
@@ -90,16 +99,33 @@ def statement_of(goals: Iterable[Goal]) -> GoalStatement:
                                for c in conditions))
 
 
+def aliases(types: Iterable[str]) -> dict[str, str]:
+    """Other names of the scene's types: each word of a type's name (``CellPhone``: Cell, Phone) that is a word
+    of no other type's name and is not itself a type, capitalized, at least :data:`ALIAS_LETTERS` letters."""
+    types = list(types)
+    owners: dict[str, set[str]] = {}
+    for kind in types:
+        for word in _NAME_WORD.findall(kind):
+            owners.setdefault(word.capitalize(), set()).add(kind)
+    taken = {t.lower() for t in types}
+    return {word: next(iter(kinds)) for word, kinds in sorted(owners.items())
+            if len(kinds) == 1 and len(word) >= ALIAS_LETTERS and word.lower() not in taken}
+
+
 def parse_goal_statement(text: str, *, where: str = "<goals>", states: Sequence[str] = tuple(STATE_WORDS),
                          types: Iterable[str] | None = None) -> GoalStatement:
     """Read a goal statement (the goal stage's output, or a file a person wrote).
 
-    ``states``: those the domain's world knows; ``types``: the scene's object types (None: any name).
+    ``states``: those the domain's world knows; ``types``: the scene's object types (None: any name), each
+    of which may also be named by one of its :func:`aliases`.
 
     Raises:
         PlanError: every line that is not a condition, naming its line and what is wrong.
     """
-    known = None if types is None else {t.lower(): t for t in types}
+    known = None
+    if types is not None:
+        types = list(types)
+        known = {alias.lower(): kind for alias, kind in aliases(types).items()} | {t.lower(): t for t in types}
     lines = text.splitlines()
     for number, line in enumerate(lines, start=1):
         refusal = _REFUSAL.match(line.strip())

@@ -1,5 +1,6 @@
 """Whether an instruction names what a stated goal is about: the goal check refuses a task for a goal out of the
-team's reach only where the instruction asked for it.
+team's reach only where the instruction asked for it, and the goal stage's refusal stands only where it is not
+for something the instruction names and the scene has.
 
 The goal stage states goals from the instruction and the scene; a small model also states goals nobody asked
 for (an object the instruction never names). Refusing a feasible task for one of those is refusing it for the
@@ -50,6 +51,13 @@ def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequen
         return []
     left = [c for c in stated if c not in out_of_reach]
     return list(out_of_reach) if any(c in asked for c in left) else []
+
+
+def present_yet_refused(refusal: str, instruction: str, types: Sequence[str]) -> str | None:
+    """A type of the scene that both the goal stage's refusal and the instruction name, or None. The stage sees
+    the scene alone, so a refusal can only be for something the scene lacks; one that names what the instruction
+    asks for and the scene has ("there is no stove" beside a StoveBurner) is the model's mistake."""
+    return next((t for t in types if names(refusal, t) and names(instruction, t)), None)
 
 
 def as_goal(condition: Condition) -> Goal:

@@ -16,6 +16,7 @@ from ..errors import PlanError
 from ..goal_language import GoalStatement, parse_goal_statement
 from ..scene import SceneObjects
 from ..scoring import Condition
+from .asked import present_yet_refused
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
 from .result import PlanResult, StageRecord
@@ -66,7 +67,22 @@ def goal_examples(planner: Planner) -> list[GoalExample]:
 
 def state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, refusals: bool = True) -> StatedGoals:
     """Run the goal stage for one instruction in one scene; without ``refusals`` the model must state goals
-    (the grammar offers no refusal unless the scene gives it nothing to state)."""
+    (the grammar offers no refusal unless the scene gives it nothing to state). A refusal for something the
+    instruction names and the scene has is the model's mistake: the stage is run again without refusals."""
+    stated = _state_goals(planner, instruction, floor_plan, refusals=refusals)
+    if stated.refusal is None or stated.record.refused_by != "model" or not planner.config.grammar:
+        return stated  # (without the grammar, nothing would keep the model from refusing again)
+    present = present_yet_refused(stated.refusal, instruction, planner.scene(floor_plan).types)
+    if present is None:
+        return stated
+    again = _state_goals(planner, instruction, floor_plan, refusals=False)
+    again.record.overturned = f"{stated.refusal} (the scene has a {present})"
+    again.record.seconds += stated.record.seconds
+    again.record.generated_tokens += stated.record.generated_tokens
+    return again
+
+
+def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, refusals: bool) -> StatedGoals:
     scene = planner.scene(floor_plan)
     vocabulary = goal_vocabulary(scene)
     examples = goal_examples(planner)
@@ -90,6 +106,8 @@ def state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, re
     if statement is not None and statement.refusal is not None:
         record.refusal = statement.refusal
         record.refused_by = record.refused_by or "model"
+    elif statement is not None:
+        record.output = statement.text() + "\n"  # each type by its name, each holder "in"; raw_output as written
     return StatedGoals(record, statement)
 
 

@@ -9,8 +9,9 @@ from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.goal_language import parse_goal_statement, statement_of
 from smartllm_local.planner import pipeline
-from smartllm_local.planner.asked import as_goal, invented, names
-from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, stated_conditions
+from smartllm_local.planner.asked import as_goal, invented, names, present_yet_refused
+from smartllm_local.planner.decoding.sampling import Generated
+from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
 from smartllm_local.planner.pipeline import Planner, PlannerConfig
 from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.scoring import Condition
@@ -86,3 +87,35 @@ def test_the_goal_check_drops_a_goal_nobody_asked_for_and_refuses_one_asked_for(
     result, record = _checked(monkeypatch, "Make me a coffee and put the apple in the fridge.", statement)
     assert record.refused_by == GOAL_CHECK and "Fridge contains Apple" in record.refusal
     assert not record.dropped_goals
+
+
+class _Refuses(FakeBackend):
+    """Refuses where the grammar lets it, giving ``why``; otherwise states the apple in the fridge."""
+
+    def __init__(self, why: str):
+        super().__init__()
+        self.why = why
+
+    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None, lines=1) -> Generated:
+        self.calls += 1
+        for text in (f"# INFEASIBLE: {self.why}\n", "Apple in Fridge\n", "\n"):
+            if grammar.matches(text):
+                return Generated([0] * len(text), text, "line")
+        raise AssertionError("the goal grammar offers neither a refusal, the apple in the fridge nor the end")
+
+
+@pytest.mark.parametrize("why, overturned", [
+    ("there is no fridge in this room", True),  # FloorPlan6 has one: the model's mistake
+    ("there is no television in this room", False),  # it has none: the refusal stands
+    ("the fridge is broken", True),
+])
+def test_a_goal_stage_refusal_for_a_thing_the_scene_has_is_stated_again_without_refusals(why, overturned):
+    planner = Planner(_Refuses(why), CATALOGUE, PlannerConfig(goal_check=True))
+    instruction = "Put the apple in the fridge." if "fridge" in why else "Put the apple in front of the television."
+    stated = state_goals(planner, instruction, "FloorPlan6")
+    if overturned:
+        assert stated.refusal is None and stated.statement.conditions == [APPLE_IN]
+        assert stated.record.overturned == f"{why} (the scene has a Fridge)"
+    else:
+        assert stated.refusal == why and not stated.record.overturned
+    assert present_yet_refused(why, "Make me a coffee.", scene_objects(6).types) is None  # not asked for: stands

@@ -16,7 +16,7 @@ from smartllm_local.benchmark.goal_accuracy import matches, measure
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import PlanError
-from smartllm_local.goal_language import GoalStatement, parse_goal_statement, statement_of
+from smartllm_local.goal_language import GoalStatement, aliases, parse_goal_statement, statement_of
 from smartllm_local.planner.constraints.goal import MAX_GOALS, GoalConstraint, goal_vocabulary
 from smartllm_local.planner.decoding.writer import Report, accepts, run_constraint, run_tokens
 from smartllm_local.planner.goal_stage import GOAL_BUDGET
@@ -87,6 +87,27 @@ def test_a_holder_is_never_said_to_be_empty_and_to_hold_something():
         assert not accepts(GoalConstraint(vocabulary), text), text
     for text in ("Fridge empty\n\n", "Apple in Fridge\nBowl empty\n\n", "Fridge empty\nApple in Bowl\n\n"):
         assert accepts(GoalConstraint(vocabulary), text), text
+
+
+def test_a_type_may_be_named_by_a_word_only_it_has_and_a_thing_put_on_a_surface():
+    """The model that starts "Phone" is let finish it (not made to write ``Pen``), and "on the bed" is said as
+    the model says it; each is read as the type's own name and containment."""
+    bedroom = scene_objects(301)
+    vocabulary = goal_vocabulary(bedroom)
+    names = aliases(vocabulary.types)
+    assert names["Phone"] == "CellPhone" and names["Lamp"] == "DeskLamp"
+    assert "Bed" not in names and "Box" not in names  # a type's own name is never another's alias
+    bathroom = aliases(goal_vocabulary(scene_objects(402)).types)
+    assert "Bottle" not in bathroom and "Soap" not in bathroom  # SoapBar, SoapBottle, SprayBottle share them
+    for text, meant in (("Phone on Dresser\n\n", "CellPhone in Dresser\n"), ("Laptop on Bed\n\n", "Laptop in Bed\n"),
+                        ("Laptop on\nLamp off\n\n", "Laptop on\nDeskLamp off\n")):
+        assert accepts(GoalConstraint(vocabulary), text), text
+        assert parse_goal_statement(text, types=vocabulary.types).text() == meant
+    # an alias is the same object: no second statement of it, no contradiction through it
+    assert not accepts(GoalConstraint(vocabulary), "CellPhone in Dresser\nPhone in Dresser\n\n")
+    assert not accepts(GoalConstraint(vocabulary), "DeskLamp off\nLamp on\n\n")
+    assert not accepts(GoalConstraint(vocabulary), "Pen on Pen\n\n")
+    assert not accepts(GoalConstraint(vocabulary), "Pen on\n\n")
 
 
 def test_the_world_decides_which_states_and_receptacles_a_type_is_offered():

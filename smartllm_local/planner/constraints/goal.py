@@ -2,8 +2,11 @@
 
 Each line is a condition (see :mod:`smartllm_local.goal_language`): ``<Type> <state>`` offers only the
 states the world can give that type in this scene (a LightSwitch on or off, never sliced), and ``<Item>
-in <Receptacle>`` only receptacles that can hold the item (a Toaster only bread slices, nothing in
-itself). A condition already stated, or one that contradicts it (``on`` after ``off``; ``Desk empty`` and
+in <Receptacle>`` (or ``on``) only receptacles that can hold the item (a Toaster only bread slices, nothing
+in itself). A type may be named by its name or by one of its aliases (a word of its name no other type of the
+scene has: ``Phone``), so that where the model starts the name it means, the grammar does not make it finish
+another (``P`` of "Phone" finished as ``Pen``).
+A condition already stated, or one that contradicts it (``on`` after ``off``; ``Desk empty`` and
 ``Pen in Desk``, in either order), is not offered again, so a statement never repeats or contradicts
 itself. A blank line ends the statement after at least one condition; the first line may instead be a
 refusal. At most :data:`MAX_GOALS` conditions.
@@ -13,7 +16,7 @@ from __future__ import annotations
 
 from itertools import count
 
-from ...goal_language import CONTAINMENT, OPPOSITES, STATE_WORDS, parse_goal_statement
+from ...goal_language import OPPOSITES, PREPOSITIONS, STATE_WORDS, aliases, parse_goal_statement
 from ...scene import GoalVocabulary, SceneObjects
 from ...scoring import Condition
 from ..decoding.grammar import Node, Ref, alt, seq
@@ -36,6 +39,9 @@ class GoalConstraint(Constraint):
         super().__init__()
         self.vocabulary, self.allow_refusal, self.max_goals = vocabulary, allow_refusal, max_goals
         self.said: list[Condition] = []
+        self.names: dict[str, list[str]] = {kind: [kind] for kind in vocabulary.types}
+        for alias, kind in aliases(vocabulary.types).items():
+            self.names[kind].append(alias)
         self.ended = False
         first, rules = self._conditions()
         self.must_refuse = first is None  # the scene offers nothing a goal could say
@@ -63,7 +69,7 @@ class GoalConstraint(Constraint):
 
     def _advance(self, kind: str, piece: str) -> None:
         if kind == "condition":
-            self.said.extend(parse_goal_statement(piece).conditions)
+            self.said.extend(parse_goal_statement(piece, types=self.vocabulary.types).conditions)
         elif kind == "end":
             self.ended = True
 
@@ -93,11 +99,11 @@ class GoalConstraint(Constraint):
         numbers = count(1)
         for (states, holders), kinds in groups.items():
             rule = f"types-{next(numbers)}"
-            rules[rule] = alt(*kinds)
+            rules[rule] = alt(*(name for kind in kinds for name in self.names[kind]))
             after: list[Node] = [seq(" ", alt(*(STATE_WORDS[s] for s in STATE_WORDS if s in states)))] if states else []
             if holders:
                 name = holder_rules.setdefault(holders, f"holders-{len(holder_rules) + 1}")
-                rules[name] = alt(*sorted(holders))
-                after.append(seq(CONTAINMENT, Ref(name)))
+                rules[name] = alt(*(n for kind in sorted(holders) for n in self.names[kind]))
+                after.append(seq(alt(*PREPOSITIONS), Ref(name)))
             lines.append(seq(Ref(rule), alt(*after), "\n"))
         return (alt(*lines) if lines else None), rules
