@@ -20,7 +20,7 @@ from smartllm_local.goal_language import parse_goal_statement, statement_of
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.classical.planning import plan_to_goal
 from smartllm_local.planner.classical.problem import Unreachable, planning_task, with_future_pieces
-from smartllm_local.planner.classical.search import pddl, search
+from smartllm_local.planner.classical.search import GREEDY, pddl, search
 from smartllm_local.planner.classical.threads import parts
 from smartllm_local.scoring import condition_holds
 from smartllm_local.world.navigation import Box
@@ -146,6 +146,22 @@ def test_the_time_limit_ends_the_search_with_a_clear_error():
                           time_limit=0.001)
     assert record.refusal is None and record.plan is None
     assert "time limit" in record.error and "--planner-time-limit" in record.error
+
+
+def test_where_the_shortest_plan_takes_too_long_the_greedy_search_s_plan_is_written_and_meets_the_goal():
+    task, team, dry, problem = _problem("kitchen-10")
+    found = search(problem, LIMIT, config=GREEDY)
+    assert found.found and not found.shortest and found.steps
+    for step in found.steps:
+        assert dry.apply(list(step.robots), step.skill, list(step.objects)).success, step
+    assert all(condition_holds(c, dry.objects) for c in statement_of(task.goals).conditions)
+    # no processor time at all for the shortest plan: the greedy search's plan, labelled as not proven shortest
+    record = plan_to_goal(statement_of(task.goals).conditions, task.floor_plan, team, SKILLS, time_limit=LIMIT,
+                          shortest_cpu=0)
+    assert record.error == "" and "not proven the shortest" in record.output.splitlines()[0]
+    assert GREEDY in record.output.splitlines()[0] and record.plan is not None
+    again = plan_to_goal(statement_of(task.goals).conditions, task.floor_plan, team, SKILLS, time_limit=LIMIT)
+    assert "shortest plan (astar" in again.output.splitlines()[0]
 
 
 # ------------------------------------------------------------------ the model against the dry-run world
