@@ -161,31 +161,8 @@ class TransformersBackend(PrefixReuse):
         if threads:
             torch.set_num_threads(threads)
         torch.manual_seed(seed)
-        kwargs: dict[str, Any] = {"local_files_only": True}
-        if gguf:
-            kwargs["gguf_file"] = gguf
-        what = "GGUF file" if gguf else "Hugging Face checkpoint"
-        try:
-            with _quiet_loading(transformers):
-                self.tokenizer = transformers.AutoTokenizer.from_pretrained(str(folder), **kwargs)
-                self.lm = transformers.AutoModelForCausalLM.from_pretrained(
-                    str(folder), dtype=dtype, device_map=device_map, **kwargs)
-                self.vocabulary = HFVocabulary(self.tokenizer, self.model)
-        except (MemoryError, getattr(torch, "OutOfMemoryError", MemoryError)) as exc:
-            where = "GPU memory (run on the CPU with --n-gpu-layers 0)" if device_map else "memory"
-            raise ModelError(f"{self.model} does not fit in {where} ({_one_line(exc)}); use a smaller model") from exc
-        except ImportError as exc:
-            raise BackendUnavailableError(
-                f"transformers could not load {self.model} ({_one_line(exc)}): {_EXTRA}") from exc
-        except Exception as exc:  # the readers fail in many ways on a damaged file (struct.error, KeyError, ...)
-            if device_map and "cuda" in str(exc).lower():
-                raise ModelError(f"loading {self.model} on the GPU failed ({_one_line(exc)}); "
-                                 "run on the CPU with --n-gpu-layers 0") from exc
-            fix = ("it may be truncated or corrupt (download it again) or of an architecture transformers "
-                   "cannot read (try --backend llamacpp)") if gguf else \
-                  "its files may be incomplete or corrupt (config.json, tokenizer and weights must all be there)"
-            raise ModelError(f"{self.model} is not a readable {what} for the transformers backend "
-                             f"({_one_line(exc)}); {fix}") from exc
+        self.tokenizer, self.lm, self.vocabulary = _load(transformers, torch, self.model, folder, gguf, dtype,
+                                                         device_map)
         self.device = self.lm.get_input_embeddings().weight.device
         self.lm.eval()
         limit = getattr(self.lm.config, "max_position_embeddings", n_ctx) or n_ctx
@@ -267,3 +244,33 @@ class TransformersBackend(PrefixReuse):
         self.lm = None
         if getattr(self, "device", None) is not None and self.device.type == "cuda":
             self._torch.cuda.empty_cache()
+
+
+def _load(transformers: Any, torch: Any, model: str, folder: Path, gguf: str | None, dtype: Any,
+          device_map: Any) -> tuple[Any, Any, HFVocabulary]:
+    """The tokenizer, the model and its vocabulary, or an error that says what is wrong with the files and
+    what to do."""
+    kwargs: dict[str, Any] = {"local_files_only": True}
+    if gguf:
+        kwargs["gguf_file"] = gguf
+    what = "GGUF file" if gguf else "Hugging Face checkpoint"
+    try:
+        with _quiet_loading(transformers):
+            tokenizer = transformers.AutoTokenizer.from_pretrained(str(folder), **kwargs)
+            lm = transformers.AutoModelForCausalLM.from_pretrained(
+                str(folder), dtype=dtype, device_map=device_map, **kwargs)
+            return tokenizer, lm, HFVocabulary(tokenizer, model)
+    except (MemoryError, getattr(torch, "OutOfMemoryError", MemoryError)) as exc:
+        where = "GPU memory (run on the CPU with --n-gpu-layers 0)" if device_map else "memory"
+        raise ModelError(f"{model} does not fit in {where} ({_one_line(exc)}); use a smaller model") from exc
+    except ImportError as exc:
+        raise BackendUnavailableError(f"transformers could not load {model} ({_one_line(exc)}): {_EXTRA}") from exc
+    except Exception as exc:  # the readers fail in many ways on a damaged file (struct.error, KeyError, ...)
+        if device_map and "cuda" in str(exc).lower():
+            raise ModelError(f"loading {model} on the GPU failed ({_one_line(exc)}); "
+                             "run on the CPU with --n-gpu-layers 0") from exc
+        fix = ("it may be truncated or corrupt (download it again) or of an architecture transformers "
+               "cannot read (try --backend llamacpp)") if gguf else \
+              "its files may be incomplete or corrupt (config.json, tokenizer and weights must all be there)"
+        raise ModelError(f"{model} is not a readable {what} for the transformers backend "
+                         f"({_one_line(exc)}); {fix}") from exc
