@@ -23,7 +23,7 @@ from ..domain import Domain, load_domain
 from ..errors import TaskFileError, UnknownFloorPlanError, UserError
 from ..robots import Catalogue
 from ..scoring import Goal, parse_goals
-from ..worlds import world_of
+from ..worlds import World, world_of
 
 # SMART-LLM's four categories (this project's benchmark has tasks in each), and LaMMA-P's MAT-THOR
 # "vague" commands (imported tasks only).
@@ -80,8 +80,12 @@ def has_words(instruction: str) -> bool:
 def check_task(data: Any, catalogue: Catalogue, where: str,
                domain: Domain | None = None) -> tuple[Task | None, list[str]]:
     """Check one decoded line (of ``domain``'s tasks, default household); return the task and the problems found."""
+    return _check_line(data, catalogue, where, world_of(domain or load_domain()))
+
+
+def _check_line(data: Any, catalogue: Catalogue, where: str, world: World) -> tuple[Task | None, list[str]]:
+    """:func:`check_task` in ``world`` (which a task file's lines share: making it is most of a line's check)."""
     problems = []
-    world = world_of(domain or load_domain())
     rules = world.task_rules()
     validator = jsonschema.Draft202012Validator(rules.schema)
     for error in sorted(validator.iter_errors(data), key=lambda e: list(e.absolute_path)):
@@ -133,6 +137,7 @@ def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
     elif isinstance(paths, (str, Path)):
         paths = [paths]
     catalogue = catalogue or domain.catalogue
+    world = world_of(domain)
     tasks: list[Task] = []
     problems: list[str] = []
     seen: dict[str, str] = {}
@@ -152,7 +157,7 @@ def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
             except ValueError as exc:
                 problems.append(f"{where}: not valid JSON ({exc})")
                 continue
-            task, found = check_task(data, catalogue, where, domain)
+            task, found = _check_line(data, catalogue, where, world)
             problems += found
             if task is None:
                 continue

@@ -322,8 +322,8 @@ def _check_context(backend: str, model: str | None, n_ctx: int) -> None:
 
 
 def refuse_household_options(dom: Domain, floor_plan: str | None, thor_build: Path | None) -> None:
-    """AI2-THOR's floor plan and build options, given for a world that takes neither (a site domain's plans run
-    on its one site), are refused rather than ignored."""
+    """AI2-THOR's floor plan and build options, given for a world that does not take them (a site domain's plans
+    run on its one site), are refused rather than ignored."""
     world = world_of(dom)
     given = [name for name, value in (("--floor-plan", floor_plan), ("--thor-build", thor_build))
              if value and name not in world.options]
