@@ -20,7 +20,6 @@ real-robot experiment) ship in ``domains/``. Every problem in a file is reported
 
 from __future__ import annotations
 
-import dataclasses
 import difflib
 import re
 from collections.abc import Iterable, Mapping
@@ -36,8 +35,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 from .errors import UserError
 from .resources import data_dir
-from .robots import Catalogue, Robot, load_catalogue
-from .scoring import SITE_STATES, STATES
+from .robots import Catalogue, Robot
 from .skills import Skill, SkillSet, thor_skill
 
 HOUSEHOLD = "household"
@@ -92,15 +90,6 @@ class Domain:
     pools: Mapping[str, str] = field(default_factory=dict)  # skill -> the capacity a team pools for it
     capacities: Mapping[str, str] = field(default_factory=dict)  # capacity -> what it measures
 
-    @property
-    def is_ai2thor(self) -> bool:
-        return self.world == AI2THOR
-
-    @property
-    def states(self) -> tuple[str, ...]:
-        """The goal states its tasks may ask for (AI2-THOR: the scorer's AI2-THOR states)."""
-        return STATES if self.is_ai2thor else tuple(SITE_STATES)
-
     def benchmark_dir(self) -> Path:
         """Its benchmark: the task files and the reference plans."""
         return self.folder / BENCHMARK
@@ -147,9 +136,9 @@ def starter_domain() -> Path:
     return data_dir("domains") / "_starter"
 
 
-def load_domain(name_or_dir: str | Path | None = None, *, catalogue: str | Path | None = None) -> Domain:
-    """A built-in domain by name (default household) or a domain folder; ``catalogue`` (a JSON robot
-    catalogue) replaces an AI2-THOR domain's robots (a site domain's are in its domain file)."""
+def load_domain(name_or_dir: str | Path | None = None) -> Domain:
+    """A built-in domain by name (default household) or a domain folder (``--catalogue``'s robots in its
+    place: :func:`.worlds.with_catalogue`, which asks the domain's world whether it takes them)."""
     name = str(name_or_dir) if name_or_dir is not None else HOUSEHOLD
     folder = Path(name)
     if (folder / DOMAIN_FILE).is_file():
@@ -163,12 +152,7 @@ def load_domain(name_or_dir: str | Path | None = None, *, catalogue: str | Path 
         hint = f"; did you mean {close[0]}?" if close else ""
         raise DomainError(f"no domain {name!r}: give a built-in domain ({', '.join(known)}) or a folder holding "
                           f"{DOMAIN_FILE}{hint}")
-    if catalogue is None:
-        return domain
-    if not domain.is_ai2thor:
-        raise DomainError(f"--catalogue gives an AI2-THOR domain other robots; the {domain.name} domain's robots "
-                          f"are in its {DOMAIN_FILE}")
-    return dataclasses.replace(domain, catalogue=load_catalogue(catalogue))
+    return domain
 
 
 def check_layout(folder: Path) -> None:

@@ -4,7 +4,8 @@ A domain names its kind of world (``world = "ai2thor"`` in domain.toml, or a sit
 :func:`world_of` gives the :class:`World` for it. Everything above the executor (the planner, the
 benchmark, the commands) asks the world, never which kind it is: the scene a prompt and a grammar see,
 running a plan, the dry run the constraints try lines on, what the scorer reads, and which goals a team
-can never meet. A new kind of world is a class with :class:`World`'s members, named in :data:`WORLDS`;
+can never meet, and what the commands and the task files ask (which scene a task is in, which options
+apply). A new kind of world is a class with :class:`World`'s members, named in :data:`WORLDS`;
 :func:`check_world` says which member it lacks (the tests run it on every kind).
 
 - :class:`Ai2ThorWorld`: AI2-THOR's floor plans, run through the real ``ai2thor`` Controller.
@@ -13,13 +14,17 @@ can never meet. A new kind of world is a class with :class:`World`'s members, na
 
 from __future__ import annotations
 
+import copy
 import inspect
+import json
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 from typing import Any, Protocol
 
-from .domain import AI2THOR, ARGUMENT_TYPES, Domain, load_domain
+from .domain import AI2THOR, ARGUMENT_TYPES, DOMAIN_FILE, Domain, DomainError, load_domain
+from .errors import UserError
 from .executor import Execution, reach, run_plan, run_site_plan, site
 from .executor.dry_run import DryRun, notional_robot
 from .executor.scheduler import execute
@@ -27,13 +32,31 @@ from .executor.site import SiteDryRun, notional_site_robot
 from .executor.team_actions import Outcome
 from .goal_language import object_states
 from .plan_language import Plan
-from .robots import Robot
+from .resources import data_dir
+from .robots import Robot, load_catalogue
 from .scene import AFFORDANCE_NAMES, Demand, GoalTerms, GoalVocabulary, SceneObjects
-from .scoring import STATES, Goal
+from .scoring import SITE_STATES, STATES, Goal
 from .skills import SkillSet, has_affordance
 from .world.controller import open_controller
 from .world.object_types import RECEPTACLE_ONLY_ACCEPTS, SLICE_RESULTS, TYPE_PROPERTIES
-from .world.scenes import floor_plan_name, load_scene
+from .world.scenes import VALID_RANGE_TEXT, floor_plan_name, load_scene
+
+#: The commands' options about the world, which a world takes or refuses (:attr:`World.options`):
+#: ``--floor-plan`` picks one of its scenes (a world without it has one place, every task on it),
+#: ``--thor-build`` names the Unity build it runs in (checked before a model loads), ``--catalogue`` gives
+#: it other robots from a JSON catalogue.
+WORLD_OPTIONS = ("--floor-plan", "--thor-build", "--catalogue")
+
+
+@dataclass(frozen=True)
+class TaskRules:
+    """What a task of a world's domains may say: the schema its line meets, the states its goal conditions (and
+    a goal file's) may name, and whether an infeasible task may list no missing skills where some goal condition
+    is one no plan for its team can meet (:meth:`World.unattainable` shows why)."""
+
+    schema: Mapping[str, Any]  # JSON schema (domains/task.schema.json, or one made from it); not to be changed
+    goal_states: tuple[str, ...]
+    infeasible_by_goals: bool
 
 
 class Trial(Protocol):
@@ -104,6 +127,25 @@ class World(Protocol):
         """What a call asks of the robots that make it beyond the skill (None: nothing): where they must get
         to, and what capacity they must pool there."""
 
+    # What the commands and the task files ask: where a task is, which options apply, what a task may say.
+
+    options: frozenset[str]  # those of WORLD_OPTIONS it takes; a command refuses the others
+    venue: str  # where its plans run, as the refusal of an option it does not take names it
+
+    def scene_name(self, floor_plan: int | str | None) -> str:
+        """The scene a task's ``floor_plan`` or a command's ``--floor-plan`` names; None (not given) names the
+        one place of a world that takes no ``--floor-plan``.
+
+        Raises:
+            UserError: no such scene here (the message lists those there are).
+        """
+
+    def describe_world(self) -> str:
+        """The world in a few words, as ``domain check`` reports a domain."""
+
+    def task_rules(self) -> TaskRules:
+        """What a task of this world's domains may say, which its task files and reference plans are checked by."""
+
 
 class Ai2ThorWorld:
     """AI2-THOR's floor plans: scenes from AI2-THOR's object metadata, plans run on the ai2thor Controller."""
@@ -114,22 +156,8 @@ class Ai2ThorWorld:
         """The object types of the floor plan, grouped by affordance. Pieces that only exist after slicing
         (``TomatoSliced``) are included for every sliceable type: a plan may slice, then handle the pieces."""
         name = floor_plan_name(floor_plan)
-        masses: dict[str, float] = {}
-        flags: dict[str, set[str]] = {}
-        for obj in load_scene(name):
-            kind = obj["objectType"]
-            masses[kind] = round(max(masses.get(kind, 0.0), float(obj.get("mass") or 0.0)), 3)
-            flags.setdefault(kind, set()).update(a for a in AFFORDANCE_NAMES if has_affordance(obj, a))
-        for kind in list(masses):
-            if kind in SLICE_RESULTS:
-                piece, count = SLICE_RESULTS[kind]
-                masses[piece] = round(masses[kind] / count, 3)
-                flags[piece] = {a for a in AFFORDANCE_NAMES
-                                if has_affordance({p: True for p in TYPE_PROPERTIES[piece]}, a)}
-        by_affordance = {"": tuple(sorted(masses))}
-        for affordance in AFFORDANCE_NAMES:
-            by_affordance[affordance] = tuple(sorted(t for t, f in flags.items() if affordance in f))
-        return SceneObjects(floor_plan=name, masses=masses, by_affordance=by_affordance, world=self)
+        masses, by_affordance = _floor_plan_objects(name)
+        return SceneObjects(floor_plan=name, masses=dict(masses), by_affordance=dict(by_affordance), world=self)
 
     def examples_dir(self) -> Path:
         """Household's: every AI2-THOR domain's prompts show household's examples."""
@@ -181,6 +209,49 @@ class Ai2ThorWorld:
         """Nothing: where a robot must be and what it lifts, the executor judges (mass: :mod:`...feasibility`)."""
         return None
 
+    options = frozenset(WORLD_OPTIONS)
+    venue = "AI2-THOR's floor plans"
+
+    def scene_name(self, floor_plan: int | str | None) -> str:
+        """The iTHOR floor plan (``6``, ``"6"`` and ``"FloorPlan6"`` name ``FloorPlan6``); every task names one."""
+        if floor_plan is None:
+            raise UserError(f"no floor plan given: name one of {VALID_RANGE_TEXT}")
+        return floor_plan_name(floor_plan)
+
+    def describe_world(self) -> str:
+        return "AI2-THOR's floor plans"
+
+    def task_rules(self) -> TaskRules:
+        """domains/task.schema.json: iTHOR floor plans by number, AI2-THOR's states; an infeasible task names
+        the skills its team lacks (as SMART-LLM's infeasible tasks do)."""
+        return TaskRules(_household_task_schema(), STATES, infeasible_by_goals=False)
+
+
+@cache  # read once; every task line is checked against it
+def _household_task_schema() -> dict[str, Any]:
+    return json.loads((data_dir("domains") / "task.schema.json").read_text(encoding="utf-8"))
+
+
+@cache  # a floor plan's objects never change; the planner and the task files ask for the same few again and again
+def _floor_plan_objects(floor_plan: str) -> tuple[dict[str, float], dict[str, tuple[str, ...]]]:
+    """A floor plan's types with the heaviest instance's mass, and its types by affordance ("": every type)."""
+    masses: dict[str, float] = {}
+    flags: dict[str, set[str]] = {}
+    for obj in load_scene(floor_plan):
+        kind = obj["objectType"]
+        masses[kind] = round(max(masses.get(kind, 0.0), float(obj.get("mass") or 0.0)), 3)
+        flags.setdefault(kind, set()).update(a for a in AFFORDANCE_NAMES if has_affordance(obj, a))
+    for kind in list(masses):
+        if kind in SLICE_RESULTS:
+            piece, count = SLICE_RESULTS[kind]
+            masses[piece] = round(masses[kind] / count, 3)
+            flags[piece] = {a for a in AFFORDANCE_NAMES
+                            if has_affordance({p: True for p in TYPE_PROPERTIES[piece]}, a)}
+    by_affordance = {"": tuple(sorted(masses))}
+    for affordance in AFFORDANCE_NAMES:
+        by_affordance[affordance] = tuple(sorted(t for t, f in flags.items() if affordance in f))
+    return masses, by_affordance
+
 
 HOUSEHOLD_COALITION_RULES = """\
 # For each sub-task of a plan, choose the robot, or the team of robots, that will do it.
@@ -222,6 +293,7 @@ class SimulatedSite:
 
     def __init__(self, domain: Domain):
         self.domain = domain
+        self.venue = f"its site {domain.site}"
 
     def scene(self, floor_plan: int | str) -> SceneObjects:
         """The site's entries, grouped by the argument type each can fill (``place``: any entry); nothing is
@@ -304,6 +376,25 @@ class SimulatedSite:
             return Demand(skill, place, "camera_range", SOME_CAMERA)
         return Demand(skill, place) if place.reach is not None else None
 
+    options: frozenset[str] = frozenset()  # one site (no floor plans), no Unity build, robots in the domain file
+
+    def scene_name(self, floor_plan: int | str | None) -> str:
+        """The one site, whatever is given (the task schema and the commands refuse any other name)."""
+        return self.domain.site
+
+    def describe_world(self) -> str:
+        return f"{len(self.domain.places)} site entries on {self.domain.site}"
+
+    def task_rules(self) -> TaskRules:
+        """Household's schema, but ``floor_plan`` names the site and goals use the site's states; an infeasible
+        task may list no missing skills (the site shows why it is infeasible)."""
+        states = tuple(SITE_STATES)
+        schema = copy.deepcopy(_household_task_schema())
+        del schema["then"]["properties"]["missing_skills"]["minItems"]
+        schema["properties"]["floor_plan"] = {"const": self.domain.site}
+        schema["properties"]["goals"]["items"]["properties"]["state"] = {"enum": [None, *states]}
+        return TaskRules(schema, states, infeasible_by_goals=True)
+
 
 #: A site entry's kind, the effect a skill must have for the world to give it a state, and that state.
 SITE_GOALS = {"region": ("patrol", "COVERED"), "object": ("photograph", "PHOTOGRAPHED"),
@@ -340,6 +431,11 @@ MEMBERS: dict[str, tuple[str, ...] | type] = {
     "goal_terms": (),
     "goal_vocabulary": ("floor_plan",),
     "call_demand": ("skill", "objects"),
+    "options": frozenset,
+    "venue": str,
+    "scene_name": ("floor_plan",),
+    "describe_world": (),
+    "task_rules": (),
 }
 
 
@@ -361,6 +457,9 @@ def check_world(world: Any) -> World:
         elif isinstance(arguments, type):
             if not isinstance(value, arguments):
                 problems.append(f"{member} must be a {arguments.__name__}, not {value!r}")
+            elif member == "options" and not value <= set(WORLD_OPTIONS):
+                problems.append(f"options may only name {', '.join(WORLD_OPTIONS)}, not "
+                                f"{', '.join(sorted(value - set(WORLD_OPTIONS)))}")
         elif not callable(value):
             problems.append(f"{member} must be a method")
         else:
@@ -387,3 +486,19 @@ def world_of(domain: Domain) -> World:
         raise TypeError(f"the {domain.name} domain's world is {domain.world!r}, which no kind of world in "
                         f"smartllm_local.worlds.WORLDS implements ({', '.join(WORLDS)})")
     return check_world(make(domain))
+
+
+def with_catalogue(domain: Domain, catalogue: str | Path | None) -> Domain:
+    """``domain`` with the robots of a JSON robot catalogue (``--catalogue``), where its world takes one; None
+    leaves it as it is.
+
+    Raises:
+        DomainError: its world takes no catalogue (its robots are in its domain file).
+        CatalogueError: the catalogue cannot be read or is not a catalogue.
+    """
+    if catalogue is None:
+        return domain
+    if "--catalogue" not in world_of(domain).options:
+        raise DomainError(f"--catalogue gives an AI2-THOR domain other robots; the {domain.name} domain's robots "
+                          f"are in its {DOMAIN_FILE}")
+    return replace(domain, catalogue=load_catalogue(catalogue))

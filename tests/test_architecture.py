@@ -190,3 +190,73 @@ def test_the_check_finds_a_circle_through_a_lazy_import(tmp_path):
     assert cycles(tmp_path / "smartllm_local") == [
         "smartllm_local.planner: backends -> decoding -> backends "
         "(smartllm_local/planner/backends.py:2, smartllm_local/planner/decoding/loop.py:1)"]
+
+
+# ---------------------------------------------------------------- nothing asks which kind of world it is in
+
+#: What names a kind of world: the domain files' kinds, and the classes that implement them.
+KIND_NAMES = {"ai2thor", "site", "AI2THOR"}
+WORLD_CLASSES = {"Ai2ThorWorld", "SimulatedSite"}
+#: Where asking is the job: the worlds themselves, and the domain file's reader (the kind names which tables a
+#: file has).
+ASKS_BY_RIGHT = {("worlds.py", None), ("domain.py", "read_domain_file")}
+
+
+def kind_branches(root: Path) -> list[str]:
+    """Every place in the package that branches on a world's kind instead of asking the world
+    (docs/architecture.md, "Kinds of world"): ``is_ai2thor``, a comparison with a kind's name or ``AI2THOR``, or
+    ``isinstance`` with a world's class. Each as ``file:line (function)``."""
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        name = str(path.relative_to(root))
+        if (name, None) in ASKS_BY_RIGHT:
+            continue
+        for node, function in _with_function(ast.parse(path.read_text(encoding="utf-8")), None):
+            if (name, function) not in ASKS_BY_RIGHT and _asks_kind(node):
+                found.append(f"{path.relative_to(root.parent)}:{node.lineno} ({function})")
+    return found
+
+
+def _with_function(tree: ast.AST, function: str | None):
+    """Every node under ``tree``, with the name of the outermost function it lies in."""
+    for child in ast.iter_child_nodes(tree):
+        inner = function or (child.name if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)) else None)
+        yield child, inner
+        yield from _with_function(child, inner)
+
+
+def _asks_kind(node: ast.AST) -> bool:
+    def names_kind(value: ast.AST) -> bool:
+        return (isinstance(value, ast.Constant) and value.value in KIND_NAMES) or \
+            (isinstance(value, ast.Name) and value.id in KIND_NAMES) or \
+            (isinstance(value, ast.Attribute) and value.attr in KIND_NAMES)
+
+    if isinstance(node, ast.Attribute):
+        return node.attr == "is_ai2thor"
+    if isinstance(node, ast.Compare):
+        return any(names_kind(v) for v in (node.left, *node.comparators))
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "isinstance":
+        return any(isinstance(n, ast.Name) and n.id in WORLD_CLASSES for a in node.args[1:] for n in ast.walk(a))
+    return False
+
+
+def test_no_part_but_the_worlds_branches_on_the_kind_of_world():
+    found = kind_branches(ROOT)
+    assert not found, "ask the world (a member of worlds.World) instead:\n" + "\n".join(found)
+
+
+def test_the_check_finds_each_way_of_asking_the_kind(tmp_path):
+    """Not vacuous: a flag, a comparison with a kind's name and an isinstance are each found, even in a file of the
+    domain module outside its reader."""
+    root = tmp_path / "smartllm_local"
+    (root / "cli").mkdir(parents=True)
+    (root / "cli" / "bad.py").write_text(
+        "def f(dom, world):\n"
+        "    if dom.is_ai2thor:\n"
+        "        return dom.world == 'site'\n"
+        "    return isinstance(world, (SimulatedSite, int))\n", encoding="utf-8")
+    (root / "domain.py").write_text("def read_domain_file(data):\n    return data['world'] == AI2THOR\n\n\n"
+                                    "def states(domain):\n    return domain.world != AI2THOR\n", encoding="utf-8")
+    (root / "worlds.py").write_text("def f(domain):\n    return domain.world == 'ai2thor'\n", encoding="utf-8")
+    assert kind_branches(root) == ["smartllm_local/cli/bad.py:2 (f)", "smartllm_local/cli/bad.py:3 (f)",
+                                   "smartllm_local/cli/bad.py:4 (f)", "smartllm_local/domain.py:6 (states)"]

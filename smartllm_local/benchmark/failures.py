@@ -20,7 +20,7 @@ from ..errors import PlanError, SmartLLMError, UserError
 from ..goal_language import condition_line, parse_goal_statement
 from ..plan_language import read_plan
 from ..scoring import Condition, condition_holds, containment
-from ..worlds import world_of
+from ..worlds import with_catalogue, world_of
 from .goal_accuracy import unmatched
 from .results import Line, read_results
 from .run_store import RESULTS, RUN_FILE
@@ -113,7 +113,7 @@ def run_failures(folder: str | Path) -> list[Failure]:
     except (OSError, ValueError) as exc:
         raise UserError(f"cannot read the run in {folder}: {exc}") from exc
     arguments = manifest.get("identity", {}).get("arguments", {})
-    domain = load_domain(arguments.get("domain"), catalogue=arguments.get("catalogue"))
+    domain = with_catalogue(load_domain(arguments.get("domain")), arguments.get("catalogue"))
     files = list(manifest.get("identity", {}).get("task_files", {})) or domain.task_files()
     try:
         tasks = {t.id: t for t in load_tasks(files, catalogue=domain.catalogue, domain=domain)}
@@ -140,7 +140,8 @@ def _stated(task_folder: Path, domain: Domain) -> list[Condition] | None:
     if not path.is_file():
         return None
     try:
-        statement = parse_goal_statement(path.read_text(encoding="utf-8"), where=str(path), states=domain.states)
+        statement = parse_goal_statement(path.read_text(encoding="utf-8"), where=str(path),
+                                         states=world_of(domain).task_rules().goal_states)
     except PlanError:
         return None
     return None if statement.refusal is not None else statement.conditions

@@ -18,7 +18,7 @@ from pathlib import Path
 from statistics import mean
 from typing import Any
 
-from ..domain import AI2THOR, Domain, load_domain
+from ..domain import Domain, load_domain
 from ..errors import UserError
 from ..executor import Execution
 from ..plan_language import Plan, read_plan
@@ -131,11 +131,12 @@ def load_reference_plan(task: Task, catalogue: Catalogue, plans_dir: Path | None
 
 
 def _check_infeasible(task: Task, catalogue: Catalogue, world: World) -> ReferenceResult:
-    """Not run (there is nothing to run); the team must lack every skill listed as missing. On a site, a
-    task may list none when the site shows it infeasible: some goal condition no plan for the team can meet
-    (an AI2-THOR task lists its missing skills, as SMART-LLM's infeasible tasks do)."""
+    """Not run (there is nothing to run); the team must lack every skill listed as missing. Where the world's
+    task rules allow it (a site's), a task may list none when the world shows it infeasible: some goal
+    condition no plan for the team can meet (an AI2-THOR task lists its missing skills, as SMART-LLM's
+    infeasible tasks do)."""
     team = catalogue.team(task.robots)
-    by_goals = world.kind != AI2THOR
+    by_goals = world.task_rules().infeasible_by_goals
     blocked = world.unattainable(task.goals, team, catalogue.skills, task.floor_plan) if by_goals else []
     if not task.missing_skills and not blocked:
         return ReferenceResult(task, None, False, "an infeasible task must list its missing_skills"

@@ -1,4 +1,5 @@
-"""Benchmark tasks: one JSON object per line, checked against ``domains/task.schema.json``.
+"""Benchmark tasks: one JSON object per line, checked against their world's task schema (household's is
+``domains/task.schema.json``).
 
 A task file is read whole and checked line by line; every bad line is
 reported as ``file:line: what is wrong`` and no line is skipped silently (blank
@@ -9,12 +10,10 @@ ids must be unique.
 
 from __future__ import annotations
 
-import copy
 import difflib
 import json
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -22,11 +21,9 @@ import jsonschema
 
 from ..domain import Domain, load_domain
 from ..errors import TaskFileError, UnknownFloorPlanError, UserError
-from ..resources import data_dir
 from ..robots import Catalogue
-from ..scoring import STATES, Goal, parse_goals
-from ..world.object_types import SLICE_RESULTS
-from ..world.scenes import floor_plan_name, load_scene
+from ..scoring import Goal, parse_goals
+from ..worlds import World, world_of
 
 # SMART-LLM's four categories (this project's benchmark has tasks in each), and LaMMA-P's MAT-THOR
 # "vague" commands (imported tasks only).
@@ -74,29 +71,6 @@ class Task:
         return data
 
 
-@lru_cache(maxsize=1)
-def task_schema() -> dict[str, Any]:
-    """The schema of an AI2-THOR domain's task lines (a site domain's is derived from it)."""
-    return json.loads((data_dir("domains") / "task.schema.json").read_text(encoding="utf-8"))
-
-
-def site_task_schema(domain: Domain) -> dict[str, Any]:
-    """The task schema for a site domain: ``floor_plan`` names its site, goals use its states, and an
-    infeasible task may list no missing skills (the site shows why it is infeasible, see :mod:`.reference_plans`)."""
-    schema = copy.deepcopy(task_schema())
-    del schema["then"]["properties"]["missing_skills"]["minItems"]
-    schema["properties"]["floor_plan"] = {"const": domain.site}
-    schema["properties"]["goals"]["items"]["properties"]["state"] = {"enum": [None, *domain.states]}
-    return schema
-
-
-@lru_cache(maxsize=256)
-def _scene_types(floor_plan: str) -> frozenset[str]:
-    types = {o["objectType"] for o in load_scene(floor_plan)}
-    types |= {SLICE_RESULTS[t][0] for t in types if t in SLICE_RESULTS}
-    return frozenset(t.lower() for t in types)
-
-
 def has_words(instruction: str) -> bool:
     """Whether an instruction has a letter or digit: one of only spaces or punctuation says nothing to plan (a
     model given one would invent a task)."""
@@ -106,9 +80,14 @@ def has_words(instruction: str) -> bool:
 def check_task(data: Any, catalogue: Catalogue, where: str,
                domain: Domain | None = None) -> tuple[Task | None, list[str]]:
     """Check one decoded line (of ``domain``'s tasks, default household); return the task and the problems found."""
+    return _check_line(data, catalogue, where, world_of(domain or load_domain()))
+
+
+def _check_line(data: Any, catalogue: Catalogue, where: str, world: World) -> tuple[Task | None, list[str]]:
+    """:func:`check_task` in ``world`` (which a task file's lines share: making it is most of a line's check)."""
     problems = []
-    site = domain is not None and not domain.is_ai2thor
-    validator = jsonschema.Draft202012Validator(site_task_schema(domain) if site else task_schema())  # type: ignore[arg-type]
+    rules = world.task_rules()
+    validator = jsonschema.Draft202012Validator(rules.schema)
     for error in sorted(validator.iter_errors(data), key=lambda e: list(e.absolute_path)):
         field = "/".join(str(p) for p in error.absolute_path) or "(line)"
         problems.append(f"{where}: {field}: {error.message}")
@@ -117,17 +96,17 @@ def check_task(data: Any, catalogue: Catalogue, where: str,
     if not has_words(data["instruction"]):
         return None, [f"{where}: instruction: {data['instruction']!r} has no words: say what the robots should do"]
     try:
-        scene = data["floor_plan"] if site else floor_plan_name(data["floor_plan"])
+        scene = world.scene_name(data["floor_plan"])
     except UnknownFloorPlanError as exc:
         return None, [f"{where}: floor_plan: {exc}"]
     unknown = [r for r in data["robots"] if r not in catalogue.robots]
     if unknown:
         problems.append(f"{where}: robots: {unknown} are not in the catalogue {catalogue.path}")
     try:
-        goals = parse_goals(data["goals"], where="goals", states=domain.states if site else STATES)  # type: ignore[union-attr]
+        goals = parse_goals(data["goals"], where="goals", states=rules.goal_states)
     except TaskFileError as exc:
         return None, problems + [f"{where}: {exc}"]
-    types = frozenset(p.lower() for p in domain.places) if site else _scene_types(scene)  # type: ignore[union-attr]
+    types = {t.lower() for t in world.scene(scene).types}  # a floor plan's types and their slices; a site's entries
     for goal in goals:
         for name in (goal.name, *goal.contains):
             if name.lower() not in types:
@@ -158,6 +137,7 @@ def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
     elif isinstance(paths, (str, Path)):
         paths = [paths]
     catalogue = catalogue or domain.catalogue
+    world = world_of(domain)
     tasks: list[Task] = []
     problems: list[str] = []
     seen: dict[str, str] = {}
@@ -177,7 +157,7 @@ def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
             except ValueError as exc:
                 problems.append(f"{where}: not valid JSON ({exc})")
                 continue
-            task, found = check_task(data, catalogue, where, domain)
+            task, found = _check_line(data, catalogue, where, world)
             problems += found
             if task is None:
                 continue

@@ -32,7 +32,7 @@ from ..planner.backends import model_location
 from ..planner.pipeline import Planner
 from ..provenance import run_manifest
 from ..world.controller import check_build
-from ..worlds import world_of
+from ..worlds import with_catalogue, world_of
 from .options import (
     CATALOGUE,
     DOMAIN,
@@ -95,7 +95,7 @@ def check(
     if plans is not None and not plans.is_dir():
         raise UserError(f"--plans {plans} is not a folder: give the folder of reference plans (<task id>.py)")
     refuse_household_options(dom, None, thor_build)
-    if dom.is_ai2thor:
+    if "--thor-build" in world_of(dom).options:
         check_build(thor_build)
     results = check_reference_plans(loaded, plans, build=str(thor_build) if thor_build else None, domain=dom)
     typer.echo(category_table(results))
@@ -195,7 +195,7 @@ def run(
     """Plan, execute and score every task of a task file; print a per-category table."""
     options = ModelOptions(**model_settings)
     check_output_folder(out, "--out")
-    dom = load_domain(domain, catalogue=catalogue)
+    dom = with_catalogue(load_domain(domain), catalogue)
     tasks_files = [tasks] if tasks else dom.task_files()
     loaded, half, found = _load(dom, tasks, split)
     chosen = _chosen_tasks(half, found, category, task, split)
@@ -206,7 +206,7 @@ def run(
         print("warning: " + "\nwarning: ".join(problems) + "\nwarning: the report's test-half rows go by the split "
               "as it is (`benchmark check` lists the same)", file=sys.stderr)
     refuse_household_options(dom, None, thor_build)
-    if dom.is_ai2thor:
+    if "--thor-build" in world_of(dom).options:
         check_build(thor_build)  # every task runs in it
     chosen_seeds = parse_seeds(seeds, options.seed)
     if len(chosen_seeds) > 1 and options.config.sampling.temperature == 0 and method != "decomp-random":

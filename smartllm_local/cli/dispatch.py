@@ -14,6 +14,7 @@ from ..executor.dispatch import dispatch_plan, load_dispatch
 from ..files import check_output_file, write_json
 from ..plan_language import read_plan
 from ..robots import parse_robot_ids
+from ..worlds import with_catalogue
 from .options import CATALOGUE_HELP, DOMAIN_HELP, given_path
 
 
@@ -32,7 +33,7 @@ def dispatch(
     Exits 0 when every action succeeded, 1 when one failed (raised, returned False or timed out)."""
     if trace is not None:
         check_output_file(trace, "--trace")
-    cat = load_domain(domain, catalogue=catalogue).catalogue
+    cat = with_catalogue(load_domain(domain), catalogue).catalogue
     team_ids = parse_robot_ids(robots)
     team = cat.team(team_ids)
     parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team))

@@ -60,6 +60,7 @@ def check(domain: str = typer.Argument(..., help="A domain folder, or a built-in
     from ..benchmark.reference_plans import category_table, check_reference_plans
     from ..benchmark.tasks import load_tasks
     from ..planner.prompting.example_check import check_examples
+    from ..worlds import world_of
     from .benchmark import check_split
 
     loaded = load_domain(domain)
@@ -67,9 +68,8 @@ def check(domain: str = typer.Argument(..., help="A domain folder, or a built-in
     count, problems = check_examples(loaded)
     if problems:
         raise UserError("\n".join(problems))
-    world = "AI2-THOR's floor plans" if loaded.is_ai2thor else f"{len(loaded.places)} site entries on {loaded.site}"
-    typer.echo(f"{loaded.name}: {len(catalogue.skills)} skills, {len(catalogue.robots)} robots, {world}, "
-               f"{count} prompt examples in their grammars")
+    typer.echo(f"{loaded.name}: {len(catalogue.skills)} skills, {len(catalogue.robots)} robots, "
+               f"{world_of(loaded).describe_world()}, {count} prompt examples in their grammars")
     files = [f for f in loaded.task_files() if f.is_file()]
     if not files:
         typer.echo(f"no tasks: add {loaded.task_files()[0]} to benchmark it")

@@ -16,8 +16,7 @@ from ..files import check_output_file, read_json, write_json
 from ..plan_language import read_plan
 from ..robots import parse_robot_ids
 from ..scoring import Scores, parse_goals, score_execution
-from ..world.scenes import floor_plan_name
-from ..worlds import world_of
+from ..worlds import with_catalogue, world_of
 from .dispatch import run_record
 from .options import (
     CATALOGUE_HELP,
@@ -49,8 +48,8 @@ def execute(
     given_transitions = trans is not None or max_trans is not None
     if trace is not None:
         check_output_file(trace, "--trace")
-    dom = load_domain(domain, catalogue=catalogue)
-    cat = dom.catalogue
+    dom = with_catalogue(load_domain(domain), catalogue)
+    cat, world = dom.catalogue, world_of(dom)
     refuse_household_options(dom, floor_plan, thor_build)
     if task is not None:
         if floor_plan or robots or goal:
@@ -62,19 +61,19 @@ def execute(
     else:
         if tasks is not None:
             raise UserError("--tasks needs --task ID")
-        if not ((floor_plan or not dom.is_ai2thor) and robots and goal):
-            raise UserError("execute needs --floor-plan, --robots and --goal (or --task ID)" if dom.is_ai2thor
+        floor_plans = "--floor-plan" in world.options  # else every task is on the world's one place
+        if not ((floor_plan or not floor_plans) and robots and goal):
+            raise UserError("execute needs --floor-plan, --robots and --goal (or --task ID)" if floor_plans
                             else "execute needs --robots and --goal (or --task ID)")
-        scene = floor_plan_name(floor_plan) if dom.is_ai2thor else dom.site
+        scene = world.scene_name(floor_plan)
         team_ids = parse_robot_ids(robots)
-        goals = list(parse_goals(read_json(goal, "goal file"), where=str(goal), states=dom.states))
+        goals = list(parse_goals(read_json(goal, "goal file"), where=str(goal), states=world.task_rules().goal_states))
         if not goals:
             raise UserError(f"goal file {goal}: a goal file needs at least one condition, "
                             'e.g. [{"name": "Fridge", "contains": ["Apple"], "state": null}]')
     if given_transitions:
         check_transitions(trans, max_trans)
     team = cat.team(team_ids)
-    world = world_of(dom)
     parsed = read_plan(plan, form="allocated", skills=cat.skills, team_size=len(team),
                        scene_types=world.plan_types(scene))
     execution = world.run(parsed, scene, team, skills=cat.skills, build=str(thor_build) if thor_build else None)

@@ -322,11 +322,14 @@ def _check_context(backend: str, model: str | None, n_ctx: int) -> None:
 
 
 def refuse_household_options(dom: Domain, floor_plan: str | None, thor_build: Path | None) -> None:
-    """A site domain's plans run on its site: AI2-THOR's floor plan and build options do not apply."""
-    given = [name for name, value in (("--floor-plan", floor_plan), ("--thor-build", thor_build)) if value]
-    if not dom.is_ai2thor and given:
+    """AI2-THOR's floor plan and build options, given for a world that does not take them (a site domain's plans
+    run on its one site), are refused rather than ignored."""
+    world = world_of(dom)
+    given = [name for name, value in (("--floor-plan", floor_plan), ("--thor-build", thor_build))
+             if value and name not in world.options]
+    if given:
         raise UserError(f"{' and '.join(given)} {'is' if len(given) == 1 else 'are'} for the household domain; "
-                        f"the {dom.name} domain's plans run on its site {dom.site}")
+                        f"the {dom.name} domain's plans run on {world.venue}")
 
 
 def check_transitions(trans: int | None, max_trans: int | None) -> None:

@@ -27,8 +27,7 @@ from ..planner.result import PlanResult
 from ..robots import Catalogue, Robot, parse_robot_ids
 from ..scoring import Scores
 from ..world.controller import check_build
-from ..world.scenes import floor_plan_name
-from ..worlds import world_of
+from ..worlds import with_catalogue, world_of
 from .dispatch import dispatch_report, dispatch_succeeded, run_record
 from .execute import metrics_lines
 from .options import (
@@ -74,7 +73,7 @@ def plan_command(
     options = ModelOptions(**model_settings)
     if out is not None:
         check_output_folder(out, "--out")
-    dom = load_domain(domain, catalogue=catalogue)
+    dom = with_catalogue(load_domain(domain), catalogue)
     cat = dom.catalogue
     refuse_household_options(dom, floor_plan, thor_build)
     if goals or options.config.goal_check:
@@ -83,7 +82,7 @@ def plan_command(
     team = cat.team(team_ids)
     if execute and dispatch is not None:
         raise UserError("give --execute (in AI2-THOR) or --dispatch (on the lab's robots), not both")
-    if dom.is_ai2thor and (execute or thor_build is not None):
+    if "--thor-build" in world_of(dom).options and (execute or thor_build is not None):
         check_build(thor_build)
     functions = _dispatch_functions(dispatch, cat, team)
     planner, result, stated = _plan(options, dom, instruction, scene, team_ids, quiet=quiet, goals=goals)
@@ -166,15 +165,16 @@ def _what_to_plan(dom: Domain, instruction: str | None, floor_plan: str | None, 
         return chosen.instruction, chosen.floor_plan, list(chosen.robots), chosen
     if tasks is not None:
         raise UserError("--tasks needs --task ID")
-    if not (instruction and (floor_plan or not dom.is_ai2thor) and robots):
+    world = world_of(dom)
+    floor_plans = "--floor-plan" in world.options  # else every task is on the world's one place
+    if not (instruction and (floor_plan or not floor_plans) and robots):
         raise UserError('plan needs an instruction, --floor-plan and --robots (or --task ID), e.g. '
                         'smartllm-local plan "Put the apple in the fridge" --floor-plan 6 --robots 1,2'
-                        if dom.is_ai2thor else "plan needs an instruction and --robots (or --task ID)")
+                        if floor_plans else "plan needs an instruction and --robots (or --task ID)")
     if not has_words(instruction):
         raise UserError(f"the instruction {instruction!r} has no words: say what the robots should do, "
                         'e.g. "Put the apple in the fridge"')
-    scene = floor_plan_name(floor_plan) if dom.is_ai2thor else dom.site
-    return instruction.strip(), scene, parse_robot_ids(robots), None
+    return instruction.strip(), world.scene_name(floor_plan), parse_robot_ids(robots), None
 
 
 def _dispatch_functions(dispatch: Path | None, cat: Catalogue, team: list[Robot]) -> Dispatch | None:

@@ -10,7 +10,7 @@ from ..domain import load_domain
 from ..errors import UserError
 from ..plan_language import read_plan
 from ..robots import parse_robot_ids
-from ..world.scenes import floor_plan_name, load_scene
+from ..worlds import with_catalogue, world_of
 from .options import CATALOGUE_HELP, DOMAIN_HELP
 
 
@@ -25,16 +25,15 @@ def validate(
     """Parse and validate a plan without running it."""
     if stage not in ("decomposed", "allocated"):
         raise UserError(f"--stage must be decomposed or allocated, not {stage!r}")
-    dom = load_domain(domain, catalogue=catalogue)
+    dom = with_catalogue(load_domain(domain), catalogue)
     cat = dom.catalogue
     team_size = len(cat.team(parse_robot_ids(robots))) if robots else None
-    if not dom.is_ai2thor:
-        if floor_plan:
-            raise UserError(f"--floor-plan is for the household domain; the {dom.name} domain's plans are checked "
-                            f"against its site {dom.site}")
-        scene_types: set[str] | None = set(dom.places)
-    else:
-        scene_types = {o["objectType"] for o in load_scene(floor_plan_name(floor_plan))} if floor_plan else None
+    world = world_of(dom)
+    floor_plans = "--floor-plan" in world.options  # else every plan is for the world's one place
+    if floor_plan and not floor_plans:
+        raise UserError(f"--floor-plan is for the household domain; the {dom.name} domain's plans are checked "
+                        f"against {world.venue}")
+    scene_types = world.scene(world.scene_name(floor_plan)).types if floor_plan or not floor_plans else None
     parsed = read_plan(plan, form=stage, skills=cat.skills, team_size=team_size, scene_types=scene_types)  # type: ignore[arg-type]
     if parsed.is_refusal:
         typer.echo(f"{plan}: valid refusal: {parsed.refusal}")

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from smartllm_local.domain import DomainError, builtin_domains, load_domain, starter_domain
 from smartllm_local.errors import CatalogueError, UserError
+from smartllm_local.worlds import with_catalogue
 
 PATROL = load_domain("patrol")
 STARTER = (starter_domain() / "domain.toml").read_text(encoding="utf-8")
@@ -33,23 +34,17 @@ def test_patrol_holds_the_papers_skills_and_a_mixed_team():
     assert PATROL.catalogue.robots[6].capacity("camera_range") == 0
     roof = PATROL.place("warehouseroof")  # names match case-insensitively, as in plans
     assert roof is not None and roof.kind == "region" and roof.reach == frozenset({"aerial"}) and roof.area == 500
-    assert PATROL.states == ("COVERED", "PHOTOGRAPHED", "RETURNED")
 
 
 def test_household_is_the_default_and_keeps_its_catalogue():
     household = load_domain()
-    assert household.is_ai2thor and household.name == "household"
+    assert household.world == "ai2thor" and household.name == "household"
     assert "PickupObject" in household.catalogue.skills and 1 in household.catalogue.robots
 
 
 def test_an_unknown_domain_names_the_known_ones():
     with pytest.raises(DomainError, match=r"no domain 'patrl'.*household, patrol.*did you mean patrol"):
         load_domain("patrl")
-
-
-def test_catalogue_is_refused_for_a_site_domain():
-    with pytest.raises(DomainError, match="robots are in its domain.toml"):
-        load_domain("patrol", catalogue="robots.json")
 
 
 def write(tmp_path: Path, text: str) -> Path:
@@ -176,18 +171,18 @@ def test_a_json_catalogue_gives_an_ai2thor_domain_other_robots(tmp_path):
     path.write_text(json.dumps({
         "robots": [{"id": 1, "name": "arm", "skills": ["GoToObject", "Grab", "PutObject"], "mass_capacity": 2}],
         "skills": [{"name": "Grab", "action": "PickupObject", "arguments": ["pickupable"]}]}))
-    domain = load_domain("household", catalogue=path)
+    domain = with_catalogue(load_domain("household"), path)
     assert list(domain.catalogue.robots) == [1] and domain.catalogue.robots[1].mass_capacity == 2
     assert domain.catalogue.skills["Grab"].action == "PickupObject" and "SwitchOn" in domain.catalogue.skills
     assert domain.task_files() == load_domain().task_files()  # the rest of the domain is household's
     path.write_text(json.dumps({"robots": [{"id": 1, "skills": ["Fly"], "mass_capacity": 1}]}))
     with pytest.raises(CatalogueError, match=r"robots\[0\]: unknown skill\(s\) \['Fly'\]"):
-        load_domain("household", catalogue=path)
+        with_catalogue(load_domain("household"), path)
     for skill in ({"name": "Grab", "action": ["PickupObject"]}, {"name": "Grab", "action": "PickupObject",
                                                                  "arguments": [["pickupable"]]}):
         path.write_text(json.dumps({"robots": [], "skills": [skill]}))
         with pytest.raises(CatalogueError, match=r"skills\[0\]: skill Grab: (action|arguments) must"):
-            load_domain("household", catalogue=path)
+            with_catalogue(load_domain("household"), path)
 
 
 # ------------------------------------------------------------------- any value in any key: an error, never a crash

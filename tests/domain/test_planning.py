@@ -67,8 +67,8 @@ def test_every_allocated_patrol_example_reaches_sr_1(ex):
     team = PATROL.catalogue.team(ex.robots)
     plan = parse_plan(ex.allocation, form="allocated", team_size=len(team), skills=SKILLS, scene_types=SCENE.types)
     execution = run_site_plan(plan, PATROL, team)
-    scores = score_execution(execution, parse_goals(list(ex.goals), states=PATROL.states), trans=ex.trans,
-                             max_trans=ex.max_trans)
+    goals = parse_goals(list(ex.goals), states=world_of(PATROL).task_rules().goal_states)
+    scores = score_execution(execution, goals, trans=ex.trans, max_trans=ex.max_trans)
     assert (scores.SR, scores.GCR, scores.Exe) == (1.0, 1.0, 1.0), (ex.name, scores, execution.trace)
 
 

@@ -11,8 +11,10 @@ from smartllm_local.executor import run_site_plan
 from smartllm_local.executor.site import SiteWorld, unattainable
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.scoring import parse_goals, score_execution
+from smartllm_local.worlds import world_of
 
 PATROL = load_domain("patrol")
+STATES = world_of(PATROL).task_rules().goal_states
 SKILLS = PATROL.catalogue.skills
 
 
@@ -104,7 +106,7 @@ def test_a_plan_with_too_small_a_team_fails_its_patrol_and_scores_zero():
     plan = parse_plan("def sweep(robot_list):\n    Patrol(robot_list, 'SolarFarm')\n\n\nsweep([robots[0]])\n",
                       form="allocated", skills=SKILLS, team_size=2)
     execution = run_site_plan(plan, PATROL, PATROL.catalogue.team([1, 2]))
-    goals = parse_goals([{"name": "SolarFarm", "contains": [], "state": "COVERED"}], states=PATROL.states)
+    goals = parse_goals([{"name": "SolarFarm", "contains": [], "state": "COVERED"}], states=STATES)
     scores = score_execution(execution, goals, trans=0, max_trans=0)
     assert scores.SR == 0.0 and scores.GCR == 0.0 and scores.Exe == 0.0
 
@@ -119,7 +121,7 @@ def test_a_plan_with_too_small_a_team_fails_its_patrol_and_scores_zero():
 ])
 def test_unattainable_goals_are_named_with_why(goal, team, reason):
     name, goal_state = goal.split()
-    goals = parse_goals([{"name": name, "contains": [], "state": goal_state}], states=PATROL.states)
+    goals = parse_goals([{"name": name, "contains": [], "state": goal_state}], states=STATES)
     problems = unattainable(PATROL, goals, PATROL.catalogue.team(team))
     assert len(problems) == 1 and reason in problems[0], problems
 
@@ -130,5 +132,5 @@ def test_unattainable_goals_are_named_with_why(goal, team, reason):
 ])
 def test_attainable_goals_pass(goal, team):
     name, goal_state = goal.split()
-    goals = parse_goals([{"name": name, "contains": [], "state": goal_state}], states=PATROL.states)
+    goals = parse_goals([{"name": name, "contains": [], "state": goal_state}], states=STATES)
     assert unattainable(PATROL, goals, PATROL.catalogue.team(team)) == []

@@ -3,13 +3,25 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import pytest
 
-from smartllm_local.domain import builtin_domains, load_domain
+from smartllm_local.domain import DomainError, builtin_domains, load_domain
+from smartllm_local.errors import UnknownFloorPlanError, UserError
+from smartllm_local.resources import data_dir
 from smartllm_local.scene import Demand, GoalTerms
 from smartllm_local.scoring import STATES
-from smartllm_local.worlds import MEMBERS, WORLDS, Ai2ThorWorld, SimulatedSite, check_world, world_of
+from smartllm_local.worlds import (
+    MEMBERS,
+    WORLD_OPTIONS,
+    WORLDS,
+    Ai2ThorWorld,
+    SimulatedSite,
+    check_world,
+    with_catalogue,
+    world_of,
+)
 
 
 @pytest.mark.parametrize("name", builtin_domains())
@@ -32,6 +44,8 @@ class _Moon:
 
     kind = "moon"
     goto_acts = False
+    options = frozenset({"--floor-plan"})
+    venue = "its craters"
 
     def scene(self, floor_plan): ...
     def examples_dir(self): ...
@@ -46,6 +60,9 @@ class _Moon:
     def goal_terms(self): ...
     def goal_vocabulary(self, floor_plan): ...
     def call_demand(self, skill, objects): ...
+    def scene_name(self, floor_plan): ...
+    def describe_world(self): ...
+    def task_rules(self): ...
 
 
 def test_a_world_with_every_member_passes_the_check():
@@ -55,7 +72,8 @@ def test_a_world_with_every_member_passes_the_check():
 
 @pytest.mark.parametrize("member", ["kind", "scene", "examples_dir", "open", "run", "run_in_process", "dry_run",
                                     "plan_types", "unattainable", "goto_acts", "describe", "coalition_rules",
-                                    "goal_terms", "goal_vocabulary", "call_demand"])
+                                    "goal_terms", "goal_vocabulary", "call_demand", "options", "venue",
+                                    "scene_name", "describe_world", "task_rules"])
 def test_a_world_missing_a_member_is_refused_saying_which(member):
     lacking = type("NoPart", (_Moon,), {member: None})
     with pytest.raises(TypeError, match=rf"NoPart is not a World: it has no {member}\. A kind of world implements"):
@@ -81,6 +99,17 @@ def test_an_attribute_of_the_wrong_type_is_refused():
 
     with pytest.raises(TypeError, match="goto_acts must be a bool, not 'sometimes'"):
         check_world(Unsure())
+    Unsure.goto_acts, Unsure.options = False, ["--floor-plan"]
+    with pytest.raises(TypeError, match=r"options must be a frozenset, not \['--floor-plan'\]"):
+        check_world(Unsure())
+
+
+def test_a_world_that_takes_an_option_the_commands_do_not_have_is_refused():
+    class Lunar(_Moon):
+        options = frozenset({"--floor-plan", "--crater"})
+
+    with pytest.raises(TypeError, match="options may only name --floor-plan, --thor-build, --catalogue, not --crater"):
+        check_world(Lunar())
 
 
 def test_a_domain_of_an_unknown_kind_of_world_is_refused():
@@ -146,3 +175,54 @@ def test_a_call_asks_nothing_more_in_a_house_and_on_a_site_its_place_s_reach_and
 
 def test_only_on_a_site_is_a_move_an_end_in_itself():
     assert HOUSEHOLD.goto_acts is False and PATROL.goto_acts is True
+
+
+def test_a_scene_s_objects_are_its_own_copy():
+    """A floor plan's objects are read once; a caller that changes its scene changes no other's."""
+    first = HOUSEHOLD.scene(1)
+    first.masses["Apple"] = 99.0
+    first.by_affordance["pickupable"] = ()
+    again = HOUSEHOLD.scene(1)
+    assert again.masses["Apple"] == 0.2 and "Apple" in again.types_for("pickupable")
+
+
+# ---------------------------------------------------------------- what the commands and the task files ask
+
+def test_a_household_world_takes_every_world_option_and_a_site_none():
+    assert HOUSEHOLD.options == set(WORLD_OPTIONS) == {"--floor-plan", "--thor-build", "--catalogue"}
+    assert PATROL.options == frozenset()
+    assert PATROL.venue == "its site campus"
+
+
+def test_a_floor_plan_is_named_as_the_commands_give_it_and_a_site_is_its_one_place():
+    assert [HOUSEHOLD.scene_name(v) for v in (6, "6", "FloorPlan6", "FloorPlan6_physics")] == ["FloorPlan6"] * 4
+    with pytest.raises(UnknownFloorPlanError, match="unknown floor plan '999': valid floor plans are FloorPlan1-30"):
+        HOUSEHOLD.scene_name("999")
+    with pytest.raises(UserError, match="no floor plan given: name one of FloorPlan1-30 \\(kitchens\\)"):
+        HOUSEHOLD.scene_name(None)
+    assert PATROL.scene_name(None) == PATROL.scene_name("campus") == "campus"
+
+
+def test_a_world_describes_itself_as_domain_check_reports_it():
+    assert HOUSEHOLD.describe_world() == "AI2-THOR's floor plans"
+    assert PATROL.describe_world() == f"{len(load_domain('patrol').places)} site entries on campus"
+
+
+def test_household_tasks_meet_the_schema_file_and_a_site_s_name_the_site_in_its_states():
+    household, patrol = HOUSEHOLD.task_rules(), PATROL.task_rules()
+    file = json.loads((data_dir("domains") / "task.schema.json").read_text(encoding="utf-8"))
+    assert household.schema == file and household.goal_states == STATES and not household.infeasible_by_goals
+    assert patrol.goal_states == ("COVERED", "PHOTOGRAPHED", "RETURNED") and patrol.infeasible_by_goals
+    assert patrol.schema["properties"]["floor_plan"] == {"const": "campus"}
+    assert patrol.schema["properties"]["goals"]["items"]["properties"]["state"] == \
+        {"enum": [None, "COVERED", "PHOTOGRAPHED", "RETURNED"]}
+    assert "minItems" not in patrol.schema["then"]["properties"]["missing_skills"]
+    assert HOUSEHOLD.task_rules().schema == file  # a site's schema is made from a copy
+
+
+def test_a_catalogue_is_refused_for_a_site_whose_robots_are_in_its_domain_file(tmp_path):
+    household = load_domain("household")
+    assert with_catalogue(household, None) is household  # other robots: tests/domain/test_domain_file.py
+    with pytest.raises(DomainError, match="^--catalogue gives an AI2-THOR domain other robots; the patrol domain's "
+                                          "robots are in its domain.toml$"):
+        with_catalogue(load_domain("patrol"), tmp_path / "robots.json")

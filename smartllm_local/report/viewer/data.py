@@ -129,10 +129,11 @@ def _catalogue(manifest: Mapping[str, Any]) -> dict[int, dict[str, Any]]:
     """The run's robots by id (name, skills, mass), from its domain and catalogue where they can still be
     read; {} where not (the viewer then shows the ids alone)."""
     from ...domain import load_domain
+    from ...worlds import with_catalogue
 
     arguments = manifest.get("identity", {}).get("arguments", {})
     try:
-        domain = load_domain(arguments.get("domain"), catalogue=arguments.get("catalogue"))
+        domain = with_catalogue(load_domain(arguments.get("domain")), arguments.get("catalogue"))
     except (SmartLLMError, OSError, ValueError):
         return {}
     return {rid: {"id": rid, "name": r.name, "skills": sorted(r.skills), "mass": r.mass_capacity,
