@@ -61,8 +61,6 @@ def _check_statement(text: str, scene) -> GoalStatement:
         assert not any((s, a) in said and (s, b) in said for s, _ in said), text
     holding = {c.subject for c in conditions if c.state is None}
     assert not any((holder, "EMPTY") in said for holder in holding), text
-    held = [c.item for c in conditions if c.state is None]
-    assert len(held) == len(set(held)), text  # a thing in one holder
     return statement
 
 
@@ -83,13 +81,12 @@ def test_adversarial_writers_state_only_scene_objects_in_states_they_can_have(ki
             _check_statement(text, scene)
 
 
-def test_a_holder_is_never_said_to_be_empty_and_to_hold_something_nor_a_thing_to_be_in_two():
+def test_a_holder_is_never_said_to_be_empty_and_to_hold_something():
     vocabulary = goal_vocabulary(scene_objects(6))
-    for text in ("Apple in Fridge\nFridge empty\n\n", "Fridge empty\nApple in Fridge\n\n",
-                 "Apple in Fridge\nApple in Bowl\n\n", "Apple on Plate\nApple in Fridge\n\n"):
+    for text in ("Apple in Fridge\nFridge empty\n\n", "Fridge empty\nApple in Fridge\n\n"):
         assert not accepts(GoalConstraint(vocabulary), text), text
     for text in ("Fridge empty\n\n", "Apple in Fridge\nBowl empty\n\n", "Fridge empty\nApple in Bowl\n\n",
-                 "Apple in Bowl\nBowl in Fridge\n\n"):
+                 "Apple in Bowl\nBowl in Fridge\n\n", "Apple on Bowl\nApple in Fridge\n\n"):  # holders nest
         assert accepts(GoalConstraint(vocabulary), text), text
 
 

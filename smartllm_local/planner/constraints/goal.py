@@ -6,9 +6,9 @@ in <Receptacle>`` (or ``on``) only receptacles that can hold the item (a Toaster
 in itself). A type may be named by its name or by one of its aliases (a word of its name no other type of the
 scene has: ``Phone``), so that where the model starts the name it means, the grammar does not make it finish
 another (``P`` of "Phone" finished as ``Pen``). A condition already stated, or one that contradicts it (``on``
-after ``off``; ``Desk empty`` and ``Pen in Desk``, in either order; a thing in a second holder, which only
-nesting allows and which the holders' own containment says), is not offered again, so a statement never
-repeats or contradicts itself. A blank line ends the statement after at least one condition; the first line
+after ``off``; ``Desk empty`` and ``Pen in Desk``, in either order), is not offered again, so a statement
+never repeats or contradicts itself. A thing may be said to be in two holders, since holders nest (a ball in
+the Bed is in the Floor too). A blank line ends the statement after at least one condition; the first line
 may instead be a refusal. At most :data:`MAX_GOALS` conditions.
 """
 
@@ -90,8 +90,7 @@ class GoalConstraint(Constraint):
         groups: dict[tuple[frozenset[str], frozenset[str]], list[str]] = {}
         for kind in self.vocabulary.types:
             states = self.vocabulary.states.get(kind, frozenset()) - said_states.get(kind, set())
-            # a thing is said to be in one holder (in a second as well would be nested, said of the holders)
-            holders = frozenset() if kind in said_in else self.vocabulary.holders.get(kind, frozenset()) - emptied
+            holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set()) - emptied
             if states or holders:
                 groups.setdefault((frozenset(states), frozenset(holders)), []).append(kind)
         rules: dict[str, Node] = {}
