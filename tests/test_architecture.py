@@ -260,3 +260,53 @@ def test_the_check_finds_each_way_of_asking_the_kind(tmp_path):
     (root / "worlds.py").write_text("def f(domain):\n    return domain.world == 'ai2thor'\n", encoding="utf-8")
     assert kind_branches(root) == ["smartllm_local/cli/bad.py:2 (f)", "smartllm_local/cli/bad.py:3 (f)",
                                    "smartllm_local/cli/bad.py:4 (f)", "smartllm_local/domain.py:6 (states)"]
+
+
+# ---------------------------------------------------------------- no function past ~60 lines
+
+#: The house rule: a function longer than this is asking to be split into helpers named for what they do.
+MAX_FUNCTION_LINES = 60
+
+
+def long_functions(root: Path, limit: int = MAX_FUNCTION_LINES) -> list[str]:
+    """Every function or method under ``root`` longer than ``limit`` lines (from its ``def`` to its last line,
+    nested functions counted in their parent too), each as ``file:line name (N lines)``, longest first."""
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        for node, name in _functions(ast.parse(path.read_text(encoding="utf-8")), ""):
+            lines = node.end_lineno - node.lineno + 1
+            if lines > limit:
+                found.append((lines, f"{path.relative_to(root.parent)}:{node.lineno} {name} ({lines} lines)"))
+    return [text for _, text in sorted(found, key=lambda found: -found[0])]
+
+
+def _functions(tree: ast.AST, prefix: str):
+    """Every function under ``tree``, with its qualified name (``Class.method``, ``outer.inner``)."""
+    for child in ast.iter_child_nodes(tree):
+        if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            name = prefix + child.name
+            if not isinstance(child, ast.ClassDef):
+                yield child, name
+            yield from _functions(child, name + ".")
+        else:
+            yield from _functions(child, prefix)
+
+
+def test_no_function_is_longer_than_60_lines():
+    found = long_functions(ROOT)
+    assert not found, (f"split these into helpers named for what they do (at most {MAX_FUNCTION_LINES} lines "
+                       "each):\n" + "\n".join(found))
+
+
+def test_the_check_finds_a_long_method_and_a_long_inner_function(tmp_path):
+    """Not vacuous: a method and a function nested in another, each past the limit, are found with their line
+    counts; a function at the limit is not."""
+    root = tmp_path / "smartllm_local"
+    root.mkdir()
+    lines = ["class C:", "    def m(self):", *["        x = 1"] * 60, "",  # C.m: lines 2-62
+             "def ok():", *["    x = 1"] * 59,  # lines 64-123: at the limit
+             "def outer():", "    def inner():", *["        x = 1"] * 60, "    return inner"]  # lines 124-186
+    (root / "long.py").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    assert long_functions(root) == ["smartllm_local/long.py:124 outer (63 lines)",
+                                    "smartllm_local/long.py:2 C.m (61 lines)",
+                                    "smartllm_local/long.py:125 outer.inner (61 lines)"]

@@ -199,6 +199,21 @@ def run(
     tasks_files = [tasks] if tasks else dom.task_files()
     loaded, half, found = _load(dom, tasks, split)
     chosen = _chosen_tasks(half, found, category, task, split)
+    _check_run(dom, loaded, found, method=method, split=split, thor_build=thor_build)
+    chosen_seeds = parse_seeds(seeds, options.seed)
+    if len(chosen_seeds) > 1 and options.config.sampling.temperature == 0 and method != "decomp-random":
+        raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
+    runs = _open_runs(ctx.params, options, dom, out, chosen_seeds, tasks_files=tasks_files, method=method, found=found,
+                      by_seed=seeds is not None, restart=restart)
+    _run_seeds(runs, chosen, options, method, dom, thor_build, labelled=seeds is not None,
+               planner_time_limit=planner_time_limit)
+    _print_summary(runs, chosen, out, by_seed=seeds is not None, split=split, found=found)
+
+
+def _check_run(dom: Domain, loaded: list[Task], found: Split | None, *, method: str, split: str | None,
+               thor_build: Path | None) -> None:
+    """Check the method and the world's build before anything is written or loaded; warn (and go on) where a run
+    of every task finds the domain's split does not fit its tasks."""
     if method not in METHODS:
         raise UserError(f"--method must be one of {', '.join(METHODS)}, not {method!r}")
     problems = split_problems(found, loaded) if found is not None and split is None else []
@@ -208,26 +223,35 @@ def run(
     refuse_household_options(dom, None, thor_build)
     if "--thor-build" in world_of(dom).options:
         check_build(thor_build)  # every task runs in it
-    chosen_seeds = parse_seeds(seeds, options.seed)
-    if len(chosen_seeds) > 1 and options.config.sampling.temperature == 0 and method != "decomp-random":
-        raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
-    arguments = {k: v for k, v in ctx.params.items()
+
+
+def _open_runs(params: dict[str, Any], options: ModelOptions, dom: Domain, out: Path, seeds: list[int], *,
+               tasks_files: list[Path], method: str, found: Split | None, by_seed: bool,
+               restart: bool) -> list[tuple[int, RunStore]]:
+    """A run folder per seed (``out`` itself for one run without ``--seeds``), each with its manifest: every
+    folder is checked (a run of other arguments there is refused) before the model loads."""
+    arguments = {k: v for k, v in params.items()
                  if k not in ("out", "restart", "seeds", "prefix_cache", "parallel", "server_timeout")}
     arguments["n_ctx"] = options.n_ctx  # the context asked for, given or not, as run.json has always named it
     model_path = None if method in MODEL_FREE else model_location(options.backend, options.model)
     runs = []
-    for s in chosen_seeds:  # every run folder is checked before the model loads
-        folder = out if seeds is None else out / f"seed-{s}"
+    for s in seeds:
+        folder = out / f"seed-{s}" if by_seed else out
         manifest = run_manifest({**arguments, "seed": s}, model_path, asdict(options.config_for(s)), tasks_files,
                                 Path(dom.catalogue.path), dom.prompts_dir(),
                                 split=found.record() if found is not None else None)
         runs.append((s, RunStore(folder, manifest, restart=restart)))
-    _run_seeds(runs, chosen, options, method, dom, thor_build, labelled=seeds is not None,
-               planner_time_limit=planner_time_limit)
+    return runs
+
+
+def _print_summary(runs: list[tuple[int, RunStore]], chosen: list[Task], out: Path, *, by_seed: bool,
+                   split: str | None, found: Split | None) -> None:
+    """Print the per-category table of the run (each category's mean and spread over the seeds with ``--seeds``,
+    written to summary.txt too) and where the results are."""
     per_run = [[lines[t.id] for t in chosen if t.id in lines] for lines in (store.results() for _, store in runs)]
     if split is not None and found is not None:
         typer.echo(f"the {split} half of {found.path} (seed {found.seed}), and every infeasible task:")
-    if seeds is None:
+    if not by_seed:
         typer.echo(summary_table(per_run[0]))
         typer.echo(f"results: {out / 'results.jsonl'}")
         return

@@ -62,24 +62,9 @@ class ModelOptions:
                  select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
                  no_repair: bool = False, no_finish_goals: bool = False,
                  one_at_a_time: bool = False, keep_idle_steps: bool = False):
-        if backend not in BACKENDS:
-            raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
-        if not math.isfinite(temperature) or temperature < 0:
-            raise UserError(f"--temperature must be a number, 0 (greedy) or more, not {temperature}")
-        if not 0 <= seed <= MAX_SEED:
-            raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
-        if candidates < 1:
-            raise UserError(f"--candidates must be 1 or more, not {candidates}")
-        if not math.isfinite(candidate_temperature) or candidate_temperature <= 0:
-            raise UserError(f"--candidate-temperature must be a number above 0, not {candidate_temperature}")
-        if select not in SELECTORS:
-            raise UserError(f"--select must be one of {', '.join(SELECTORS)}, not {select!r}")
-        if n_ctx is not None and n_ctx < 512:
-            raise UserError(f"--n-ctx must be at least 512 tokens, not {n_ctx}")
-        if threads is not None and threads < 1:
-            raise UserError(f"--threads must be 1 or more, not {threads} (leave it out for all cores)")
-        if n_gpu_layers < -1:
-            raise UserError(f"--n-gpu-layers must be -1 (all), 0 (none, the default) or more, not {n_gpu_layers}")
+        _check_ranges(backend=backend, temperature=temperature, seed=seed, candidates=candidates,
+                      candidate_temperature=candidate_temperature, select=select, n_ctx=n_ctx, threads=threads,
+                      n_gpu_layers=n_gpu_layers)
         known = model if backend == "server" else model or default_model()
         if n_ctx is not None:
             _check_context(backend, model, n_ctx)
@@ -309,6 +294,30 @@ CATALOGUE = typer.Option(None, help=CATALOGUE_HELP)
 THOR_BUILD = typer.Option(None, help=THOR_BUILD_HELP)
 TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
 DOMAIN = typer.Option(None, help=DOMAIN_HELP)
+
+
+def _check_ranges(*, backend: str, temperature: float, seed: int, candidates: int, candidate_temperature: float,
+                  select: str, n_ctx: int | None, threads: int | None, n_gpu_layers: int) -> None:
+    """Refuse a model option's value out of its range (or not among its choices) before anything is read or
+    loaded, each with what it must be."""
+    if backend not in BACKENDS:
+        raise UserError(f"--backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
+    if not math.isfinite(temperature) or temperature < 0:
+        raise UserError(f"--temperature must be a number, 0 (greedy) or more, not {temperature}")
+    if not 0 <= seed <= MAX_SEED:
+        raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
+    if candidates < 1:
+        raise UserError(f"--candidates must be 1 or more, not {candidates}")
+    if not math.isfinite(candidate_temperature) or candidate_temperature <= 0:
+        raise UserError(f"--candidate-temperature must be a number above 0, not {candidate_temperature}")
+    if select not in SELECTORS:
+        raise UserError(f"--select must be one of {', '.join(SELECTORS)}, not {select!r}")
+    if n_ctx is not None and n_ctx < 512:
+        raise UserError(f"--n-ctx must be at least 512 tokens, not {n_ctx}")
+    if threads is not None and threads < 1:
+        raise UserError(f"--threads must be 1 or more, not {threads} (leave it out for all cores)")
+    if n_gpu_layers < -1:
+        raise UserError(f"--n-gpu-layers must be -1 (all), 0 (none, the default) or more, not {n_gpu_layers}")
 
 
 def _check_context(backend: str, model: str | None, n_ctx: int) -> None:

@@ -74,30 +74,60 @@ def plan_command(
     if out is not None:
         check_output_folder(out, "--out")
     dom = with_catalogue(load_domain(domain), catalogue)
-    cat = dom.catalogue
     refuse_household_options(dom, floor_plan, thor_build)
     if goals or options.config.goal_check:
         load_goal_examples(dom.prompts_dir())  # a domain without them fails before the model loads
     instruction, scene, team_ids, chosen = _what_to_plan(dom, instruction, floor_plan, robots, tasks, task)
-    team = cat.team(team_ids)
+    team = dom.catalogue.team(team_ids)
+    functions = _where_to_run(dom, team, execute=execute, dispatch=dispatch, thor_build=thor_build)
+    planner, result, stated = _plan(options, dom, instruction, scene, team_ids, quiet=quiet, goals=goals)
+    for notice in result.notices:
+        print(f"notice: {notice}", file=sys.stderr)
+    execution, scores, dispatched = _run_plan(result, chosen, dom, team, functions, execute=execute,
+                                              thor_build=thor_build)
+    extra = _record(planner, scores, dispatched, stated)
+    if out is not None:
+        _write_out(out, result, extra, execution, scores)
+    _print_result(result, extra, scores, dispatched, as_json, chosen)
+    if stated is not None and not as_json:
+        typer.echo(stated.report(), nl=False)
+    if result.error or (dispatched is not None and not dispatch_succeeded(dispatched)):
+        raise typer.Exit(1)
+
+
+def _where_to_run(dom: Domain, team: list[Robot], *, execute: bool, dispatch: Path | None,
+                  thor_build: Path | None) -> Dispatch | None:
+    """Check where the plan is to run (AI2-THOR's build, the lab's dispatch file) before the model loads, so a
+    mistake there costs no planning; the dispatch file's functions, if one is given."""
     if execute and dispatch is not None:
         raise UserError("give --execute (in AI2-THOR) or --dispatch (on the lab's robots), not both")
     if "--thor-build" in world_of(dom).options and (execute or thor_build is not None):
         check_build(thor_build)
-    functions = _dispatch_functions(dispatch, cat, team)
-    planner, result, stated = _plan(options, dom, instruction, scene, team_ids, quiet=quiet, goals=goals)
-    for notice in result.notices:
-        print(f"notice: {notice}", file=sys.stderr)
+    return _dispatch_functions(dispatch, dom.catalogue, team)
+
+
+def _run_plan(result: PlanResult, chosen: Task | None, dom: Domain, team: list[Robot], functions: Dispatch | None,
+              *, execute: bool, thor_build: Path | None
+              ) -> tuple[Execution | None, Scores | None, Execution | None]:
+    """Execute the plan and score it (``--execute``) or dispatch it to the lab (``--dispatch``), where there is a
+    plan: the execution and its scores, and the dispatched run (None for what was not asked or not done)."""
     planned = result.plan is not None and not result.error
     scores = execution = None
     if execute and planned:
-        execution, scores = execute_scored(result, chosen.goals if chosen else (), cat,
+        execution, scores = execute_scored(result, chosen.goals if chosen else (), dom.catalogue,
                                            trans=chosen.trans if chosen else None,
                                            max_trans=chosen.max_trans if chosen else None,
                                            build=str(thor_build) if thor_build else None, world=world_of(dom))
     dispatched = None
     if functions is not None and planned and not result.plan.is_refusal:
-        dispatched = dispatch_plan(result.plan, team, functions, skills=cat.skills)
+        dispatched = dispatch_plan(result.plan, team, functions, skills=dom.catalogue.skills)
+    return execution, scores, dispatched
+
+
+def _record(planner: Planner, scores: Scores | None, dispatched: Execution | None,
+            stated: StatedGoals | None) -> dict[str, Any]:
+    """What the plan's record holds besides the plan (the model, and the metrics, dispatch and goals where they
+    were asked for): printed with ``--json`` and written with ``--out``."""
     extra: dict[str, Any] = {"model": planner.backend.model, "backend": planner.backend.name,
                              "chat_template": planner.chat_status}
     if scores is not None:
@@ -107,17 +137,18 @@ def plan_command(
                              **run_record(dispatched)}
     if stated is not None:
         extra["goals"] = stated.summary()
-    if out is not None:
-        write_artifacts(result, out, extra)
-        if execution is not None and scores is not None:
-            write_trace(out, execution, scores, result.floor_plan, result.robots)
-        else:  # one an earlier plan left here is not this plan's
-            (out / TRACE).unlink(missing_ok=True)
-    _print_result(result, extra, scores, dispatched, as_json, chosen)
-    if stated is not None and not as_json:
-        typer.echo(stated.report(), nl=False)
-    if result.error or (dispatched is not None and not dispatch_succeeded(dispatched)):
-        raise typer.Exit(1)
+    return extra
+
+
+def _write_out(out: Path, result: PlanResult, extra: dict[str, Any], execution: Execution | None,
+               scores: Scores | None) -> None:
+    """Write the plan's artifacts to ``--out``, with the execution's trace where it ran (a trace an earlier plan
+    left there is removed, since it is not this plan's)."""
+    write_artifacts(result, out, extra)
+    if execution is not None and scores is not None:
+        write_trace(out, execution, scores, result.floor_plan, result.robots)
+    else:
+        (out / TRACE).unlink(missing_ok=True)
 
 
 def _plan(options: ModelOptions, dom: Domain, instruction: str, scene: str, team_ids: list[int], *,
