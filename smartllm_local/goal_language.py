@@ -99,13 +99,18 @@ def statement_of(goals: Iterable[Goal]) -> GoalStatement:
                                for c in conditions))
 
 
+def name_words(object_type: str) -> list[str]:
+    """The words of a type's name as it is written (``CellPhone``: Cell, Phone; ``TVStand``: TV, Stand)."""
+    return _NAME_WORD.findall(object_type)
+
+
 def aliases(types: Iterable[str]) -> dict[str, str]:
     """Other names of the scene's types: each word of a type's name (``CellPhone``: Cell, Phone) that is a word
     of no other type's name and is not itself a type, capitalized, at least :data:`ALIAS_LETTERS` letters."""
     types = list(types)
     owners: dict[str, set[str]] = {}
     for kind in types:
-        for word in _NAME_WORD.findall(kind):
+        for word in name_words(kind):
             owners.setdefault(word.capitalize(), set()).add(kind)
     taken = {t.lower() for t in types}
     return {word: next(iter(kinds)) for word, kinds in sorted(owners.items())

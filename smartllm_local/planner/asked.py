@@ -20,13 +20,13 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
+from ..goal_language import name_words
 from ..scoring import Condition, Goal
 from ..world.object_types import base_type
 
 #: How many first letters a word of the instruction and a word of a type's name must share.
 PREFIX = 3
 _WORD = re.compile(r"[a-z]+")
-_NAME_WORD = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+")
 
 
 def names(instruction: str, object_type: str) -> bool:
@@ -84,4 +84,4 @@ def _objects(condition: Condition) -> list[str]:
 
 
 def _type_words(object_type: str) -> list[str]:
-    return [w.lower() for w in _NAME_WORD.findall(base_type(object_type))]
+    return [w.lower() for w in name_words(base_type(object_type))]
