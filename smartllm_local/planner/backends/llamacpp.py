@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import BackendUnavailableError, ModelError
+from .amx import amx_runs, without_extra_buffers
 from .base import continuation_tokens, keep_whole, shared_prefix
 from .llamacpp_decoding import LlamaDecoding
 from .prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
@@ -40,7 +41,7 @@ def _trained_context(metadata: dict[str, str]) -> int | None:
 def gguf_trained_context(model_path: str | Path) -> int | None:
     """The context a GGUF model was trained on, read from its metadata by loading its vocabulary alone (no
     weights, no context worth the name): what a context size is checked against before the model loads."""
-    _, llm = _open(model_path, n_ctx=512, threads=1, n_gpu_layers=0, seed=0, n_batch=CPU_BATCH, vocab_only=True)
+    _, llm, _ = _open(model_path, n_ctx=512, threads=1, n_gpu_layers=0, seed=0, n_batch=CPU_BATCH, vocab_only=True)
     try:
         return _trained_context(llm.metadata)
     finally:
@@ -48,8 +49,9 @@ def gguf_trained_context(model_path: str | Path) -> int | None:
 
 
 def _open(model_path: str | Path, *, n_ctx: int, threads: int, n_gpu_layers: int, seed: int, n_batch: int,
-          vocab_only: bool) -> tuple[Any, Any]:
-    """llama-cpp-python and a model loaded in it, or a clear error where either cannot be had."""
+          vocab_only: bool) -> tuple[Any, Any, bool]:
+    """llama-cpp-python, a model loaded in it, and whether it was loaded without llama.cpp's extra buffer types
+    (AMX traps here: :mod:`.amx`); or a clear error where either cannot be had."""
     try:
         import llama_cpp
     except ImportError as exc:
@@ -57,13 +59,16 @@ def _open(model_path: str | Path, *, n_ctx: int, threads: int, n_gpu_layers: int
             from exc
     # A vocabulary has no training context, which llama.cpp warns about on stderr as it loads one.
     quiet = contextlib.redirect_stderr(io.StringIO()) if vocab_only else contextlib.nullcontext()
+    plain = not vocab_only and not amx_runs(llama_cpp, model_path)  # AMX traps on some virtual machines
     try:
         # On the CPU flash attention stays off: there it decoded Qwen2.5-Coder-1.5B 30% slower over the
         # benchmark's decompositions (docs/measurements.md); on a GPU llama.cpp decides (auto).
-        with quiet, _flash_attention_auto(llama_cpp, wanted=bool(n_gpu_layers)):
-            return llama_cpp, llama_cpp.Llama(model_path=str(model_path), n_ctx=n_ctx, n_threads=threads,
-                                              n_gpu_layers=n_gpu_layers, seed=seed, n_batch=n_batch, n_ubatch=UBATCH,
-                                              logits_all=False, vocab_only=vocab_only, verbose=False)
+        with quiet, _flash_attention_auto(llama_cpp, wanted=bool(n_gpu_layers)), \
+                without_extra_buffers(llama_cpp, wanted=plain):
+            llm = llama_cpp.Llama(model_path=str(model_path), n_ctx=n_ctx, n_threads=threads, n_gpu_layers=n_gpu_layers,
+                                  seed=seed, n_batch=n_batch, n_ubatch=UBATCH, logits_all=False, vocab_only=vocab_only,
+                                  verbose=False)
+            return llama_cpp, llm, plain
     except (ValueError, RuntimeError) as exc:
         raise ModelError(f"llama.cpp could not load {model_path}: {exc}") from exc
 
@@ -108,7 +113,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         GPU, 512 on the CPU (whose speed it does not change); either way llama.cpp computes 512 at a time."""
         n_batch = n_batch or (GPU_BATCH if n_gpu_layers else CPU_BATCH)
         self._threads = threads or max(1, os.cpu_count() or 1)
-        llama_cpp, self.llm = _open(model_path, n_ctx=n_ctx, threads=self._threads, n_gpu_layers=n_gpu_layers,
+        llama_cpp, self.llm, plain = _open(model_path, n_ctx=n_ctx, threads=self._threads, n_gpu_layers=n_gpu_layers,
                                     seed=seed, n_batch=n_batch, vocab_only=vocab_only)
         self._lib = llama_cpp
         self._vocab_only = vocab_only
@@ -126,6 +131,8 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         self._settings = {"backend": self.name, "llama_cpp": getattr(llama_cpp, "__version__", ""), "n_ctx": n_ctx,
                           "n_batch": n_batch, "n_gpu_layers": n_gpu_layers,
                           "flash_attn": "auto" if n_gpu_layers else "off"}
+        if plain:  # weights in plain buffers compute otherwise: their states are not AMX's
+            self._settings["extra_buffers"] = False
         self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
         self._pieces: dict[tuple[int, bool], bytes] = {}

@@ -22,11 +22,36 @@ import pytest
 
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.backends.amx import amx_runs
 from smartllm_local.planner.models import resolve_gguf
 from tests.cli.test_cli_errors import cli, one_line_error
 from tests.llama_server import llama_server
 
 TASKS = ("kitchen-01", "living-01")
+
+
+#: llama_cpp.server with its model loaded in plain buffers: it has no option for that (see amx_traps).
+PLAIN_LLAMA_CPP_SERVER = """\
+import runpy
+import llama_cpp
+from smartllm_local.planner.backends.amx import without_extra_buffers
+with without_extra_buffers(llama_cpp, wanted=True):
+    runpy.run_module("llama_cpp.server", run_name="__main__", alter_sys=True)
+"""
+
+
+def amx_traps(model: Path) -> bool:
+    """Whether llama.cpp's AMX kernels trap on this machine for ``model`` (smartllm_local.planner.backends.amx):
+    a server must then load it without llama.cpp's extra buffer types, as the in-process backend does."""
+    import llama_cpp
+
+    return not amx_runs(llama_cpp, model)
+
+
+def llama_cpp_server(model: Path) -> list[str]:
+    """The command that starts llama-cpp-python's server for ``model`` on this machine."""
+    return [sys.executable, "-c", PLAIN_LLAMA_CPP_SERVER] if amx_traps(model) else [sys.executable, "-m",
+                                                                                    "llama_cpp.server"]
 
 
 class Server:
@@ -40,7 +65,7 @@ class Server:
             probe.bind(("127.0.0.1", 0))
             self.port = probe.getsockname()[1]
         self.url, self.log = f"http://127.0.0.1:{self.port}", log
-        command = command or [sys.executable, "-m", "llama_cpp.server", "--model", str(resolve_gguf(None)),
+        command = command or [*llama_cpp_server(resolve_gguf(None)), "--model", str(resolve_gguf(None)),
                               "--n_ctx", "8192", "--n_threads", str(threads), "--logits_all", "False"]
         self.process = subprocess.Popen([*command, "--host", "127.0.0.1", "--port", str(self.port)],
                                         stdout=open(log, "w"), stderr=subprocess.STDOUT,
@@ -215,7 +240,8 @@ def _llama_server(tmp_path: Path, *args: str) -> tuple[Server, Path]:
     it (as on a GPU box): the tokenizer and chat template are the server's own."""
     log, served = tmp_path / "llama-server.log", tmp_path / "served.gguf"
     served.symlink_to(resolve_gguf(None))
-    server = Server(log, command=[str(llama_server()), "-m", str(served), "-t", "2", *args], ready="/health")
+    plain = ["--no-repack"] if amx_traps(resolve_gguf(None)) else []  # the built server's AMX traps here too
+    server = Server(log, command=[str(llama_server()), "-m", str(served), "-t", "2", *plain, *args], ready="/health")
     served.unlink()
     return server, log
 

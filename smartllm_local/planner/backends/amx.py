@@ -1,0 +1,123 @@
+"""Whether llama.cpp's AMX kernels run on this machine, and loading a model without them where they do not.
+
+A llama.cpp built where the processor reports AMX (Intel's matrix tiles) multiplies quantized weights on AMX
+tiles, which llama.cpp keeps in an "extra" buffer type of its own. Some virtual machines report AMX and grant
+its permission, yet trap its instructions: the process dies of SIGILL at its first prompt, with no message
+(measured on a 2-core Xeon guest, 2026-11-28: ``tilezero`` in ``ggml_backend_amx_mul_mat``). So where the build
+has AMX, a child process loads the model and evaluates a few tokens first; where the child dies of SIGILL, the
+model is loaded without llama.cpp's extra buffer types (its weights in plain CPU buffers, computed with
+AVX-512 or AVX2). The answer is kept in the cache per llama.cpp build, machine and model file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import platform
+import signal
+import subprocess
+import sys
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+from ...files import write_atomic
+
+#: What the child runs: load the model (argv[1]) and evaluate a few tokens, as the planner's first prompt does.
+PROBE = """\
+import sys
+import llama_cpp
+llm = llama_cpp.Llama(model_path=sys.argv[1], n_ctx=64, n_batch=32, n_threads=1, verbose=False)
+llm.eval(llm.tokenize(b"def probe(): return 1"))
+"""
+PROBE_TIMEOUT = 120.0  # seconds: a load from a cold disk; past it the answer is unknown and not kept
+CACHE_FILE = "amx.json"
+
+
+def amx_in_build(llama_cpp: Any) -> bool:
+    """Whether this llama.cpp was built with AMX kernels (its system information says ``AMX_INT8 = 1``)."""
+    return "AMX_INT8 = 1" in llama_cpp.llama_print_system_info().decode("utf-8", errors="replace")
+
+
+def probe(model_path: str | Path, code: str = PROBE) -> int | None:
+    """Run ``code`` in a child Python with the model's path; its exit status (negative: the signal that ended
+    it), or None where it did not end within :data:`PROBE_TIMEOUT` (the child is killed, not left behind)."""
+    try:
+        return subprocess.run([sys.executable, "-c", code, str(model_path)], stdin=subprocess.DEVNULL,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=PROBE_TIMEOUT,
+                              check=False).returncode
+    except subprocess.TimeoutExpired:
+        return None
+
+
+def amx_runs(llama_cpp: Any, model_path: str | Path, cache_dir: Path | None = None,
+             run_probe: Callable[[str | Path], int | None] = probe) -> bool:
+    """Whether the model may be loaded with llama.cpp's extra buffer types: yes where the build has no AMX,
+    else as the probe found (kept in ``cache_dir``; a probe that ended otherwise than by SIGILL counts as yes,
+    and one that did not end is not kept)."""
+    if not amx_in_build(llama_cpp):
+        return True
+    if cache_dir is None:
+        from ...world.scenes import cache_root
+        cache_dir = cache_root()
+    path = cache_dir / CACHE_FILE
+    key = _machine_key(llama_cpp, Path(model_path))
+    known = _read(path)
+    if key in known:
+        return bool(known[key])
+    status = run_probe(model_path)
+    if status is None:
+        return True
+    runs = status != -signal.SIGILL
+    known[key] = runs
+    with contextlib.suppress(OSError):  # an unwritable cache costs a probe per process, nothing else
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_atomic(path, json.dumps(known, indent=1, sort_keys=True) + "\n")
+    return runs
+
+
+@contextlib.contextmanager
+def without_extra_buffers(llama_cpp: Any, wanted: bool) -> Iterator[None]:
+    """Where ``wanted``, models loaded inside take no extra buffer types (no AMX, no repacked weights):
+    llama-cpp-python 0.3.36 cannot ask for that, and reads the model's parameters from llama.cpp's defaults,
+    which this wraps while the model loads."""
+    if not wanted:
+        yield
+        return
+    module = llama_cpp.llama_cpp
+    defaults = module.llama_model_default_params
+
+    def plain() -> Any:
+        params = defaults()
+        params.use_extra_bufts = False
+        return params
+
+    module.llama_model_default_params = plain
+    try:
+        yield
+    finally:
+        module.llama_model_default_params = defaults
+
+
+def _machine_key(llama_cpp: Any, model_path: Path) -> str:
+    """The build, the processor (its name and flags), the kernel, and the model file (name and size)."""
+    cpu = ""
+    with contextlib.suppress(OSError):
+        lines = Path("/proc/cpuinfo").read_text(encoding="utf-8", errors="replace").splitlines()
+        cpu = "\n".join(dict.fromkeys(x for x in lines if x.startswith(("model name", "flags"))))
+    try:
+        size = model_path.stat().st_size
+    except OSError:
+        size = -1
+    parts = [getattr(llama_cpp, "__version__", ""), platform.machine(), platform.release(), cpu,
+             model_path.name, str(size)]
+    return hashlib.sha256("\0".join(parts).encode("utf-8")).hexdigest()[:24]
+
+
+def _read(path: Path) -> dict[str, Any]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
