@@ -98,7 +98,8 @@ def with_future_pieces(objects: Sequence[Mapping[str, Any]]) -> tuple[list[dict[
 
 def relevant(objects: Sequence[Mapping[str, Any]], conditions: Sequence[Condition]) -> list[Mapping[str, Any]]:
     """The objects the goal can involve: its types (and their pieces or wholes), the tools and sources its
-    states need, and every receptacle holding any of those (to be opened, or emptied)."""
+    states need, every receptacle holding any of those (to be opened), and what a receptacle to be emptied
+    holds (not what the places it may go to hold: nothing there need move)."""
     names = {normalize_name(n) for c in conditions for n in (c.subject, c.item) if n}
     wanted = set(names)
     cut = {normalize_name(c.subject) for c in conditions if c.state == "SLICED"}
@@ -114,8 +115,9 @@ def relevant(objects: Sequence[Mapping[str, Any]], conditions: Sequence[Conditio
     by_id = {o["objectId"]: o for o in objects}
     chosen = {o["objectId"] for o in objects if o["objectType"].lower() in wanted}
     chosen |= {o["objectId"] for o in objects if any(s in chosen for s in o.get("controlledObjects") or ())}
-    if any(c.state == "EMPTY" for c in conditions):
-        chosen |= {o["objectId"] for o in objects if set(o.get("parentReceptacles") or ()) & chosen}
+    emptied = {o["objectId"] for o in objects if o["objectType"].lower() in
+               {normalize_name(c.subject) for c in conditions if c.state == "EMPTY"}}
+    chosen |= {o["objectId"] for o in objects if set(o.get("parentReceptacles") or ()) & emptied}
     stack = list(chosen)
     while stack:  # the holders of holders
         for parent in by_id[stack.pop()].get("parentReceptacles") or ():
