@@ -19,6 +19,7 @@ from ...robots import Robot
 from ...scoring import Condition
 from ...skills import SkillSet
 from ...worlds import Ai2ThorWorld, SimulatedSite, World
+from ..asked import as_goal
 from ..result import StageRecord
 from .problem import PlanningTask, Unreachable, planning_task
 from .search import GREEDY, SEARCH, UP_LOCK, Search, Step, search
@@ -116,7 +117,13 @@ def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: S
     do not find it, the greedy search's plan in the wall-clock time left."""
     started = time.perf_counter()
     record = StageRecord(STAGE)
-    model = goal_planning(world or Ai2ThorWorld(), floor_plan, team, skills)
+    world = world or Ai2ThorWorld()
+    out_of_reach = world.unattainable([as_goal(c) for c in conditions], team, skills, floor_plan)
+    if out_of_reach:  # a skill no robot has: no search need prove it (one could take past the time limit)
+        _refuse(record, f"the planner found no plan: {'; '.join(out_of_reach)}")
+        record.seconds = time.perf_counter() - started
+        return record
+    model = goal_planning(world, floor_plan, team, skills)
     with UP_LOCK:
         try:
             task = model.task(conditions, _problem_name(name))

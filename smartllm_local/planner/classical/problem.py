@@ -159,8 +159,11 @@ def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditio
     _initial_state(problem, v, dry, chosen, things, future, team)
     for robot, member in zip(robots, members or ()):
         _stands(problem, v, dry, member, robot, things)
-    problem.add_goal(And(*(_condition(v, c, chosen, things, future) for c in conditions),
-                         *(v.free(robot) for robot in robots if hands_free)))
+    goal = And(*(_condition(v, c, chosen, things, future) for c in conditions),
+               *(v.free(robot) for robot in robots if hands_free))
+    if problem.environment.simplifier.simplify(goal).is_false():  # (which no PDDL file can say)
+        raise Unreachable("the goal contradicts itself: no state of this scene meets all of its conditions at once")
+    problem.add_goal(goal)
     return PlanningTask(problem, {o.name: oid for oid, o in things.items()},
                         {o.name: i for i, o in enumerate(robots)}, {s.name: s.action for s in skills.values()},
                         skill_of)

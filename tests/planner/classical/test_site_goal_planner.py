@@ -85,7 +85,7 @@ def test_every_feasible_patrol_task_gets_a_plan_whose_calls_all_succeed_and_meet
 @pytest.mark.parametrize("task_id", [t for t in PATROL_TASKS if not PATROL_TASKS[t].feasible])
 def test_every_infeasible_patrol_task_is_the_planner_s_refusal_with_the_reason(task_id):
     record, _ = _run(PATROL, PATROL_TASKS[task_id])
-    assert record.refused_by == "planner" and "Fast Downward proved it" in record.refusal
+    assert record.refused_by == "planner" and record.refusal.startswith("the planner found no plan")
     place = PATROL_TASKS[task_id].goals[0].name
     assert f"{place} {PATROL_TASKS[task_id].goals[0].state}:" in record.refusal, "the executor's reason, named"
 
