@@ -7,7 +7,7 @@ with --out, writes one JSON line per task (what was stated, the task's condition
 
 Usage::
 
-    python scripts/goal_accuracy.py --model qwen2.5-coder-0.5b [--split dev|test] [--out goals.jsonl]
+    python scripts/goal_accuracy.py --model qwen2.5-coder-0.5b [--split dev|test] [--goal-candidates N] [--out F]
 """
 
 from __future__ import annotations
@@ -33,13 +33,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--split", default=None, help="dev or test: that half (and every infeasible task)")
     parser.add_argument("--out", type=Path, default=None, help="write one JSON line per task here")
     parser.add_argument("--n-ctx", type=int, default=8192)
+    parser.add_argument("--goal-candidates", type=int, default=1, help="statements written per task, one kept")
     args = parser.parse_args(argv)
     domain = load_domain(args.domain)
     tasks = load_tasks(domain.task_files(), domain=domain)
     if args.split is not None:
         check_half(args.split)
         tasks = split_tasks(tasks, require_split(domain), args.split)
-    planner = ModelOptions(model=args.model, n_ctx=args.n_ctx).planners(domain.catalogue, domain)[0]
+    options = ModelOptions(model=args.model, n_ctx=args.n_ctx, goal_candidates=args.goal_candidates)
+    planner = options.planners(domain.catalogue, domain)[0]
     started = time.perf_counter()
 
     def state(instruction: str, floor_plan: str):

@@ -43,7 +43,7 @@ MODEL_HELP = (f"A GGUF file (llama.cpp), a checkpoint folder or GGUF (transforme
 
 #: The candidates a stage writes, and whether the goal stage runs first, unless the user says (chosen on the
 #: development half: docs/measurements.md).
-DEFAULT_CANDIDATES, DEFAULT_GOAL_CHECK = 1, True
+DEFAULT_CANDIDATES, DEFAULT_GOAL_CANDIDATES, DEFAULT_GOAL_CHECK = 1, 1, True
 MAX_SEED = 2**32 - 1  # llama.cpp takes an unsigned 32-bit seed
 DEFAULT_N_CTX = 8192  # or less, where the model was trained on less (the backends fit it within that)
 
@@ -59,9 +59,12 @@ class ModelOptions:
                  endpoint: str | None = None, parallel: int = 1, server_timeout: float | None = None,
                  no_loop_guard: bool = False, no_token_alignment: bool = False,
                  candidates: int = DEFAULT_CANDIDATES, candidate_temperature: float = CANDIDATE_TEMPERATURE,
-                 select: str = "verifier", goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
+                 select: str = "verifier", goal_candidates: int = DEFAULT_GOAL_CANDIDATES,
+                 goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
                  no_repair: bool = False, no_finish_goals: bool = False,
                  one_at_a_time: bool = False, keep_idle_steps: bool = False):
+        if goal_candidates < 1:
+            raise UserError(f"--goal-candidates must be 1 or more, not {goal_candidates}")
         _check_ranges(backend=backend, temperature=temperature, seed=seed, candidates=candidates,
                       candidate_temperature=candidate_temperature, select=select, n_ctx=n_ctx, threads=threads,
                       n_gpu_layers=n_gpu_layers)
@@ -93,6 +96,7 @@ class ModelOptions:
             restate=not free_allocation,
             world_check=not no_world_check,
             candidates=Candidates(candidates, candidate_temperature, select),
+            goal_candidates=goal_candidates,
             goal_check=goal_check,
             stop_at_goals=not no_stop_at_goals,
             repair=not no_repair,
@@ -205,6 +209,11 @@ _CANDIDATE_TEMPERATURE = typer.Option(CANDIDATE_TEMPERATURE, "--candidate-temper
 _SELECT = typer.Option("verifier", "--select", help=(
     "How a candidate is chosen: verifier (each dry-run in the world and checked against the goals the model "
     "stated) or likelihood (the model's mean log-probability alone)."))
+_GOAL_CANDIDATES = typer.Option(DEFAULT_GOAL_CANDIDATES, "--goal-candidates", envvar="SMARTLLM_GOAL_CANDIDATES",
+                                help=(
+    "Write the goal statement this many times (the first as --temperature says, the others sampled at "
+    "--candidate-temperature) and keep the one that says something of the most things the instruction names "
+    "(a refusal where most refuse); 1 writes one (see docs/planner.md, \"The goal stage\")."))
 _GOAL_CHECK = typer.Option(DEFAULT_GOAL_CHECK, "--goal-check/--no-goal-check", envvar="SMARTLLM_GOAL_CHECK", help=(
     "State the task's goals first (the goal stage) and refuse a task whose stated goals the team cannot meet "
     "(a state no robot's skill gives, a load too heavy for every lifter); the verifier checks candidates "
@@ -246,6 +255,7 @@ MODEL_PARAMETERS = [
         ("endpoint", str | None, _ENDPOINT), ("parallel", int, _PARALLEL),
         ("server_timeout", float | None, _SERVER_TIMEOUT), ("candidates", int, _CANDIDATES),
         ("candidate_temperature", float, _CANDIDATE_TEMPERATURE), ("select", str, _SELECT),
+        ("goal_candidates", int, _GOAL_CANDIDATES),
         ("goal_check", bool, _GOAL_CHECK), ("no_stop_at_goals", bool, _NO_STOP_AT_GOALS),
         ("no_repair", bool, _NO_REPAIR), ("no_finish_goals", bool, _NO_FINISH_GOALS),
         ("one_at_a_time", bool, _ONE_AT_A_TIME), ("keep_idle_steps", bool, _KEEP_IDLE_STEPS),

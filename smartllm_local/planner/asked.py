@@ -1,6 +1,7 @@
 """Whether an instruction names what a stated goal is about: the goal check refuses a task for a goal out of the
-team's reach only where the instruction asked for it, and the goal stage's refusal stands only where it is not
-for something the instruction names and the scene has.
+team's reach only where the instruction asked for it, the goal stage's refusal stands only where it is not
+for something the instruction names and the scene has, and among several statements the goal stage keeps one
+that says something of each thing the instruction names in full.
 
 The goal stage states goals from the instruction and the scene; a small model also states goals nobody asked
 for (an object the instruction never names). Refusing a feasible task for one of those is refusing it for the
@@ -18,7 +19,7 @@ Television, "keys" the KeyChain). A goal on two objects (``Apple in Fridge``) is
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 from ..goal_language import name_words
 from ..scoring import Condition, Goal
@@ -27,6 +28,8 @@ from ..world.object_types import base_type
 #: How many first letters a word of the instruction and a word of a type's name must share.
 PREFIX = 3
 _WORD = re.compile(r"[a-z]+")
+#: Words after which an instruction names where a thing is now, not where it must be ("from the coffee table").
+ORIGIN = re.compile(r"\b(?:from|out of)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?([a-z]+(?:\s+[a-z]+)?)")
 
 
 def names(instruction: str, object_type: str) -> bool:
@@ -51,6 +54,23 @@ def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequen
         return []
     left = [c for c in stated if c not in out_of_reach]
     return list(out_of_reach) if any(c in asked for c in left) else []
+
+
+def named_in_full(instruction: str, types: Sequence[str]) -> list[str]:
+    """The scene's types every word of whose name the instruction says ("the bar of soap": the SoapBar, not
+    the SoapBottle; a plural's ending aside), less those it names only as where a thing comes from ("move the
+    laptop from the coffee table"): the things a goal statement should say something of."""
+    text = instruction.lower()
+    said = _forms(_WORD.findall(text))
+    origin = _forms(w for match in ORIGIN.finditer(text) for w in match.group(1).split())
+    rest = _forms(_WORD.findall(ORIGIN.sub(" ", text)))
+    return [t for t in types if (words := set(_type_words(t))) <= said and not (words <= origin and not words <= rest)]
+
+
+def coverage(named: Sequence[str], stated: Sequence[Condition]) -> float:
+    """The share of the named types (:func:`named_in_full`) that some stated condition is about (1 where none)."""
+    about = {base_type(t).lower() for c in stated for t in _objects(c)}
+    return sum(base_type(t).lower() in about for t in named) / len(named) if named else 1.0
 
 
 def present_yet_refused(refusal: str, instruction: str, types: Sequence[str]) -> str | None:
@@ -81,6 +101,14 @@ def _asked(instruction: str, stated: Sequence[Condition]) -> list[Condition]:
 
 def _objects(condition: Condition) -> list[str]:
     return [condition.subject] + ([condition.item] if condition.item else [])
+
+
+def _forms(words: Iterable[str]) -> set[str]:
+    """The words, and each as it would be without a plural's ending ("glasses": glasse, glass)."""
+    forms = set()
+    for w in words:
+        forms |= {w, w[:-1], w[:-2]} if len(w) > 3 and w.endswith("s") and not w.endswith("ss") else {w}
+    return forms
 
 
 def _type_words(object_type: str) -> list[str]:

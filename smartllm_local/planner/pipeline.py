@@ -86,7 +86,8 @@ class PlannerConfig:
     rewrites the plan freely. ``world_check``: offer only steps that succeed in the scene from the
     state the steps so far produce (decomposition, and a restated allocation). ``chat_template``:
     "auto" gives an instruct model each prompt as a user turn of its own chat template; "none"
-    gives raw text. ``candidates``: how many decompositions to write and how to choose one; ``goal_check``:
+    gives raw text. ``candidates``: how many decompositions to write and how to choose one; ``goal_candidates``:
+    how many goal statements to write (the sampled ones at the candidates' temperature), one kept; ``goal_check``:
     state the goals first (the goal stage), refuse a task whose stated goals the team cannot meet, and give the
     verifier the goals to check candidates against (with the grammar only)."""
 
@@ -99,6 +100,7 @@ class PlannerConfig:
     restate: bool = True
     world_check: bool = True
     candidates: Candidates = Candidates()
+    goal_candidates: int = 1
     goal_check: bool = False
     stop_at_goals: bool = True
     repair: bool = True

@@ -80,6 +80,7 @@ def test_help_and_bare_groups_behave_as_before(tmp_path):
     (["--n-ctx", "100000"], ["--n-ctx 100000 is more than the 8,192 tokens smollm2 was trained on: give --n-ctx "
                              "8192 or less (left out, it is 8192)"]),
     (["--prefix-cache", ""], ["--prefix-cache needs a folder, or off"]),
+    (["--goal-candidates", "0"], ["--goal-candidates must be 1 or more, not 0"]),
     (["--thor-build", "nowhere"], ["AI2-THOR build", "nowhere is not an executable file"]),
 ])
 @pytest.mark.parametrize("command", [

@@ -9,7 +9,7 @@ from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.goal_language import parse_goal_statement, statement_of
 from smartllm_local.planner import pipeline
-from smartllm_local.planner.asked import as_goal, invented, names, present_yet_refused
+from smartllm_local.planner.asked import as_goal, coverage, invented, named_in_full, names, present_yet_refused
 from smartllm_local.planner.decoding.sampling import Generated
 from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
 from smartllm_local.planner.pipeline import Planner, PlannerConfig
@@ -119,3 +119,24 @@ def test_a_goal_stage_refusal_for_a_thing_the_scene_has_is_stated_again_without_
     else:
         assert stated.refusal == why and not stated.record.overturned
     assert present_yet_refused(why, "Make me a coffee.", scene_objects(6).types) is None  # not asked for: stands
+
+
+@pytest.mark.parametrize("instruction, types, named", [
+    ("Put the bar of soap in the sink.", ["SoapBar", "SoapBottle", "SinkBasin", "Sink"], ["SoapBar", "Sink"]),
+    ("Move the laptop from the coffee table to the sofa.", ["Laptop", "CoffeeTable", "Sofa"], ["Laptop", "Sofa"]),
+    ("Take the cloth out of the bathtub.", ["Cloth", "Bathtub"], ["Cloth"]),
+    ("Take the apple from the fridge and put it back in the fridge.", ["Apple", "Fridge"], ["Apple", "Fridge"]),
+    ("Put the glasses and the boxes on the desk.", ["Glass", "Box", "Desk", "DeskLamp"], ["Glass", "Box", "Desk"]),
+    ("Switch off the lamp on the side table.", ["DeskLamp", "SideTable"], ["SideTable"]),
+])
+def test_a_type_is_named_in_full_where_every_word_of_its_name_is_said_and_not_only_as_an_origin(
+        instruction, types, named):
+    assert named_in_full(instruction, types) == named
+
+
+def test_coverage_is_the_share_of_named_types_some_condition_is_about():
+    stated = parse_goal_statement("SoapBottle in SinkBasin\nCloth in GarbageCan\n").conditions
+    assert coverage(["SoapBar", "Cloth"], stated) == 0.5
+    assert coverage(["SoapBar", "Cloth"], parse_goal_statement("SoapBar in SinkBasin\n").conditions) == 0.5
+    assert coverage([], stated) == 1.0
+    assert coverage(["Potato"], parse_goal_statement("PotatoSliced in Pan\n").conditions) == 1.0  # a slice of it

@@ -19,8 +19,9 @@ from smartllm_local.errors import PlanError
 from smartllm_local.goal_language import GoalStatement, aliases, parse_goal_statement, statement_of
 from smartllm_local.planner.constraints.goal import MAX_GOALS, GoalConstraint, goal_vocabulary
 from smartllm_local.planner.decoding.writer import Report, accepts, run_constraint, run_tokens
-from smartllm_local.planner.goal_stage import GOAL_BUDGET
+from smartllm_local.planner.goal_stage import GOAL_BUDGET, StatedGoals, choose_statement
 from smartllm_local.planner.prompting.example_check import check_examples, check_goal_examples
+from smartllm_local.planner.result import StageRecord
 from smartllm_local.scoring import Goal, score
 from smartllm_local.world.object_types import RECEPTACLE_ONLY_ACCEPTS, TYPE_PROPERTIES
 from smartllm_local.world.scenes import load_scene
@@ -248,3 +249,42 @@ def test_plan_without_goals_writes_no_goal_stage_and_removes_a_stale_one(goals_r
     write_artifacts(PlanResult(instruction="x", floor_plan="FloorPlan1", robots=[1]), out)
     assert not (out / "goals.txt").exists() and not (out / "goal").exists()
     assert Path(goals_run[0] / "goals.txt").exists()
+
+
+def _stated(text: str, logprob: float) -> StatedGoals:
+    record = StageRecord("goal", output=text, logprob=logprob, choices=1)
+    statement = parse_goal_statement(text)
+    record.refusal = statement.refusal
+    return StatedGoals(record, statement)
+
+
+def test_of_several_statements_the_one_about_the_named_things_is_kept_then_the_likeliest():
+    instruction = "Put the bar of soap in the sink and throw the cloth away."
+    types = ["SoapBar", "SoapBottle", "SinkBasin", "Cloth", "GarbageCan"]
+    bottle = _stated("SoapBottle in SinkBasin\nCloth in GarbageCan\n", -0.1)  # likelier, but not the bar
+    bar, bar_less_likely = (_stated("SoapBar in SinkBasin\nCloth in GarbageCan\n", p) for p in (-0.3, -0.5))
+    refused = _stated("# INFEASIBLE: there is no soap here\n", 0.0)
+    chosen = choose_statement(instruction, types, [bottle, bar_less_likely, refused, bar])
+    assert chosen is bar
+    assert [c["chosen"] for c in chosen.record.candidates] == [False, False, False, True]
+    assert [c["coverage"] for c in chosen.record.candidates] == [0.5, 1.0, None, 1.0]
+    # where most candidates refuse, the likeliest refusal is kept
+    other = _stated("# INFEASIBLE: no soap\n", -0.2)
+    assert choose_statement(instruction, types, [bottle, other, refused]) is refused
+
+
+def test_goal_candidates_are_written_together_and_the_first_is_the_greedy_statement(smollm2):
+    """Three goal statements from SmolLM2 on llama.cpp's lanes: the first is what one greedy statement is, each is
+    in the record with its coverage and likelihood, and the one kept is among them."""
+    from smartllm_local.planner.goal_stage import state_goals
+    from smartllm_local.planner.pipeline import Planner, PlannerConfig
+
+    instruction, floor_plan = "Put the apple in the fridge and switch off the light.", "FloorPlan1"
+    greedy = state_goals(Planner(smollm2, HOUSEHOLD.catalogue, PlannerConfig()), instruction, floor_plan)
+    three = state_goals(Planner(smollm2, HOUSEHOLD.catalogue, PlannerConfig(goal_candidates=3)), instruction,
+                        floor_plan)
+    candidates = three.record.candidates
+    assert len(candidates) == 3 and sum(c["chosen"] for c in candidates) == 1
+    assert candidates[0]["output"] == greedy.record.output and not greedy.record.candidates
+    assert three.record.output == next(c["output"] for c in candidates if c["chosen"])
+    assert all(c["mean_logprob"] <= 0 for c in candidates)
