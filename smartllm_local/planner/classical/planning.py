@@ -131,10 +131,9 @@ def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: S
             _refuse(record, f"the planner found no plan: {exc}")
             record.seconds = time.perf_counter() - started
             return record
-        found = search(task, time_limit, cpu_limit=shortest_cpu)
+        found = _search_within(task, time_limit - (time.perf_counter() - started), cpu_limit=shortest_cpu)
         if found.out_of_cpu:
-            left = time_limit - (time.perf_counter() - started)
-            found = search(task, max(left, 1.0), config=GREEDY)
+            found = _search_within(task, time_limit - (time.perf_counter() - started), config=GREEDY)
     record.prompt = (f";; domain.pddl\n{found.domain_pddl}\n;; problem.pddl\n{found.problem_pddl}")
     record.raw = found.log + _plan_log(found)
     if found.timed_out:
@@ -156,6 +155,12 @@ def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: S
                                  name="<goal-planner allocation>")
     record.seconds = time.perf_counter() - started
     return record
+
+
+def _search_within(task: PlanningTask, left: float, **how: Any) -> Search:
+    """The search in the ``left`` seconds of the time limit that building the problem (and any search before)
+    left; none where nothing is left."""
+    return search(task, left, **how) if left > 0 else Search(timed_out=True)
 
 
 def _refuse(record: StageRecord, why: str) -> None:
