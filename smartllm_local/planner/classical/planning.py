@@ -23,7 +23,7 @@ from ..asked import as_goal
 from ..result import StageRecord
 from .problem import PlanningTask, Unreachable, planning_task
 from .search import GREEDY, SEARCH, UP_LOCK, Search, Step, search
-from .site import goals_of, site_planning_task
+from .site import site_planning_task
 from .threads import Part, parts, plan_text, robot_parts, spread
 
 STAGE = "allocation"
@@ -40,7 +40,6 @@ class GoalPlanning(Protocol):
     where: str  # what the world of a task is called in a refusal ("scene", "site")
 
     def task(self, conditions: Sequence[Condition], name: str) -> PlanningTask: ...
-    def unreachable(self, conditions: Sequence[Condition]) -> list[str]: ...
     def threads(self, task: PlanningTask, found: Search) -> tuple[list[Step], list[Part], str]: ...
 
 
@@ -57,10 +56,6 @@ class HouseholdPlanning:
     def task(self, conditions: Sequence[Condition], name: str) -> PlanningTask:
         return planning_task(self.dry, self.team, self.skills, conditions, name=name)
 
-    def unreachable(self, conditions: Sequence[Condition]) -> list[str]:
-        """Nothing beyond Fast Downward's proof."""
-        return []
-
     def threads(self, task: PlanningTask, found: Search) -> tuple[list[Step], list[Part], str]:
         split = parts(found.steps, self.dry.objects)
         _, steps, split = spread(task, found.actions, list(found.steps), split, len(self.team))
@@ -75,14 +70,10 @@ class SitePlanning:
     where = "site"
 
     def __init__(self, world: SimulatedSite, floor_plan: str | int, team: Sequence[Robot], skills: SkillSet):
-        self.world, self.floor_plan, self.team, self.skills = world, floor_plan, team, skills
+        self.world, self.team = world, team
 
     def task(self, conditions: Sequence[Condition], name: str) -> PlanningTask:
         return site_planning_task(self.world.domain, self.team, conditions, name=name)
-
-    def unreachable(self, conditions: Sequence[Condition]) -> list[str]:
-        """The goals the team can never meet on the site, each with why (the world's own judgement)."""
-        return self.world.unattainable(goals_of(conditions), self.team, self.skills, self.floor_plan)
 
     def threads(self, task: PlanningTask, found: Search) -> tuple[list[Step], list[Part], str]:
         return list(found.steps), robot_parts(found.steps), "plan with the fewest robot-calls"
@@ -140,9 +131,8 @@ def plan_to_goal(conditions: Sequence[Condition], floor_plan: str | int, team: S
         record.error = (f"the planner's time limit ran out: Fast Downward found no plan in {time_limit:g} s "
                         "(raise it with --planner-time-limit)")
     elif found.unsolvable:
-        why = "; ".join(model.unreachable(conditions))
         _refuse(record, f"the planner found no plan: the team cannot reach the goal in this {model.where} "
-                        f"(Fast Downward proved it: {found.status})" + (f": {why}" if why else ""))
+                        f"(Fast Downward proved it: {found.status})")
     elif not found.steps:
         record.error = "the goal holds already: there is nothing to plan"
     else:

@@ -27,7 +27,7 @@ from unified_planning.shortcuts import And, BoolType, Equals, Exists, Forall, Im
 
 from ...domain import Domain, Place, pooled
 from ...robots import Robot
-from ...scoring import Condition, Goal, normalize_name
+from ...scoring import Condition, normalize_name
 from ...skills import Skill
 from .problem import PlanningTask, Unreachable, pddl_name
 
@@ -198,8 +198,3 @@ def _goal_place(domain: Domain, condition: Condition) -> Place:
     if effect and effect not in domain.effects.values():
         raise Unreachable(f"`{what}`: no skill of the {domain.name} domain has the effect {effect}")
     return place
-
-
-def goals_of(conditions: Sequence[Condition]) -> list[Goal]:
-    """The site's goal conditions as the task file's goals (what the executor's feasibility check reads)."""
-    return [Goal(c.subject, state=c.state) for c in conditions if c.state is not None]
