@@ -97,6 +97,16 @@ def write_json(path: str | Path, data: Any) -> Path:
     return write_atomic(path, json_text(data))
 
 
+def read_cache_map(path: str | Path) -> dict[str, Any]:
+    """A JSON object this project keeps in its cache; empty where it is missing or damaged (never trusted then:
+    what it would have said is found again)."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
 def read_json(path: str | Path, what: str) -> Any:
     """Read a JSON file the user named; problems become a UserError naming the file."""
     path = Path(path)

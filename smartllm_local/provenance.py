@@ -18,7 +18,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from .files import write_atomic
+from .files import read_cache_map, write_atomic
 from .world.scenes import cache_root
 
 PACKAGES = ("smartllm-local", "llama-cpp-python", "ai2thor", "transformers", "torch")
@@ -60,11 +60,7 @@ def _digest_key(path: Path) -> str:
 
 
 def _known_digests(cache: Path | None) -> dict[str, Any]:
-    try:
-        known = json.loads(_digest_store(cache).read_text())
-    except (OSError, ValueError):
-        return {}  # missing or damaged: digest again, never trust it
-    return known if isinstance(known, dict) else {}
+    return read_cache_map(_digest_store(cache))  # missing or damaged: digest again
 
 
 def file_record(path: str | Path) -> dict[str, Any]:

@@ -63,11 +63,9 @@ class ModelOptions:
                  goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
                  no_repair: bool = False, no_finish_goals: bool = False,
                  one_at_a_time: bool = False, keep_idle_steps: bool = False):
-        if goal_candidates < 1:
-            raise UserError(f"--goal-candidates must be 1 or more, not {goal_candidates}")
         _check_ranges(backend=backend, temperature=temperature, seed=seed, candidates=candidates,
-                      candidate_temperature=candidate_temperature, select=select, n_ctx=n_ctx, threads=threads,
-                      n_gpu_layers=n_gpu_layers)
+                      goal_candidates=goal_candidates, candidate_temperature=candidate_temperature, select=select,
+                      n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers)
         known = model if backend == "server" else model or default_model()
         if n_ctx is not None:
             _check_context(backend, model, n_ctx)
@@ -306,8 +304,9 @@ TASKS = typer.Option(None, help="A task file (default: the project's benchmark).
 DOMAIN = typer.Option(None, help=DOMAIN_HELP)
 
 
-def _check_ranges(*, backend: str, temperature: float, seed: int, candidates: int, candidate_temperature: float,
-                  select: str, n_ctx: int | None, threads: int | None, n_gpu_layers: int) -> None:
+def _check_ranges(*, backend: str, temperature: float, seed: int, candidates: int, goal_candidates: int,
+                  candidate_temperature: float, select: str, n_ctx: int | None, threads: int | None,
+                  n_gpu_layers: int) -> None:
     """Refuse a model option's value out of its range (or not among its choices) before anything is read or
     loaded, each with what it must be."""
     if backend not in BACKENDS:
@@ -318,6 +317,8 @@ def _check_ranges(*, backend: str, temperature: float, seed: int, candidates: in
         raise UserError(f"--seed must be between 0 and {MAX_SEED}, not {seed}")
     if candidates < 1:
         raise UserError(f"--candidates must be 1 or more, not {candidates}")
+    if goal_candidates < 1:
+        raise UserError(f"--goal-candidates must be 1 or more, not {goal_candidates}")
     if not math.isfinite(candidate_temperature) or candidate_temperature <= 0:
         raise UserError(f"--candidate-temperature must be a number above 0, not {candidate_temperature}")
     if select not in SELECTORS:

@@ -139,23 +139,16 @@ def choose_statement(instruction: str, types: Sequence[str], stated: Sequence[St
     something of the most things the instruction names in full (:func:`.asked.named_in_full`: "the bar of soap"
     is the SoapBar), the likeliest among those. Measured on the development half: docs/measurements.md."""
     named = named_in_full(instruction, types)
-    refused = [s for s in stated if s.refusal is not None]
-    said = [s for s in stated if s.refusal is None and s.statement is not None]
-    if len(refused) * 2 > len(stated) or not said:
-        pool, scores = (refused or list(stated)), [(0.0, _mean(s)) for s in (refused or stated)]
-    else:
-        pool, scores = said, [(_covered(named, s), _mean(s)) for s in said]
-    best = max(range(len(pool)), key=lambda i: (scores[i], -stated.index(pool[i])))
-    chosen = pool[best]
-    chosen.record.candidates = [{"candidate": k, "output": s.record.output, "refusal": s.refusal,
-                                 "error": s.error or None, "mean_logprob": round(_mean(s), 4),
-                                 "coverage": round(_covered(named, s), 4) if s in said else None,
-                                 "chosen": s is chosen} for k, s in enumerate(stated)]
-    return chosen
-
-
-def _covered(named: Sequence[str], stated: StatedGoals) -> float:
-    return coverage(named, stated.statement.conditions) if stated.statement is not None else 0.0
+    covered = {k: coverage(named, s.statement.conditions) for k, s in enumerate(stated)
+               if s.refusal is None and s.statement is not None}
+    refused = [k for k, s in enumerate(stated) if s.refusal is not None]
+    pool = (refused or range(len(stated))) if len(refused) * 2 > len(stated) or not covered else covered
+    best = max(pool, key=lambda k: (covered.get(k, 0.0), _mean(stated[k]), -k))
+    stated[best].record.candidates = [{"candidate": k, "output": s.record.output, "refusal": s.refusal,
+                                       "error": s.error or None, "mean_logprob": round(_mean(s), 4),
+                                       "coverage": round(covered[k], 4) if k in covered else None,
+                                       "chosen": k == best} for k, s in enumerate(stated)]
+    return stated[best]
 
 
 def _mean(stated: StatedGoals) -> float:

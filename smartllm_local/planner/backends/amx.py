@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from ...files import write_atomic
+from ...files import read_cache_map, write_atomic
 
 #: What the child runs: load the model (argv[1]) and evaluate a few tokens, as the planner's first prompt does.
 PROBE = """\
@@ -56,14 +56,14 @@ def amx_runs(llama_cpp: Any, model_path: str | Path, cache_dir: Path | None = No
     """Whether the model may be loaded with llama.cpp's extra buffer types: yes where the build has no AMX,
     else as the probe found (kept in ``cache_dir``; a probe that ended otherwise than by SIGILL counts as yes,
     and one that did not end is not kept)."""
-    if not amx_in_build(llama_cpp):
-        return True
+    if not amx_in_build(llama_cpp) or not Path(model_path).is_file():
+        return True  # (a missing file: the load says so, no child need try it first)
     if cache_dir is None:
         from ...world.scenes import cache_root
         cache_dir = cache_root()
     path = cache_dir / CACHE_FILE
     key = _machine_key(llama_cpp, Path(model_path))
-    known = _read(path)
+    known = read_cache_map(path)
     if key in known:
         return bool(known[key])
     status = run_probe(model_path)
@@ -113,11 +113,3 @@ def _machine_key(llama_cpp: Any, model_path: Path) -> str:
     parts = [getattr(llama_cpp, "__version__", ""), platform.machine(), platform.release(), cpu,
              model_path.name, str(size)]
     return hashlib.sha256("\0".join(parts).encode("utf-8")).hexdigest()[:24]
-
-
-def _read(path: Path) -> dict[str, Any]:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}

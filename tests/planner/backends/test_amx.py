@@ -55,10 +55,14 @@ def test_the_probes_answer_is_kept_per_model(tmp_path, status, runs):
     assert len(calls) == 2  # another model file: AMX kernels exist for some weight types only
 
 
-def test_a_probe_that_does_not_end_is_not_kept(tmp_path):
+def test_a_probe_that_does_not_end_is_not_kept_and_a_missing_model_is_not_probed(tmp_path):
     run, calls = counting(None)
-    assert amx.amx_runs(Build(has_amx=True), tmp_path / "m.gguf", tmp_path, run) is True
-    assert not (tmp_path / amx.CACHE_FILE).exists()
+    model = tmp_path / "m.gguf"
+    assert amx.amx_runs(Build(has_amx=True), model, tmp_path, run) is True
+    assert calls == []  # no file: the load itself says so
+    model.write_bytes(b"weights")
+    assert amx.amx_runs(Build(has_amx=True), model, tmp_path, run) is True
+    assert calls == [model] and not (tmp_path / amx.CACHE_FILE).exists()
 
 
 def test_the_probe_reports_a_child_killed_by_sigill(tmp_path):
