@@ -22,6 +22,35 @@ os.environ["SMARTLLM_CANDIDATES"] = "1"
 os.environ["SMARTLLM_GOAL_CHECK"] = "false"
 
 
+#: The files whose tests read the ``runs`` fixture (five minutes of benchmark runs): the suite runs on two
+#: workers (pytest-xdist), each file's tests on one, and these files on the one that makes the runs.
+RUNS_FILES = ("tests/benchmark/test_methods.py", "tests/report/test_report.py", "tests/report/viewer/test_viewer.py")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    """pytest-xdist's ``loadfile`` distribution, with the files of :data:`RUNS_FILES` as one file (unless another
+    ``--dist`` is asked for)."""
+    from xdist.scheduler import LoadFileScheduling
+
+    if config.getvalue("dist") != "load":
+        return None
+
+    class SharedRuns(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            scope = super()._split_scope(nodeid)
+            return RUNS_FILES[0] if scope in RUNS_FILES else scope
+
+    return SharedRuns(config, log)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """A test that reads ``runs`` outside :data:`RUNS_FILES` would make the runs again on another worker."""
+    strays = {item.nodeid.split("::")[0] for item in items if "runs" in getattr(item, "fixturenames", ())}
+    if strays - set(RUNS_FILES):
+        raise pytest.UsageError(f"add {sorted(strays - set(RUNS_FILES))} to RUNS_FILES in tests/conftest.py")
+
+
 @pytest.fixture(scope="session")
 def fp6_controller():
     """A stand-in Controller on FloorPlan6 with 3 agents, shared by read-mostly tests (reset before use)."""

@@ -39,16 +39,16 @@ def test_a_build_without_amx_is_never_probed(tmp_path):
     assert calls == [] and not (tmp_path / amx.CACHE_FILE).exists()
 
 
-@pytest.mark.parametrize("status, runs", [(-signal.SIGILL, False), (0, True), (1, True)])
-def test_the_probes_answer_is_kept_per_model(tmp_path, status, runs):
+@pytest.mark.parametrize("status, expected", [(-signal.SIGILL, False), (0, True), (1, True)])
+def test_the_probes_answer_is_kept_per_model(tmp_path, status, expected):
     """SIGILL alone means AMX traps (a child that fails otherwise leaves the load to fail with its own error)."""
     model = tmp_path / "m.gguf"
     model.write_bytes(b"weights")
     run, calls = counting(status)
-    assert amx.amx_runs(Build(has_amx=True), model, tmp_path, run) is runs
-    assert amx.amx_runs(Build(has_amx=True), model, tmp_path, run) is runs
+    assert amx.amx_runs(Build(has_amx=True), model, tmp_path, run) is expected
+    assert amx.amx_runs(Build(has_amx=True), model, tmp_path, run) is expected
     assert len(calls) == 1
-    assert list(json.loads((tmp_path / amx.CACHE_FILE).read_text()).values()) == [runs]
+    assert list(json.loads((tmp_path / amx.CACHE_FILE).read_text()).values()) == [expected]
     other = tmp_path / "other.gguf"
     other.write_bytes(b"other weights")
     amx.amx_runs(Build(has_amx=True), other, tmp_path, run)
