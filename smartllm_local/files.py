@@ -107,6 +107,18 @@ def read_cache_map(path: str | Path) -> dict[str, Any]:
     return data if isinstance(data, dict) else {}
 
 
+def remember_in_cache_map(path: str | Path, key: str, value: Any) -> bool:
+    """Add ``key`` to a JSON object kept in the cache (:func:`read_cache_map`), written atomically; whether it
+    was written (a cache that cannot be written costs only finding the value again later)."""
+    known = read_cache_map(path)
+    known[key] = value
+    try:
+        write_atomic(path, json.dumps(known, indent=1, sort_keys=True) + "\n")
+    except UserError:
+        return False
+    return True
+
+
 def read_json(path: str | Path, what: str) -> Any:
     """Read a JSON file the user named; problems become a UserError naming the file."""
     path = Path(path)

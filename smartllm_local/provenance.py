@@ -8,7 +8,6 @@ the user's cache, keyed by the file's path, size and modification time.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
@@ -18,7 +17,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from .files import read_cache_map, write_atomic
+from .files import read_cache_map, remember_in_cache_map
 from .world.scenes import cache_root
 
 PACKAGES = ("smartllm-local", "llama-cpp-python", "ai2thor", "transformers", "torch")
@@ -43,11 +42,8 @@ def sha256_file(path: str | Path, cache: Path | None = None) -> str:
 
 def remember_digest(path: str | Path, digest: str, cache: Path | None = None) -> None:
     """Keep a digest just computed while writing ``path`` (so it is not read again to digest it)."""
-    path = Path(path).resolve()
-    known = _known_digests(cache)
-    known[_digest_key(path)] = digest
-    with contextlib.suppress(Exception):  # a read-only cache only costs the next run a digest
-        write_atomic(_digest_store(cache), json.dumps(known, indent=0, sort_keys=True))
+    # a read-only cache only costs the next run a digest
+    remember_in_cache_map(_digest_store(cache), _digest_key(Path(path).resolve()), digest)
 
 
 def _digest_store(cache: Path | None) -> Path:

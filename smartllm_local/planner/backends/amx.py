@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import json
 import platform
 import signal
 import subprocess
@@ -22,7 +21,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from ...files import read_cache_map, write_atomic
+from ...files import read_cache_map, remember_in_cache_map
 
 #: What the child runs: load the model (argv[1]) and evaluate a few tokens, as the planner's first prompt does.
 PROBE = """\
@@ -70,10 +69,7 @@ def amx_runs(llama_cpp: Any, model_path: str | Path, cache_dir: Path | None = No
     if status is None:
         return True
     runs = status != -signal.SIGILL
-    known[key] = runs
-    with contextlib.suppress(OSError):  # an unwritable cache costs a probe per process, nothing else
-        path.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(path, json.dumps(known, indent=1, sort_keys=True) + "\n")
+    remember_in_cache_map(path, key, runs)  # where it cannot be written: a probe per process, nothing else
     return runs
 
 

@@ -55,6 +55,18 @@ def test_the_probes_answer_is_kept_per_model(tmp_path, status, expected):
     assert len(calls) == 2  # another model file: AMX kernels exist for some weight types only
 
 
+def test_a_cache_that_cannot_be_written_costs_only_a_probe_per_process(tmp_path):
+    model = tmp_path / "m.gguf"
+    model.write_bytes(b"weights")
+    run, calls = counting(-signal.SIGILL)
+    (tmp_path / "file").write_text("x")
+    for unwritable in (tmp_path / "file" / "cache", tmp_path / "cache"):  # under a file; its map a folder
+        (tmp_path / "cache" / amx.CACHE_FILE).mkdir(parents=True, exist_ok=True)
+        assert amx.amx_runs(Build(has_amx=True), model, unwritable, run) is False
+        assert amx.amx_runs(Build(has_amx=True), model, unwritable, run) is False
+    assert calls == [model] * 4
+
+
 def test_a_probe_that_does_not_end_is_not_kept_and_a_missing_model_is_not_probed(tmp_path):
     run, calls = counting(None)
     model = tmp_path / "m.gguf"
