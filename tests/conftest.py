@@ -3,6 +3,7 @@ project's task files, loaded once, and real benchmark runs the benchmark's and t
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -10,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from filelock import FileLock
 
 # Scene splits and other derived data go to a per-session folder, never the user's cache.
 os.environ.setdefault("SMARTLLM_CACHE_DIR", os.path.join(os.path.dirname(__file__), "..", ".pytest_cache", "smartllm"))
@@ -83,14 +85,23 @@ class Planned:
 def kitchen01(tmp_path_factory) -> Planned:
     """SmolLM2 plans and executes kitchen-01 through the CLI (``plan --task kitchen-01 --execute --out``), with a
     prefix store of its own: the one such run, which the tests of its artifacts, of the prefix store across
-    processes and of the chat template read."""
-    root = tmp_path_factory.mktemp("kitchen-01")
-    states, out = root / "states", root / "run"
-    proc = subprocess.run([sys.executable, "-m", "smartllm_local", "plan", "--task", "kitchen-01", "--execute",
-                           "--prefix-cache", str(states), "--out", str(out)],
-                          capture_output=True, text=True, timeout=900)
-    assert proc.returncode == 0, proc.stderr
-    return Planned(out, states, proc.stdout, proc.stderr)
+    processes and of the chat template read. Made once for the session's workers: the first to need it makes
+    it in the folder they share (pytest-xdist's way, under a file lock), the others wait and read it."""
+    shared = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        shared = shared.parent  # the workers' basetemps are folders of one session's
+    root = shared / "kitchen-01"
+    states, out, made = root / "states", root / "run", root / "made.json"
+    with FileLock(f"{root}.lock"):
+        if not made.is_file():
+            root.mkdir(exist_ok=True)
+            proc = subprocess.run([sys.executable, "-m", "smartllm_local", "plan", "--task", "kitchen-01", "--execute",
+                                   "--prefix-cache", str(states), "--out", str(out)],
+                                  capture_output=True, text=True, timeout=900)
+            assert proc.returncode == 0, proc.stderr
+            made.write_text(json.dumps({"stdout": proc.stdout, "stderr": proc.stderr}))
+    streams = json.loads(made.read_text())
+    return Planned(out, states, streams["stdout"], streams["stderr"])
 
 
 @pytest.fixture(scope="session")

@@ -180,7 +180,7 @@ def test_plan_dispatch_runs_the_model_s_plan_on_the_lab_s_functions(tmp_path, ca
     env = {**os.environ, "PYTHONPATH": str(root), "LAB_ROBOTS_LOG": str(tmp_path / "calls.jsonl")}
 
     def plan(*args: str) -> subprocess.CompletedProcess:
-        return subprocess.run([SCRIPT, "plan", "--task", "kitchen-02", *args], cwd=tmp_path,
+        return subprocess.run([SCRIPT, "plan", "--task", "kitchen-01", *args], cwd=tmp_path,
                               env=env, capture_output=True, text=True, timeout=600)
 
     run = plan("--dispatch", "all.toml", "--json")
@@ -192,7 +192,7 @@ def test_plan_dispatch_runs_the_model_s_plan_on_the_lab_s_functions(tmp_path, ca
     assert sorted(map(tuple, (c["objects"] for c in logged))) == sorted(tuple(a["objects"]) for a in actions)
     assert run.returncode == 0
 
-    run = plan("--dispatch", "some.toml")  # kitchen-02's robot has skills this file leaves out
+    run = plan("--dispatch", "some.toml")  # kitchen-01's robot has skills this file leaves out
     assert run.returncode == 2 and "names no function for" in run.stderr and "[skills]" in run.stderr
     run = plan("--dispatch", "all.toml", "--execute")
     assert run.returncode == 2 and "not both" in run.stderr

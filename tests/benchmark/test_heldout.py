@@ -1,0 +1,81 @@
+"""The held-out household tasks (``domains/household/heldout/tasks.jsonl``): written after every prompt, example and
+setting was chosen, in scenes no benchmark task and no worked example uses, with teams of few skills as the
+paper's; never used to choose anything, only to measure. Here: that they are what the docs say; the heavy suite
+proves every feasible one reachable and every infeasible one refused (the planner, given the tasks' goals)."""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from pathlib import Path
+
+import pytest
+
+from smartllm_local.benchmark.tasks import load_tasks
+from smartllm_local.domain import load_domain
+from smartllm_local.scoring import condition_holds
+from smartllm_local.world.scenes import load_scene
+from tests.conftest import benchmark_run
+
+from .test_dataset import MINIMUM, SMARTLLM_SKILLS, needed_skills
+
+HELDOUT = load_domain().folder / "heldout" / "tasks.jsonl"
+
+
+@pytest.fixture(scope="module")
+def heldout():
+    return load_tasks([HELDOUT])
+
+
+def _example_floor_plans() -> set[int]:
+    """Every floor plan a worked example of any stage of the household prompts is set in."""
+    found = set()
+    for path in load_domain().prompts_dir().rglob("examples.json"):
+        found |= {e["floor_plan"] for e in json.loads(path.read_text()).get("examples", []) if "floor_plan" in e}
+    return found
+
+
+def test_six_feasible_tasks_a_category_and_infeasible_ones(heldout):
+    counts = Counter(t.category for t in heldout if t.feasible)
+    assert counts == {category: 6 for category in MINIMUM}
+    assert sum(not t.feasible for t in heldout) >= 3
+
+
+def test_their_scenes_are_new_to_the_benchmark_and_the_examples(heldout, all_tasks):
+    used = {t.floor_plan for t in heldout}
+    assert _example_floor_plans() and not used & _example_floor_plans()
+    assert not used & {t.floor_plan for t in all_tasks}
+    assert not {t.instruction.lower() for t in heldout} & {t.instruction.lower() for t in all_tasks}
+
+
+def test_every_team_lacks_skills_or_strength_as_the_papers_do(heldout, catalogue):
+    for task in heldout:
+        team = catalogue.team(task.robots)
+        lacking = any(SMARTLLM_SKILLS - r.skills for r in team)  # a robot of few skills
+        weak = all(r.mass_capacity < 5 for r in team if "PickupObject" in r.skills)  # the lifters are weak
+        assert lacking or weak, task.id
+
+
+def test_no_goal_holds_at_the_start_and_infeasible_teams_lack_what_the_goals_need(heldout, catalogue):
+    for task in heldout:
+        objects = load_scene(task.floor_plan)
+        assert not any(condition_holds(c, objects) for goal in task.goals for c in goal.conditions()), task.id
+        have = frozenset().union(*(r.skills for r in catalogue.team(task.robots)))
+        assert bool(needed_skills(task) - have) == (not task.feasible), task.id
+
+
+@pytest.mark.heavy
+def test_the_planner_given_their_goals_reaches_every_feasible_one_and_refuses_the_rest(tmp_path):
+    benchmark_run(tmp_path / "oracle", "--method", "goal-planner-oracle", "--tasks", str(HELDOUT))
+    lines = [json.loads(line) for line in (tmp_path / "oracle" / "results.jsonl").read_text().splitlines()]
+    assert len(lines) == len(load_tasks([HELDOUT]))
+    for line in lines:
+        if line["feasible"]:
+            assert line["SR"] == 1.0 and line["Exe"] == 1.0, line["id"]
+        else:
+            assert line["refused"] and line["refused_by"] == "planner", line["id"]
+
+
+def test_the_file_is_where_the_docs_say():
+    docs = (Path(__file__).parents[2] / "docs" / "benchmark.md").read_text()
+    assert str(HELDOUT.relative_to(Path(__file__).parents[2])) in docs
