@@ -19,6 +19,7 @@ from tests.conftest import benchmark_run
 
 from .test_dataset import MINIMUM, SMARTLLM_SKILLS, needed_skills
 
+ROOT = Path(__file__).parents[2]
 HELDOUT = load_domain().folder / "heldout" / "tasks.jsonl"
 
 
@@ -42,8 +43,8 @@ def test_six_feasible_tasks_a_category_and_infeasible_ones(heldout):
 
 
 def test_their_scenes_are_new_to_the_benchmark_and_the_examples(heldout, all_tasks):
-    used = {t.floor_plan for t in heldout}
-    assert _example_floor_plans() and not used & _example_floor_plans()
+    used, examples = {t.floor_plan for t in heldout}, _example_floor_plans()
+    assert examples and not used & examples
     assert not used & {t.floor_plan for t in all_tasks}
     assert not {t.instruction.lower() for t in heldout} & {t.instruction.lower() for t in all_tasks}
 
@@ -65,10 +66,10 @@ def test_no_goal_holds_at_the_start_and_infeasible_teams_lack_what_the_goals_nee
 
 
 @pytest.mark.heavy
-def test_the_planner_given_their_goals_reaches_every_feasible_one_and_refuses_the_rest(tmp_path):
+def test_the_planner_given_their_goals_reaches_every_feasible_one_and_refuses_the_rest(heldout, tmp_path):
     benchmark_run(tmp_path / "oracle", "--method", "goal-planner-oracle", "--tasks", str(HELDOUT))
     lines = [json.loads(line) for line in (tmp_path / "oracle" / "results.jsonl").read_text().splitlines()]
-    assert len(lines) == len(load_tasks([HELDOUT]))
+    assert len(lines) == len(heldout)
     for line in lines:
         if line["feasible"]:
             assert line["SR"] == 1.0 and line["Exe"] == 1.0, line["id"]
@@ -77,5 +78,4 @@ def test_the_planner_given_their_goals_reaches_every_feasible_one_and_refuses_th
 
 
 def test_the_file_is_where_the_docs_say():
-    docs = (Path(__file__).parents[2] / "docs" / "benchmark.md").read_text()
-    assert str(HELDOUT.relative_to(Path(__file__).parents[2])) in docs
+    assert str(HELDOUT.relative_to(ROOT)) in (ROOT / "docs" / "benchmark.md").read_text()
