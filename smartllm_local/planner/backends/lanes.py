@@ -45,9 +45,10 @@ from typing import Any
 import numpy as np
 
 from ...errors import ModelError
+from ..decoding.first_bytes import FirstBytes
 from ..decoding.grammar import Grammar
 from ..decoding.sampling import Generated, Sampling
-from .base import Backend, continuation_tokens
+from .base import Backend
 from .llamacpp_decoding import LlamaDecoding
 
 _ONE_STREAM = struct.pack("<I", 1)  # the stream count of a state from a cache of one stream of cells
@@ -348,7 +349,8 @@ class LaneView(LlamaDecoding):
         return self._parent.detokenize(tokens)
 
     def tokenize_continuation(self, text: str) -> list[int]:
-        return continuation_tokens(text, self.tokenize, self._piece)
+        with self._engine.tokenizing:
+            return self._parent.tokenize_continuation(text)
 
     def text_of(self, tokens: Sequence[int]) -> str:
         return self._parent.text_of(tokens)
@@ -358,6 +360,9 @@ class LaneView(LlamaDecoding):
 
     def _piece(self, token: int, special: bool = False) -> bytes:
         return self._parent._piece(token, special)
+
+    def first_bytes(self) -> FirstBytes:
+        return self._parent.first_bytes()
 
     # a sequence of the lanes' context
     def prefill(self, context: Sequence[int], prefixes: Sequence[int]) -> int:

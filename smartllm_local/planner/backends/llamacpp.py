@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import io
 import os
 import time
@@ -136,6 +137,9 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
         self._fresh = False  # whether the logits belong to the last token of _tokens
         self._pieces: dict[tuple[int, bool], bytes] = {}
+        # The texts a grammar forces recur (`GoToObject(robot_list[`, a line's end): each spelled once.
+        self._continuations = functools.lru_cache(maxsize=1024)(
+            lambda text: tuple(continuation_tokens(text, self.tokenize, self._piece)))
         self._init_decoding(frozenset(t for t in range(self.n_vocab) if llama_cpp.llama_vocab_is_eog(self._vocab, t)))
         self.n_gpu_layers = n_gpu_layers
         self.chat_template = self.llm.metadata.get("tokenizer.chat_template")
@@ -155,7 +159,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         return b"".join(self._piece(t) for t in tokens).decode("utf-8", errors="replace")
 
     def tokenize_continuation(self, text: str) -> list[int]:
-        return continuation_tokens(text, self.tokenize, self._piece)
+        return list(self._continuations(text))
 
     def text_of(self, tokens: Sequence[int]) -> str:
         """The text that tokenizes back into ``tokens`` with control tokens parsed (``<|im_start|>`` written

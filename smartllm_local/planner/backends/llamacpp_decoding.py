@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..decoding import loop
+from ..decoding.first_bytes import FirstBytes
 from ..decoding.grammar import Grammar, GrammarError
 from ..decoding.sampling import END_RANK, Generated, Sampling
 
@@ -39,8 +40,9 @@ class LlamaGrammar:
         self._sampler = lib.llama_sampler_init_grammar(vocab, grammar.to_gbnf().encode(), b"root")
         if not self._sampler:
             raise GrammarError("llama.cpp rejected a grammar:\n" + grammar.to_gbnf())
-        self._few = np.zeros(END_RANK, dtype=_DATA)
+        self._few = np.zeros(END_RANK, dtype=_DATA)  # grows to the most tokens asked about at once
         self._full: np.ndarray | None = None  # the whole vocabulary's buffer, made when first needed
+        self._admitted = -1  # a token just found admitted, at the grammar's state now (accepted without asking again)
 
     def _apply(self, buffer: np.ndarray, count: int) -> None:
         array = self._lib.llama_token_data_array(
@@ -50,10 +52,15 @@ class LlamaGrammar:
     def admits(self, token: int) -> bool:
         self._few[0] = (token, 0.0, 0.0)
         self._apply(self._few, 1)
-        return bool(np.isfinite(self._few["logit"][0]))
+        admitted = bool(np.isfinite(self._few["logit"][0]))
+        if admitted:
+            self._admitted = token
+        return admitted
 
     def mask(self, logits: np.ndarray, ids: np.ndarray | None = None) -> np.ndarray:
         if ids is not None:
+            if len(ids) > len(self._few):
+                self._few = np.zeros(len(ids), dtype=_DATA)
             self._few["id"][: len(ids)], self._few["logit"][: len(ids)] = ids, logits
             self._apply(self._few, len(ids))
             return self._few["logit"][: len(ids)].copy()
@@ -67,8 +74,9 @@ class LlamaGrammar:
         return masked
 
     def accept(self, token: int) -> bool:
-        if not self.admits(token):
+        if token != self._admitted and not self.admits(token):
             return False
+        self._admitted = -1
         self._lib.llama_sampler_accept(self._sampler, token)
         return True
 
@@ -88,6 +96,7 @@ class LlamaDecoding:
 
     def _init_decoding(self, end_tokens: frozenset[int]) -> None:
         self.end_tokens = end_tokens  # llama.cpp's end-of-generation tokens
+        self._first_bytes: FirstBytes | None = None
 
     # hooks
     def _piece(self, token: int, special: bool = False) -> bytes:
@@ -113,6 +122,11 @@ class LlamaDecoding:
 
     def constrain(self, grammar: Grammar) -> LlamaGrammar:
         return LlamaGrammar(self._lib, self._vocab, self.n_vocab, grammar)
+
+    def first_bytes(self) -> FirstBytes:
+        if self._first_bytes is None:
+            self._first_bytes = FirstBytes(self._piece, self.n_vocab)
+        return self._first_bytes
 
     def generate(self, context: Sequence[int], *, grammar: Grammar | None, max_tokens: int, sampling: Sampling,
                  stop: Sequence[str] = (), rng: np.random.Generator | None = None, lines: int = 1) -> Generated:

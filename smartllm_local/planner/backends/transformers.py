@@ -239,6 +239,10 @@ class TransformersBackend(PrefixReuse):
     def constrain(self, grammar: Grammar) -> LLGuidanceGrammar:
         return LLGuidanceGrammar(self._llg, self.ll_tokenizer, self.n_vocab, grammar)
 
+    def first_bytes(self) -> None:
+        """None: llguidance masks the whole vocabulary at once."""
+        return None
+
     def close(self) -> None:
         self._cache = self._last = None
         self.lm = None

@@ -38,6 +38,7 @@ from typing import Protocol
 import numpy as np
 
 from ...errors import GrammarMismatchError, ModelError
+from .first_bytes import FirstBytes
 from .grammar import Grammar, GrammarError
 from .matcher import Matcher
 from .repetition import TRIES, current_line, draw
@@ -90,6 +91,10 @@ class TokenModel(Protocol):
     def constrain(self, grammar: Grammar) -> TokenConstraint:
         """``grammar`` compiled by the backend's engine; a :class:`GrammarError` where it rejects it."""
 
+    def first_bytes(self) -> FirstBytes | None:
+        """The model's vocabulary by first byte (made once per model, when first asked for); None where the engine's
+        whole-vocabulary mask costs no more than one over a few tokens (llguidance's)."""
+
 
 def generate(model: TokenModel, context: Sequence[int], *, grammar: Grammar | None, max_tokens: int,
              sampling: Sampling, stop: Sequence[str] = (), rng: np.random.Generator | None = None,
@@ -120,11 +125,13 @@ def forced_tokens(text: str, spell: Callable[[str], list[int]], *, heal: bool, w
 
 class Choice:
     """How the next token is chosen from the logits under the engine's grammar. ``ends`` marks the end-of-sequence
-    tokens where the end is always the model's choice (aligned decoding; None: only where the grammar admits it)."""
+    tokens where the end is always the model's choice (aligned decoding; None: only where the grammar admits it).
+    ``narrow`` gives the tokens that can come next (None: any): a whole-vocabulary mask asks the engine about those
+    alone (see :mod:`.first_bytes`)."""
 
     def __init__(self, constraint: TokenConstraint | None, ends: np.ndarray | None, sampling: Sampling,
-                 rng: np.random.Generator):
-        self.constraint, self.ends, self.sampling, self.rng = constraint, ends, sampling, rng
+                 rng: np.random.Generator, narrow: Callable[[], np.ndarray | None] = lambda: None):
+        self.constraint, self.ends, self.sampling, self.rng, self.narrow = constraint, ends, sampling, rng, narrow
 
     def admits(self, token: int) -> bool:
         return self.constraint is None or (self.ends is not None and bool(self.ends[token])) \
@@ -133,7 +140,13 @@ class Choice:
     def masked(self, logits: np.ndarray) -> np.ndarray:
         """The logits of the whole vocabulary, those the grammar refuses at -inf, the end of sequence the model's
         where it is among its ``END_RANK`` likeliest (see :data:`.END_RANK`)."""
-        masked = self.constraint.mask(logits) if self.constraint is not None else logits.copy()
+        if self.constraint is None:
+            masked = logits.copy()
+        elif (ids := self.narrow()) is None:
+            masked = self.constraint.mask(logits)
+        else:
+            masked = np.full(len(logits), -np.inf, dtype=logits.dtype)
+            masked[ids] = self.constraint.mask(logits[ids], ids)
         if self.ends is not None:
             for end in np.flatnonzero(self.ends):
                 if may_end(logits, int(end)):
@@ -199,12 +212,18 @@ class _Decoding:
         self.matcher = Matcher(grammar) if grammar is not None else None
         self.eog = np.zeros(model.n_vocab, dtype=bool)
         self.eog[list(model.end_tokens)] = True
-        self.choice = Choice(constraint, self.eog if sampling.aligned else None, sampling, rng)
+        self.choice = Choice(constraint, self.eog if sampling.aligned else None, sampling, rng, self._next_ids)
         self.out = Generated([], "", "length")
+        self.decoder = codecs.getincrementaldecoder("utf-8")("replace")  # a character split over tokens waits
+
+    def _next_ids(self) -> np.ndarray | None:
+        """The tokens that can come next: those that begin with a character the planner's grammar admits next (None:
+        any, where no grammar is followed or a character is half written)."""
+        index = self.model.first_bytes() if self.matcher is not None and not self.decoder.getstate()[0] else None
+        return index.starting_with(self.matcher.next_chars()) if index is not None else None  # type: ignore[union-attr]
 
     def run(self, max_tokens: int, stop: Sequence[str], lines: int) -> Generated:
-        out = self.out
-        decoder = codecs.getincrementaldecoder("utf-8")("replace")  # a character split over tokens waits
+        out, decoder = self.out, self.decoder
         while len(out.tokens) < max_tokens:
             new = self._next_tokens()
             if new is None:

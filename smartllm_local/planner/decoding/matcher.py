@@ -138,6 +138,11 @@ class Matcher:
     def accepting(self) -> bool:
         return self._automaton.accept in self._states
 
+    def next_chars(self) -> frozenset[str]:
+        """The characters the grammar admits next (none at the end of the text)."""
+        edges = self._automaton.edges
+        return frozenset().union(*(label for s in self._states for label, _ in edges[s] if label is not None))
+
     def shortest_way(self) -> str:
         """How free text that has run on long enough ends soonest: the characters every shortest way from
         here to the end of the text begins with, until they leave the free text or come to a choice."""

@@ -134,6 +134,27 @@ def test_the_grammars_forced_text_goes_in_one_batch_but_its_last_token(vocab):
     assert forced_tokens(matcher.forced(), vocab.tokenize_continuation, heal=True) == []
 
 
+def test_a_mask_asked_of_the_tokens_that_begin_with_a_character_admitted_next_is_the_whole_vocabularys(vocab):
+    """What lets a whole-vocabulary mask ask llama.cpp's grammar about a few tokens (planner/decoding/first_bytes.py),
+    for every tokenizer family (SentencePiece's pieces begin with their space)."""
+    grammar = Grammar({"root": seq("    ", alt("GoToObject(", "PickupObject(", "# fetch it"), "'Apple')\n")})
+    matcher, constraint = Matcher(grammar), vocab.constrain(grammar)
+    logits = np.random.default_rng(0).normal(size=vocab.n_vocab).astype(np.float32)
+    try:
+        for piece in ("", "    ", "Go"):
+            assert matcher.advance(piece) and all(constraint.accept(t) for t in vocab.tokenize_continuation(piece))
+            ids = vocab.first_bytes().starting_with(matcher.next_chars())
+            narrowed = np.full(vocab.n_vocab, -np.inf, dtype=np.float32)
+            narrowed[ids] = constraint.mask(logits[ids], ids)
+            assert np.array_equal(narrowed, constraint.mask(logits)) and np.isfinite(narrowed).any()
+            assert piece == "" or len(ids) < vocab.n_vocab / 8  # (where a space comes next, many tokens begin with one)
+        refused = vocab.tokenize_continuation("#")[0]
+        admitted = int(np.argmax(constraint.mask(logits)))
+        assert constraint.admits(admitted) and not constraint.accept(refused)  # asked again: not the one just admitted
+    finally:
+        constraint.close()
+
+
 class GrammarWriter:
     """A backend that writes each offered line from the grammar (a vocabulary cannot generate), tokenized by
     ``vocab``, and keeps the contexts it is asked to continue."""

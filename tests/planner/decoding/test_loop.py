@@ -10,7 +10,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from smartllm_local.planner.decoding.grammar import Grammar, chars, rep, seq
+from smartllm_local.planner.decoding.first_bytes import FirstBytes
+from smartllm_local.planner.decoding.grammar import Grammar, alt, chars, rep, seq
 from smartllm_local.planner.decoding.loop import generate
 from smartllm_local.planner.decoding.matcher import Matcher
 from smartllm_local.planner.decoding.sampling import Sampling
@@ -27,6 +28,7 @@ class CharGrammar:
 
     def __init__(self, grammar: Grammar):
         self.matcher = Matcher(grammar)
+        self.asked: list[int] = []  # how many tokens each mask asked about
 
     def admits(self, token: int) -> bool:
         if token == END:
@@ -35,6 +37,7 @@ class CharGrammar:
 
     def mask(self, logits: np.ndarray, ids: np.ndarray | None = None) -> np.ndarray:
         ids = np.arange(len(logits)) if ids is None else ids
+        self.asked.append(len(ids))
         return np.array([s if self.admits(int(t)) else -np.inf for t, s in zip(ids, logits)], dtype=np.float32)
 
     def accept(self, token: int) -> bool:
@@ -52,8 +55,9 @@ class CharModel:
     n_vocab = END + 1
     end_tokens = frozenset({END})
 
-    def __init__(self, likes: Callable[[str], str]):
-        self.likes, self.tokens, self.batches = likes, [], []
+    def __init__(self, likes: Callable[[str], str], by_first_byte: bool = True):
+        self.likes, self.tokens, self.batches, self.grammars = likes, [], [], []
+        self.index = FirstBytes(self.token_bytes, self.n_vocab) if by_first_byte else None
 
     def tokenize_continuation(self, text: str) -> list[int]:
         return [ALPHABET.index(c) for c in text]
@@ -78,7 +82,11 @@ class CharModel:
         return b"".join(self.token_bytes(t) for t in self.tokens).decode()
 
     def constrain(self, grammar: Grammar) -> CharGrammar:
-        return CharGrammar(grammar)
+        self.grammars.append(CharGrammar(grammar))
+        return self.grammars[-1]
+
+    def first_bytes(self) -> FirstBytes | None:
+        return self.index
 
 
 def test_forced_text_goes_in_one_batch_but_its_last_token_which_the_model_writes():
@@ -131,3 +139,30 @@ def test_the_model_ends_where_the_end_is_its_likeliest_token():
     assert out.stop == "eos" and out.text == "" and out.choices == 1
     strict = generate(model, [0], grammar=grammar, max_tokens=10, sampling=Sampling(aligned=False))
     assert strict.stop == "line" and strict.text  # unaligned: the model ends only where the grammar may
+
+
+def test_a_whole_vocabulary_mask_asks_the_engine_only_about_tokens_that_begin_with_a_character_admitted_next():
+    # The model likes "a", then the alphabet in order: its 64 likeliest are all refused where the grammar admits
+    # only characters from the end of the alphabet, so each choice masks the whole vocabulary.
+    grammar = Grammar({"root": seq(rep(chars("~}"), 2, 2), alt("|", "{"), "\n")})
+    late = [c for c in ALPHABET if ALPHABET.index(c) > 64]
+    assert set("~}|{") <= set(late)
+    outputs = {}
+    for narrowed in (True, False):
+        for sampling in (Sampling(), Sampling(temperature=1.0, seed=3)):
+            model = CharModel(lambda text: "a", by_first_byte=narrowed)
+            out = generate(model, [0], grammar=grammar, max_tokens=10, sampling=sampling)
+            outputs[narrowed, sampling.temperature] = out.text, out.logprob
+            whole = [n for n in model.grammars[0].asked if n != 64]  # (greedy asks about its 64 likeliest first)
+            # "~}" or "|{", and the end of sequence (a token without text), where narrowed
+            assert len(whole) >= 3 and all(n == (3 if narrowed else model.n_vocab) for n in whole[:3])
+    assert outputs[True, 0.0] == outputs[False, 0.0] and outputs[True, 1.0] == outputs[False, 1.0]
+    assert outputs[True, 0.0][0] == "}}{\n"  # the best admitted: the latest characters are the model's least liked
+
+
+def test_the_vocabulary_by_first_byte_keeps_tokens_without_text_and_reads_a_characters_first_byte():
+    pieces = [b"", b"ab", b"a", b"b", "\u00e9t\u00e9".encode(), b"\xc3", b"\xa9"]
+    index = FirstBytes(lambda t: pieces[t], len(pieces))
+    assert index.starting_with("a").tolist() == [0, 1, 2]
+    assert index.starting_with({"\u00e9", "b"}).tolist() == [0, 3, 4, 5]  # "é" begins with byte 0xc3
+    assert index.starting_with(()).tolist() == [0]
