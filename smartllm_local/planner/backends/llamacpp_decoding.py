@@ -17,6 +17,7 @@ context gets into the key/value cache and where the logits come from: the hooks 
 from __future__ import annotations
 
 import ctypes
+import threading
 from collections.abc import Sequence
 from typing import Any
 
@@ -28,6 +29,7 @@ from ..decoding.grammar import Grammar, GrammarError
 from ..decoding.sampling import END_RANK, Generated, Sampling
 
 _DATA = [("id", np.intc), ("logit", np.single), ("p", np.single)]  # llama_token_data
+_MAKING = threading.Lock()
 
 
 class LlamaGrammar:
@@ -124,8 +126,9 @@ class LlamaDecoding:
         return LlamaGrammar(self._lib, self._vocab, self.n_vocab, grammar)
 
     def first_bytes(self) -> FirstBytes:
-        if self._first_bytes is None:
-            self._first_bytes = FirstBytes(self._piece, self.n_vocab)
+        with _MAKING:  # lanes ask at once, from threads of their own: made once
+            if self._first_bytes is None:
+                self._first_bytes = FirstBytes(self._piece, self.n_vocab)
         return self._first_bytes
 
     def generate(self, context: Sequence[int], *, grammar: Grammar | None, max_tokens: int, sampling: Sampling,
