@@ -30,6 +30,6 @@ class FirstBytes:
         self._by_byte = [order[bounds[b]:bounds[b + 1]] for b in range(_NONE + 1)]
 
     def starting_with(self, chars: Iterable[str]) -> np.ndarray:
-        """The ids of the tokens whose text can begin with one of ``chars`` (and of those with no text), ascending."""
-        firsts = sorted({c.encode("utf-8")[0] for c in chars} | {_NONE})
-        return np.sort(np.concatenate([self._by_byte[b] for b in firsts]))
+        """The ids of the tokens whose text can begin with one of ``chars`` (and of those with no text)."""
+        firsts = {c.encode("utf-8")[0] for c in chars} | {_NONE}
+        return np.concatenate([self._by_byte[b] for b in firsts])

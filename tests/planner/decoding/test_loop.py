@@ -163,6 +163,6 @@ def test_a_whole_vocabulary_mask_asks_the_engine_only_about_tokens_that_begin_wi
 def test_the_vocabulary_by_first_byte_keeps_tokens_without_text_and_reads_a_characters_first_byte():
     pieces = [b"", b"ab", b"a", b"b", "\u00e9t\u00e9".encode(), b"\xc3", b"\xa9"]
     index = FirstBytes(lambda t: pieces[t], len(pieces))
-    assert index.starting_with("a").tolist() == [0, 1, 2]
-    assert index.starting_with({"\u00e9", "b"}).tolist() == [0, 3, 4, 5]  # "é" begins with byte 0xc3
+    assert sorted(index.starting_with("a").tolist()) == [0, 1, 2]
+    assert sorted(index.starting_with({"\u00e9", "b"}).tolist()) == [0, 3, 4, 5]  # "é" begins with byte 0xc3
     assert index.starting_with(()).tolist() == [0]
