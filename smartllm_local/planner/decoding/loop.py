@@ -219,8 +219,10 @@ class _Decoding:
     def _next_ids(self) -> np.ndarray | None:
         """The tokens that can come next: those that begin with a character the planner's grammar admits next (None:
         any, where no grammar is followed or a character is half written)."""
-        index = self.model.first_bytes() if self.matcher is not None and not self.decoder.getstate()[0] else None
-        return index.starting_with(self.matcher.next_chars()) if index is not None else None  # type: ignore[union-attr]
+        if self.matcher is None or self.decoder.getstate()[0]:
+            return None
+        index = self.model.first_bytes()
+        return None if index is None else index.starting_with(self.matcher.next_chars())
 
     def run(self, max_tokens: int, stop: Sequence[str], lines: int) -> Generated:
         out, decoder = self.out, self.decoder

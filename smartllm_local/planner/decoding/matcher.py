@@ -80,6 +80,10 @@ class _Automaton:
                     stack.append(target)
         return frozenset(seen)
 
+    def labels(self, states: frozenset[int]) -> set[frozenset[str]]:
+        """The character sets of the edges that leave ``states``."""
+        return {label for s in states for label, _ in self.edges[s] if label is not None}
+
     def step(self, states: frozenset[int], c: str) -> frozenset[int]:
         return self.closure({t for s in states for label, t in self.edges[s] if label is not None and c in label})
 
@@ -140,8 +144,7 @@ class Matcher:
 
     def next_chars(self) -> frozenset[str]:
         """The characters the grammar admits next (none at the end of the text)."""
-        edges = self._automaton.edges
-        return frozenset().union(*(label for s in self._states for label, _ in edges[s] if label is not None))
+        return frozenset().union(*self._automaton.labels(self._states))
 
     def shortest_way(self) -> str:
         """How free text that has run on long enough ends soonest: the characters every shortest way from
@@ -165,7 +168,7 @@ class Matcher:
         out: list[str] = []
         states = self._states
         while automaton.accept not in states:
-            c = _only_char({label for s in states for label, _ in automaton.edges[s] if label is not None})
+            c = _only_char(automaton.labels(states))
             if c is None:
                 break
             out.append(c)
