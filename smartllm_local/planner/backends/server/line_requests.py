@@ -30,9 +30,9 @@ Ask = Callable[[list[int], Grammar, int, Sequence[int]], tuple[list[int], list[T
 
 
 #: Tokens a server is first asked for at once in a line. It writes on (its answers past the next forced text
-#: are dropped, and cost decoding time), so it is asked for few, and for twice as many after an answer that
-#: was kept whole.
-FIRST_ASK = 8
+#: are dropped, and cost decoding time; in a plan line most answers are cut after a token or two), so it is
+#: asked for few, and for twice as many after an answer that was kept whole (free text: a comment).
+FIRST_ASK = 2
 
 
 class WrongLine(Exception):
