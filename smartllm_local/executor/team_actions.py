@@ -178,8 +178,10 @@ class TeamWorld:
             return held[0]
         x, z = self.position(near)
         shut = self._shut_away()
-        # Prefer instances the robots can get at (not in a closed fridge or drawer), then the nearest.
-        return min(matches, key=lambda o: (o["objectId"] in shut, round(Box.of(o).distance(x, z), 6), o["objectId"]))
+        # Prefer instances the robots can get at (not in a closed fridge or drawer), then whole ones (a broken
+        # one can be neither picked up nor broken again), then the nearest.
+        return min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")),
+                                           round(Box.of(o).distance(x, z), 6), o["objectId"]))
 
     def _shut_away(self) -> set[str]:
         closed = {o["objectId"] for o in self.objects

@@ -34,3 +34,22 @@ def test_members_go_to_the_nearest_free_cells(floor_plan, members):
             expected = _nearest_free(world.cells, box, {p for i, p in enumerate(now) if i != member})
             assert world.position(member) == expected, (name, member)
             now[member] = expected
+
+
+def test_a_name_means_a_whole_instance_before_a_broken_one_however_near():
+    """FloorPlan212 has two statues: once the nearer is broken, "the Statue" is the other, wherever the robot
+    stands (a broken one can be neither picked up nor broken again), on the real Controller."""
+    from smartllm_local.world.controller import open_controller
+
+    from .helpers import run
+
+    controller = open_controller(212, agent_count=1)
+    try:
+        ex = run("GoToObject(robots[0], 'Statue')\nBreakObject(robots[0], 'Statue')\n"
+                 "GoToObject(robots[0], 'Statue')\nBreakObject(robots[0], 'Statue')\n", [27], controller, 212)
+    finally:
+        controller.stop()
+    assert [e.success for e in ex.trace] == [True] * 4, [e.error for e in ex.trace]
+    first, second = ex.trace[1].object_id, ex.trace[3].object_id
+    assert first != second and ex.trace[2].object_id == second
+    assert all(o["isBroken"] for o in ex.final_objects if o["objectType"] == "Statue")

@@ -48,11 +48,18 @@ _XCPU = f"exit code: -{signal.SIGXCPU.value}"
 
 class _FastDownward(FastDownwardPDDLPlanner):
     """Fast Downward with its intermediate file in a folder of its own: by default its translator writes
-    output.sas in the working directory, where two searches at once (or a user's file) would collide."""
+    output.sas in the working directory, where two searches at once (or a user's file) would collide. The PDDL
+    files Unified Planning writes for it are read back as they are handed over (``pddl``), so the record is
+    what Fast Downward read and the problem is not written twice."""
 
     def __init__(self, sas_file: Path, cpu_limit: int | None = None, config: str = SEARCH):
         super().__init__(fast_downward_search_config=config)
         self._sas_file, self._cpu_limit = sas_file, cpu_limit
+        self.pddl = ("", "")
+
+    def _get_cmd(self, domain_filename: str, problem_filename: str, plan_filename: str) -> list[str]:
+        self.pddl = (Path(domain_filename).read_text(), Path(problem_filename).read_text())
+        return super()._get_cmd(domain_filename, problem_filename, plan_filename)
 
     def _base_cmd(self, plan_filename: str) -> list[str]:
         interpreter, driver, *rest = super()._base_cmd(plan_filename)
@@ -118,13 +125,13 @@ def pddl(task: PlanningTask) -> tuple[str, str]:
 def search(task: PlanningTask, time_limit: float, *, cpu_limit: int | None = None, config: str = SEARCH) -> Search:
     """Run Fast Downward (its search ``config``) for at most ``time_limit`` seconds of wall-clock time and, with
     ``cpu_limit``, at most that many seconds of its own processor time."""
-    domain, problem = pddl(task)
-    result = Search(domain_pddl=domain, problem_pddl=problem, config=config)
+    result = Search(config=config)
     log = io.StringIO()
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="smartllm-fd-") as folder, \
             _FastDownward(Path(folder) / "output.sas", cpu_limit, config) as planner:
         answer = planner.solve(task.problem, timeout=time_limit, output_stream=log)
+    result.domain_pddl, result.problem_pddl = planner.pddl
     result.log, result.status = log.getvalue(), answer.status.name
     if cpu_limit is not None and _XCPU in result.log:  # the translator (Python) is killed at its CPU limit
         result.timed_out = result.out_of_cpu = True

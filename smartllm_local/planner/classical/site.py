@@ -29,7 +29,7 @@ from ...domain import Domain, Place, pooled
 from ...robots import Robot
 from ...scoring import Condition, normalize_name
 from ...skills import Skill
-from .problem import PlanningTask, Unreachable, pddl_name
+from .problem import BuiltProblem, PlanningTask, Unreachable, pddl_name
 
 PLACE = UserType("place")
 #: The site's kinds of entry as types: a move goes to any place, a patrol to a region, a picture of an object.
@@ -111,7 +111,7 @@ def site_planning_task(domain: Domain, team: Sequence[Robot], conditions: Sequen
         raise Unreachable(f"the planner takes teams of up to {MAX_TEAM} robots on a site, and this one has "
                           f"{len(team)}")
     f = fluents(domain)
-    problem = Problem(name)
+    problem = BuiltProblem(name)
     for fluent in f.values():
         problem.add_fluent(fluent, default_initial_value=False)
     size = Fluent("size", IntType(), t=TEAM)  # what a call by the team costs: its robots' time
@@ -135,7 +135,7 @@ def site_planning_task(domain: Domain, team: Sequence[Robot], conditions: Sequen
     _initial_state(problem, f, domain, team, places, robots, groups)
     problem.add_goal(And(*(_condition(f, domain, c, places, robots) for c in conditions)))
     robot_names = {o.name: i for i, o in enumerate(robots)}
-    return PlanningTask(problem, {o.name: place for place, o in places.items()}, robot_names,
+    return PlanningTask(problem.built(), {o.name: place for place, o in places.items()}, robot_names,
                         {s.name: s.action for s in domain.catalogue.skills.values()}, skill_of,
                         teams={o.name: members for members, o in groups.items()})
 

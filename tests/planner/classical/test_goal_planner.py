@@ -11,6 +11,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 from unified_planning.io import PDDLReader
+from unified_planning.model import Problem
 from unified_planning.shortcuts import SequentialSimulator
 
 from smartllm_local.benchmark.tasks import load_tasks
@@ -70,6 +71,13 @@ def test_the_problem_names_the_scene_s_objects_the_team_and_the_goal():
     assert not state.get_value(fluents["skill_SwitchOn"](robot[1])).bool_constant_value()
 
 
+def test_a_problem_s_kind_is_computed_once_and_is_what_unified_planning_computes():
+    *_, problem = _problem("kitchen-13")  # a burner's knob: conditional effects
+    kind = problem.problem.kind
+    assert problem.problem.kind is kind and kind == Problem.kind.fget(problem.problem)
+    assert kind.has_conditional_effects()
+
+
 @pytest.mark.parametrize("task_id", ["kitchen-01", "living-03", "bathroom-02"])
 def test_the_pddl_written_parses_back_with_unified_planning(task_id, tmp_path):
     *_, problem = _problem(task_id)
@@ -91,6 +99,7 @@ def test_every_plan_found_dry_runs_with_every_step_succeeding_and_meets_the_goal
     task, team, dry, problem = _problem(task_id)
     found = search(problem, LIMIT)
     assert found.found and found.steps, found.log[-3000:]
+    assert (found.domain_pddl, found.problem_pddl) == pddl(problem)  # the files Fast Downward read, kept
     for step in found.steps:
         outcome = dry.apply(list(step.robots), step.skill, list(step.objects))
         assert outcome.success, f"{step}: {outcome.error}"

@@ -98,19 +98,16 @@ def test_a_restated_allocation_never_strands_a_later_step():
     assert allocated >= 40, allocated
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="known gap: an object named by its type is the instance nearest the robots, who stand "
-                          "elsewhere in the decomposition's dry run than in the allocation's (living-08)")
-def test_a_body_the_coalition_accepts_is_never_a_dead_end_for_the_restated_allocation():
+def test_a_body_the_coalition_accepts_is_not_a_dead_end_for_the_restated_allocation_where_one_of_two_is_broken():
     """Found by drawing other seeds for the test above: living-08's random decomposition, written one sub-task
-    after another, passes the coalition stage, yet from its second body's first line no robot argument keeps
-    the rest of that body possible (12 dead ends). FloorPlan212 has two statues (1.0 kg each, a lift for two of
-    the team): the body breaks one, goes elsewhere, then goes to "the Statue" and picks it up. The
-    decomposition's one robot, coming from the house plant, reaches and picks up the whole one; the team,
-    gathered where it broke the first, would pick up the broken one, which cannot be. Until the two dry runs
-    resolve such a name alike (or the coalition refuses the body), this test fails as expected."""
+    after another, breaks one of FloorPlan212's two statues (1.0 kg each, a lift for two of the team), goes
+    elsewhere, then goes to "the Statue" and picks it up. Where a type's name meant only the instance nearest
+    the robots, the decomposition's one robot reached the whole statue and the team, gathered where it broke
+    the first, the broken one, which cannot be picked up: from that body's first line no robot argument kept
+    the rest possible (12 dead ends). A whole instance is now preferred to a broken one, wherever the robots
+    stand."""
     planned = _plan(find_task(load_tasks(), "living-08"), random.Random(34), sequential=True, budget=4000)
-    assert planned is None or planned[1] == (0, 0)  # refused at coalition, or allocated without a dead end
+    assert planned is not None and planned[1] == (0, 0)
 
 
 def test_a_tight_budget_never_leaves_a_promised_subtask_without_a_step_that_succeeds():
