@@ -7,9 +7,10 @@ from random import Random
 import pytest
 
 from smartllm_local.executor.dry_run import DryRun
+from smartllm_local.world.controller import open_controller
 from smartllm_local.world.navigation import Box
 
-from .helpers import CATALOGUE
+from .helpers import CATALOGUE, run
 
 
 def _nearest_free(cells, box: Box, taken) -> tuple[float, float]:
@@ -39,10 +40,6 @@ def test_members_go_to_the_nearest_free_cells(floor_plan, members):
 def test_a_name_means_a_whole_instance_before_a_broken_one_however_near():
     """FloorPlan212 has two statues: once the nearer is broken, "the Statue" is the other, wherever the robot
     stands (a broken one can be neither picked up nor broken again), on the real Controller."""
-    from smartllm_local.world.controller import open_controller
-
-    from .helpers import run
-
     controller = open_controller(212, agent_count=1)
     try:
         ex = run("GoToObject(robots[0], 'Statue')\nBreakObject(robots[0], 'Statue')\n"

@@ -28,7 +28,6 @@ from typing import Any
 import unified_planning.shortcuts as up
 from unified_planning.engines import PlanGenerationResultStatus as Status
 from unified_planning.engines.pddl_planner import terminate_process
-from unified_planning.io import PDDLWriter
 from unified_planning.plans import ActionInstance
 from up_fast_downward import FastDownwardPDDLPlanner
 
@@ -114,12 +113,6 @@ class Search:
     def shortest(self) -> bool:
         """Whether a plan found is proven the shortest (the admissible search found it)."""
         return self.config == SEARCH
-
-
-def pddl(task: PlanningTask) -> tuple[str, str]:
-    """The domain and the problem, as PDDL files would hold them."""
-    writer = PDDLWriter(task.problem)
-    return writer.get_domain(), writer.get_problem()
 
 
 def search(task: PlanningTask, time_limit: float, *, cpu_limit: int | None = None, config: str = SEARCH) -> Search:

@@ -10,7 +10,7 @@ import itertools
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
-from unified_planning.io import PDDLReader
+from unified_planning.io import PDDLReader, PDDLWriter
 from unified_planning.model import Problem
 from unified_planning.shortcuts import SequentialSimulator
 
@@ -21,7 +21,7 @@ from smartllm_local.goal_language import parse_goal_statement, statement_of
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.classical.planning import plan_to_goal
 from smartllm_local.planner.classical.problem import Unreachable, planning_task, with_future_pieces
-from smartllm_local.planner.classical.search import GREEDY, pddl, search
+from smartllm_local.planner.classical.search import GREEDY, search
 from smartllm_local.planner.classical.threads import parts
 from smartllm_local.scoring import Condition, condition_holds
 from smartllm_local.world.navigation import Box
@@ -81,7 +81,8 @@ def test_a_problem_s_kind_is_computed_once_and_is_what_unified_planning_computes
 @pytest.mark.parametrize("task_id", ["kitchen-01", "living-03", "bathroom-02"])
 def test_the_pddl_written_parses_back_with_unified_planning(task_id, tmp_path):
     *_, problem = _problem(task_id)
-    domain_text, problem_text = pddl(problem)
+    found = search(problem, LIMIT)  # the PDDL a run keeps: the files Fast Downward read
+    domain_text, problem_text = found.domain_pddl, found.problem_pddl
     (tmp_path / "domain.pddl").write_text(domain_text)
     (tmp_path / "problem.pddl").write_text(problem_text)
     read = PDDLReader().parse_problem(str(tmp_path / "domain.pddl"), str(tmp_path / "problem.pddl"))
@@ -99,7 +100,8 @@ def test_every_plan_found_dry_runs_with_every_step_succeeding_and_meets_the_goal
     task, team, dry, problem = _problem(task_id)
     found = search(problem, LIMIT)
     assert found.found and found.steps, found.log[-3000:]
-    assert (found.domain_pddl, found.problem_pddl) == pddl(problem)  # the files Fast Downward read, kept
+    writer = PDDLWriter(problem.problem)  # the files Fast Downward read, kept
+    assert (found.domain_pddl, found.problem_pddl) == (writer.get_domain(), writer.get_problem())
     for step in found.steps:
         outcome = dry.apply(list(step.robots), step.skill, list(step.objects))
         assert outcome.success, f"{step}: {outcome.error}"

@@ -27,7 +27,7 @@ from smartllm_local.planner.classical.planning import (
     goal_planning,
     plan_to_goal,
 )
-from smartllm_local.planner.classical.search import pddl
+from smartllm_local.planner.classical.search import search
 from smartllm_local.planner.classical.site import EFFECT_TYPES, site_planning_task, teams
 from smartllm_local.scoring import condition_holds
 from smartllm_local.worlds import WORLDS, Ai2ThorWorld, SimulatedSite, world_of
@@ -48,7 +48,8 @@ PATROL_TASKS = _tasks(PATROL)
 def test_the_pddl_written_from_the_domain_file_parses_back_with_unified_planning(domain, tmp_path):
     task = next(iter(_tasks(domain).values()))
     problem = site_planning_task(domain, domain.catalogue.team(task.robots), statement_of(task.goals).conditions)
-    domain_text, problem_text = pddl(problem)
+    found = search(problem, LIMIT)  # the PDDL a run keeps: the files Fast Downward read
+    domain_text, problem_text = found.domain_pddl, found.problem_pddl
     (tmp_path / "domain.pddl").write_text(domain_text)
     (tmp_path / "problem.pddl").write_text(problem_text)
     read = PDDLReader().parse_problem(str(tmp_path / "domain.pddl"), str(tmp_path / "problem.pddl"))
