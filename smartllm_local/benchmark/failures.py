@@ -2,9 +2,11 @@
 
 The kinds are tried in the order a task goes through a method, and the first that applies is the task's,
 so they are exclusive; the last two cover every plan that ran, so they are exhaustive (docs/metrics.md
-defines each). A task's stated goals are its goal stage's ``goals.txt`` (where the method ran the stage)
-and its end state is what its plan left, replayed from ``allocated.py`` on the executor the run used (the
-scene as it began where no plan ran), so a run folder is all it needs, and it reads that folder only.
+defines each). A task's stated goals are its goal stage's ``goals.txt`` (where the method ran the stage), with
+the holders the goal-planner read from the model's steps in their place (its allocation record's ``placements``:
+the goal it planned for), and its end state is what its plan left, replayed from ``allocated.py`` on the
+executor the run used (the scene as it began where no plan ran), so a run folder is all it needs, and it reads
+that folder only.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from ..domain import Domain, load_domain
 from ..errors import PlanError, SmartLLMError, UserError
 from ..goal_language import condition_line, parse_goal_statement
 from ..plan_language import read_plan
+from ..planner.readings import merge
 from ..scoring import Condition, condition_holds, containment
 from ..worlds import with_catalogue, world_of
 from .goal_accuracy import unmatched
@@ -135,16 +138,24 @@ def run_failures(folder: str | Path) -> list[Failure]:
 
 
 def _stated(task_folder: Path, domain: Domain) -> list[Condition] | None:
-    """The goal stage's conditions (None where it did not run, refused, or wrote what does not parse)."""
+    """The goal stage's conditions with the steps' placements in their place (None where the stage did not run,
+    refused, or wrote what does not parse)."""
     path = task_folder / "goals.txt"
     if not path.is_file():
         return None
+    states = world_of(domain).task_rules().goal_states
     try:
-        statement = parse_goal_statement(path.read_text(encoding="utf-8"), where=str(path),
-                                         states=world_of(domain).task_rules().goal_states)
+        statement = parse_goal_statement(path.read_text(encoding="utf-8"), where=str(path), states=states)
     except PlanError:
         return None
-    return None if statement.refusal is not None else statement.conditions
+    if statement.refusal is not None:
+        return None
+    record = task_folder / "allocation" / "record.json"
+    placed = json.loads(record.read_text(encoding="utf-8")).get("placements") or [] if record.is_file() else []
+    if not placed:
+        return statement.conditions
+    return merge(statement.conditions, parse_goal_statement("\n".join(placed), where=str(record),
+                                                            states=states).conditions)
 
 
 def _lazy(end: Callable[[], list[dict[str, Any]]]) -> Callable[[Condition], bool]:

@@ -17,14 +17,17 @@ from pathlib import Path
 from typing import Protocol
 
 from ..errors import UserError
-from ..goal_language import parse_goal_statement, statement_of
-from ..plan_language import parse_plan
+from ..goal_language import condition_line, parse_goal_statement, statement_of
+from ..plan_language import Plan, parse_plan
 from ..planner.baselines import allocate_by, random_chooser, rule_chooser
 from ..planner.constraints.feasibility import function_needs
+from ..planner.constraints.goal import goal_vocabulary
 from ..planner.pipeline import Planner
+from ..planner.readings import merge, placements
 from ..planner.result import PlanResult, StageRecord
 from ..planner.steps import Step
 from ..robots import Catalogue
+from ..scoring import Condition
 from ..worlds import Ai2ThorWorld, World
 from .reference_plans import default_plans_dir
 from .tasks import Task
@@ -86,6 +89,10 @@ class DecompositionThenRule:
 class GoalPlanner:
     """The goal stage states the goal; Fast Downward finds the steps for the team (``goal-planner``).
 
+    With ``read_steps`` (the default), the model also decomposes the task (SMART-LLM's decomposition, checked in
+    the world as it is written), and where the decomposition puts a thing the instruction names into a holder it
+    names, the planner's goal has it there, whatever the statement said (:mod:`~..planner.readings`).
+
     With ``oracle``, the task's own goal conditions are the goal and no model runs
     (``goal-planner-oracle``): it measures the planner alone, what it reaches when the goal is right.
     ``world``: the world the tasks are in (none given: the planner's, else AI2-THOR's), whose kind picks the
@@ -93,14 +100,23 @@ class GoalPlanner:
     """
 
     def __init__(self, planner: Planner | None, catalogue: Catalogue, *, time_limit: float, oracle: bool = False,
-                 world: World | None = None):
+                 world: World | None = None, read_steps: bool = True):
         self.planner, self.catalogue, self.time_limit, self.oracle = planner, catalogue, time_limit, oracle
+        self.read_steps = read_steps and not oracle
         self.world = world or (planner.world if planner is not None else Ai2ThorWorld())
         self.name = "goal-planner-oracle" if oracle else "goal-planner"
 
     def steps(self, task: Task) -> list[Step]:
         search = Step("allocation", lambda result: self.allocate(task, result))
-        return [search] if self.oracle else [Step("goal", self.state_goals), search]
+        if self.oracle:
+            return [search]
+        steps = [Step("decomposition", self.decompose)] if self.reads_steps(task) else []
+        return [Step("goal", self.state_goals), *steps, search]
+
+    def reads_steps(self, task: Task) -> bool:
+        """Whether the task's decomposition is read: with ``read_steps``, where its scene has holders to put things
+        in (a site's goals are states alone, so its steps could say nothing the statement does not)."""
+        return self.read_steps and any(goal_vocabulary(self.world.scene(task.floor_plan)).holders.values())
 
     def state_goals(self, result: PlanResult) -> None:
         assert self.planner is not None
@@ -111,6 +127,10 @@ class GoalPlanner:
         elif stated.error:
             result.error = stated.error
 
+    def decompose(self, result: PlanResult) -> None:
+        assert self.planner is not None
+        self.planner.decompose(result)
+
     def allocate(self, task: Task, result: PlanResult) -> None:
         from ..planner.classical.planning import plan_to_goal  # Unified Planning loads only for this method
 
@@ -118,13 +138,23 @@ class GoalPlanner:
             conditions = statement_of(task.goals).conditions
         else:
             conditions = parse_goal_statement(result.stage("goal").output, where="<goal output>").conditions
+        placed = self._placements(result) if self.reads_steps(task) else []
+        conditions = merge(conditions, placed)
         record = plan_to_goal(conditions, task.floor_plan, self.catalogue.team(task.robots), self.catalogue.skills,
                               time_limit=self.time_limit, name=task.id, world=self.world)
+        record.placements = [condition_line(c) for c in placed]
         result.add(record)
         if record.refusal is not None:
             result.refusal = record.refusal
         elif record.error:
             result.error = record.error
+
+    def _placements(self, result: PlanResult) -> list[Condition]:
+        """Where the task's decomposition puts the things its instruction names."""
+        plan = result.stage("decomposition").plan
+        if not isinstance(plan, Plan) or plan.is_refusal:
+            return []
+        return placements(plan, self.world.scene(result.floor_plan), self.catalogue.skills, result.instruction)
 
 
 class Reference:
@@ -164,7 +194,8 @@ MODEL_FREE = frozenset({"reference", "goal-planner-oracle"})
 
 
 def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_dir: Path | None = None, *,
-                planner_time_limit: float = DEFAULT_TIME_LIMIT, world: World | None = None) -> Method:
+                planner_time_limit: float = DEFAULT_TIME_LIMIT, world: World | None = None,
+                read_steps: bool = True) -> Method:
     """The method ``name`` (the reference plans, from ``plans_dir`` or the benchmark's, and the goal-planner
     on the task's own goals need no model); ``planner_time_limit``: the goal-planner's search, per task, in
     ``world`` (the tasks' world: see :class:`GoalPlanner`)."""
@@ -176,7 +207,7 @@ def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_
         if not planner_time_limit > 0:
             raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
         return GoalPlanner(planner, catalogue, time_limit=planner_time_limit, oracle=name == "goal-planner-oracle",
-                           world=world)
+                           world=world, read_steps=read_steps)
     assert planner is not None
     if name == "smartllm":
         return SmartLLM(planner, catalogue)

@@ -182,6 +182,10 @@ def run(
         "as the goal (an oracle: no model); the reference plans (no model).")),
     planner_time_limit: float = typer.Option(DEFAULT_TIME_LIMIT, "--planner-time-limit", metavar="SECONDS", help=(
         "The goal-planner's search time per task; a task whose search runs out of it fails with an error.")),
+    read_steps: bool = typer.Option(True, "--read-steps/--statement-only", help=(
+        "The goal-planner: the model also decomposes the task, and where its steps put a thing the instruction "
+        "names into a holder it names, the goal has it there, whatever the goal statement said "
+        "(--statement-only: the statement alone, a decomposition fewer).")),
     tasks: Path | None = TASKS,
     category: str | None = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
     task: list[str] | None = typer.Option(None, help="Only these task ids (repeatable)."),
@@ -206,7 +210,7 @@ def run(
     runs = _open_runs(ctx.params, options, dom, out, chosen_seeds, tasks_files=tasks_files, method=method, found=found,
                       by_seed=seeds is not None, restart=restart)
     _run_seeds(runs, chosen, options, method, dom, thor_build, labelled=seeds is not None,
-               planner_time_limit=planner_time_limit)
+               planner_time_limit=planner_time_limit, read_steps=read_steps)
     _print_summary(runs, chosen, out, by_seed=seeds is not None, split=split, found=found)
 
 
@@ -300,7 +304,8 @@ def _chosen_tasks(half: list[Task], found: Split | None, category: str | None, i
 
 
 def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: ModelOptions, method: str,
-               dom: Domain, thor_build: Path | None, *, labelled: bool, planner_time_limit: float) -> None:
+               dom: Domain, thor_build: Path | None, *, labelled: bool, planner_time_limit: float,
+               read_steps: bool) -> None:
     """Plan, execute and score the tasks once per seed, resuming each run; Ctrl-C says how far it got."""
     cat = dom.catalogue
     planner_set = None if method in MODEL_FREE else options.open_planners(cat, dom, len(chosen))
@@ -314,7 +319,7 @@ def _run_seeds(runs: list[tuple[int, RunStore]], chosen: list[Task], options: Mo
             seeded = [Planner(p.backend, cat, options.config_for(s), p.examples, p.world) for p in planners] or [None]
             with RunProgress(f"seed {s}" if labelled else "") as progress:
                 methods = [make_method(method, cat, p, dom.plans_dir(), planner_time_limit=planner_time_limit,
-                                       world=world_of(dom)) for p in seeded]
+                                       world=world_of(dom), read_steps=read_steps) for p in seeded]
                 run_benchmark(chosen, methods, cat,
                               out=store.out, store=store, build=str(thor_build) if thor_build else None,
                               progress=progress, domain=dom,

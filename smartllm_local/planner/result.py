@@ -47,6 +47,7 @@ class StageRecord:
     idle_steps: list[str] = field(default_factory=list)  # a decomposition's lines taken out as idle (idle_steps.py)
     dropped_goals: list[str] = field(default_factory=list)  # stated goals out of reach nobody asked for (asked.py)
     overturned: str = ""  # a goal stage's refusal for a thing the scene has, stated again without it (asked.py)
+    placements: list[str] = field(default_factory=list)  # the goal-planner's holders read from the steps (readings.py)
     loops_ended: int = 0  # loops the loop guard ended: in free text, and of whole lines (see decoding.repetition)
     choices: int = 0  # tokens the model chose (not forced), where the backend measures them
     refused: int = 0  # of those, where the model's likeliest token was one the grammar refused

@@ -64,13 +64,13 @@ def check_decomposition(plan: Plan, scene: SceneObjects, skills: SkillSet, condi
     (a dry run more per sub-task)."""
     world = WorldCheck(scene, skills, MAX_SUBTASKS)
     start = world.run.snapshot()
-    calls, failed = _run(world, plan, skip=None)
+    calls, failed = run_subtasks(world, plan)
     met = world.met(conditions)
     lazy = 0
     if idle and conditions:
         for k in range(len(plan.functions)):
             world.run.restore(start)
-            _run(world, plan, skip=k)
+            run_subtasks(world, plan, skip=k)
             lazy += world.met(conditions) >= met
     return Check(calls=calls, failed=failed, goals=len(conditions), met=met, subtasks=len(plan.functions), idle=lazy)
 
@@ -88,8 +88,8 @@ def choose(scores: Sequence[float]) -> int:
     return max(range(len(scores)), key=lambda k: (scores[k], -k))
 
 
-def _run(world: WorldCheck, plan: Plan, skip: int | None) -> tuple[int, int]:
-    """Each sub-task's calls by a robot of its own, in order (all but ``skip``): calls and failures."""
+def run_subtasks(world: WorldCheck, plan: Plan, skip: int | None = None) -> tuple[int, int]:
+    """Each sub-task's calls by a robot of its own, in order (all but ``skip``), in ``world``: calls and failures."""
     by_name = plan.by_name
     calls = failed = 0
     for k, function in enumerate(plan.functions):

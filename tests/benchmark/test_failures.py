@@ -134,6 +134,16 @@ def test_the_plan_is_replayed_to_judge_the_stated_goals_at_the_end(tmp_path, goa
     assert (failure.id, failure.category, failure.kind) == ("kitchen-05", "simple", kind)
 
 
+def test_the_goal_planner_is_judged_on_the_goal_it_planned_for_with_the_steps_placements(tmp_path):
+    # the statement put the apple on the counter; the steps put it in the fridge, and the planner planned for that
+    folder = _run_folder(tmp_path / "run", {"kitchen-05": ("Apple in CounterTop\n", APPLE_IN_FRIDGE.format(close=""),
+                                                           APPLE_ONLY)})
+    assert F.run_failures(folder)[0].kind == F.WRONG_GOAL
+    (folder / "kitchen-05" / "allocation").mkdir()
+    (folder / "kitchen-05" / "allocation" / "record.json").write_text(json.dumps({"placements": ["Apple in Fridge"]}))
+    assert F.run_failures(folder)[0].kind == F.GOAL_NOT_INSTRUCTION
+
+
 def test_the_report_counts_each_kind_per_category(tmp_path):
     folder = _run_folder(tmp_path / "run", {
         "kitchen-05": ("Apple in Fridge\n", APPLE_IN_FRIDGE.format(close=""), APPLE_ONLY),

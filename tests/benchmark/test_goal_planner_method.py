@@ -12,9 +12,13 @@ import pytest
 from smartllm_local.benchmark.methods import GoalPlanner, make_method
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain, starter_domain
+from smartllm_local.goal_language import condition_line
+from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.pipeline import Planner
+from smartllm_local.planner.readings import placements
 from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.planner.steps import run_steps
+from smartllm_local.worlds import scene_objects, world_of
 from tests.conftest import benchmark_run
 
 HOUSEHOLD = load_domain("household")
@@ -37,7 +41,15 @@ def test_the_methods_stages_and_options():
     assert [s.name for s in make_method("goal-planner-oracle", CATALOGUE, None).steps(task)] == ["allocation"]
     method = make_method("goal-planner", CATALOGUE, None, planner_time_limit=5)
     assert isinstance(method, GoalPlanner) and method.time_limit == 5
-    assert [s.name for s in method.steps(task)] == ["goal", "allocation"]
+    assert [s.name for s in method.steps(task)] == ["goal", "decomposition", "allocation"]  # the steps read too
+    statement_only = make_method("goal-planner", CATALOGUE, None, read_steps=False)
+    assert [s.name for s in statement_only.steps(task)] == ["goal", "allocation"]
+    assert [s.name for s in make_method("goal-planner-oracle", CATALOGUE, None, read_steps=True).steps(task)] == [
+        "allocation"]
+    patrol = load_domain("patrol")  # a site: its goals are states alone, so there are no steps' holders to read
+    site_task = load_tasks(patrol.task_files(), domain=patrol)[0]
+    assert [s.name for s in make_method("goal-planner", patrol.catalogue, None, world=world_of(patrol)).steps(
+        site_task)] == ["goal", "allocation"]
 
 
 def _stated(text: str) -> PlanResult:
@@ -50,7 +62,7 @@ def _stated(text: str) -> PlanResult:
 def test_the_planner_plans_for_the_goal_the_goal_stage_stated():
     # the goal stage's record, written here: what the planner reads is the stated goal, never the task's
     task = TASKS["kitchen-05"]  # its own goal is the apple, the tomato and the lettuce in the fridge
-    method = GoalPlanner(None, CATALOGUE, time_limit=300)
+    method = GoalPlanner(None, CATALOGUE, time_limit=300, read_steps=False)
     result = _stated("Apple in Fridge\n")
     method.allocate(task, result)
     record = result.stage("allocation")
@@ -58,10 +70,28 @@ def test_the_planner_plans_for_the_goal_the_goal_stage_stated():
     assert "'Apple|" in record.output and "'Tomato|" not in record.output and "'Lettuce|" not in record.output
 
 
+def test_where_the_steps_put_a_named_thing_is_the_planner_s_goal_for_it():
+    # bedroom-06: "put it away in the nightstand drawer", stated as the side table; the steps use the drawer
+    task = TASKS["bedroom-06"]
+    result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
+    result.add(StageRecord("goal", output="Laptop closed\nLaptop in SideTable\nDeskLamp off\n"))
+    steps = ("def put_away():\n    GoToObject('Laptop')\n    PickupObject('Laptop')\n    GoToObject('Drawer')\n"
+             "    OpenObject('Drawer')\n    PutObject('Laptop', 'Drawer')\n\nput_away()\n")
+    decomposition = StageRecord("decomposition", output=steps)
+    decomposition.plan = parse_plan(steps, form="decomposed", skills=CATALOGUE.skills)
+    result.add(decomposition)
+    GoalPlanner(None, CATALOGUE, time_limit=300).allocate(task, result)
+    record = result.stage("allocation")
+    assert record.placements == ["Laptop in Drawer"] and result.refusal is None, record.raw[-2000:]
+    assert "'SideTable" not in record.output and "PutObject" in record.output
+    assert any(line.startswith("PutObject(robot_list[0], 'Laptop|") and "'Drawer|" in line
+               for line in map(str.strip, record.output.splitlines())), record.output
+
+
 def test_a_stated_goal_the_scene_cannot_meet_is_the_planner_s_refusal():
     task = TASKS["kitchen-05"]
     result = _stated("Fridge on\n")
-    GoalPlanner(None, CATALOGUE, time_limit=300).allocate(task, result)
+    GoalPlanner(None, CATALOGUE, time_limit=300, read_steps=False).allocate(task, result)
     assert result.refusal is not None and result.refused_by == "planner"
 
 
@@ -92,18 +122,26 @@ def test_a_time_limit_that_is_not_positive_is_refused_at_the_command_line(tmp_pa
     assert proc.returncode == 2 and "--planner-time-limit must be a positive" in proc.stderr
 
 
-def test_the_goal_stage_on_smollm2_then_the_planner(tmp_path, smollm2):
-    # the whole method on a model: whatever the tiny model states is what the planner is given
-    task = TASKS["kitchen-01"]
+@pytest.mark.parametrize("read_steps", [False, True], ids=["statement", "statement-and-steps"])
+def test_the_goal_stage_on_smollm2_then_the_planner(tmp_path, smollm2, read_steps):
+    # the whole method on a model: whatever the tiny model states (and, reading its steps too, wherever its
+    # decomposition puts the laptop) is what the planner is given
+    task = TASKS["living-07"]
     planner = Planner(smollm2, CATALOGUE)
-    method = GoalPlanner(planner, CATALOGUE, time_limit=600)
+    method = GoalPlanner(planner, CATALOGUE, time_limit=600, read_steps=read_steps)
     result = PlanResult(task.instruction, task.floor_plan, list(task.robots))
     run_steps(method.steps(task), result)  # the goal stage, then the search on what it stated
     stated = result.stage("goal")
     assert stated.output
     if stated.refusal is None and not stated.error:
-        record = result.stage("allocation")
-        assert record.plan is not None or record.refused_by == "planner" or "holds already" in record.error
+        assert ("decomposition" in result.stages) == read_steps
+        if result.goes_on or "allocation" in result.stages:
+            record = result.stage("allocation")
+            assert record.plan is not None or record.refused_by == "planner" or "holds already" in record.error
+            decomposition = result.stages.get("decomposition")
+            placed = placements(decomposition.plan, scene_objects(task.floor_plan), CATALOGUE.skills,
+                                task.instruction) if read_steps and not decomposition.refusal else []
+            assert record.placements == [condition_line(c) for c in placed]
 
 
 def test_the_oracle_plans_on_a_site_domain_and_its_plans_run_on_the_site(tmp_path):

@@ -1,0 +1,55 @@
+"""Two readings of one instruction by the same model: its goal statement, and where its decomposition leaves things.
+
+The goal stage says in one breath what must hold; the decomposition says it step by step, each step checked in the
+dry-run world as it is written. They fail differently: asked to put the laptop "in the nightstand drawer", the
+1.5B states ``Laptop in SideTable`` and writes ``PutObject('Laptop', 'Drawer')``. Where the two disagree on where
+a thing the instruction names must end up, the steps are taken; a state (on, off, sliced ...) is taken from the
+statement alone, since the decomposition's state changes are mostly its means (a fridge opened, a coffee machine
+left on) rather than what was asked. Measured on the development half (docs/measurements.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ..plan_language import Plan
+from ..scene import SceneObjects
+from ..scoring import Condition
+from ..skills import SkillSet
+from ..world.object_types import base_type
+from .asked import names
+from .constraints.format import MAX_SUBTASKS
+from .constraints.world_check import WorldCheck
+from .verifier import run_subtasks
+
+
+def placements(plan: Plan, scene: SceneObjects, skills: SkillSet, instruction: str) -> list[Condition]:
+    """Where the decomposition's dry run (a robot per sub-task, in order) puts the things the instruction names,
+    in holders it names too: one ``Holder contains Thing`` per thing in a holder it was not in before (a slice
+    counts as its whole; a thing carried or let fall is in none). A holder the instruction never names is the
+    steps' means (a potato warmed in a mug because the microwave is out of reach), not what was asked."""
+    world = WorldCheck(scene, skills, MAX_SUBTASKS)
+    before = _holders(world)
+    run_subtasks(world, plan)
+    after = _holders(world)
+    return sorted({Condition(holder, item=item) for (item, holder) in after - before
+                   if names(instruction, item) and names(instruction, holder)},
+                  key=lambda c: (c.item or "", c.subject))
+
+
+def merge(stated: Sequence[Condition], placed: Sequence[Condition]) -> list[Condition]:
+    """The statement with the steps' holders: a thing the steps placed is where they placed it (its stated
+    holders dropped), and a holder stated empty that now holds something is no longer said to be empty."""
+    moved = {base_type(c.item or "") for c in placed}
+    kept = [c for c in stated if c.item is None or base_type(c.item) not in moved]
+    goals = kept + [c for c in placed if c not in kept]
+    filled = {c.subject for c in goals if c.item is not None}
+    return [c for c in goals if not (c.state == "EMPTY" and c.subject in filled)]
+
+
+def _holders(world: WorldCheck) -> set[tuple[str, str]]:
+    """(thing's type, its direct holder's type) for every thing in a holder now."""
+    objects = world.objects()
+    by_id = {o["objectId"]: o for o in objects}
+    return {(base_type(by_id[child]["objectType"]), o["objectType"])
+            for o in objects for child in o.get("receptacleObjectIds") or () if child in by_id}

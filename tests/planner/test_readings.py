@@ -1,0 +1,62 @@
+"""The goal-planner's second reading of an instruction: where a decomposition's steps leave the things the
+instruction names, on the real dry-run world, and how those holders overrule the goal statement's."""
+
+from __future__ import annotations
+
+from smartllm_local.domain import load_domain
+from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.readings import merge, placements
+from smartllm_local.scoring import Condition
+from smartllm_local.worlds import scene_objects
+
+SKILLS = load_domain("household").catalogue.skills
+BEDROOM = scene_objects(310)  # a laptop, a pen, a box, drawers, a side table
+
+
+def _plan(*bodies: str):
+    functions = "".join(f"def part{k}():\n" + "".join(f"    {line}\n" for line in body.split("; "))
+                        for k, body in enumerate(bodies))
+    calls = "".join(f"part{k}()\n" for k in range(len(bodies)))
+    return parse_plan(functions + calls, form="decomposed", skills=SKILLS, scene_types=BEDROOM.types)
+
+
+def test_a_named_thing_is_where_the_steps_leave_it():
+    plan = _plan("GoToObject('Laptop'); PickupObject('Laptop'); GoToObject('Drawer'); OpenObject('Drawer'); "
+                 "PutObject('Laptop', 'Drawer'); CloseObject('Drawer')")
+    assert placements(plan, BEDROOM, SKILLS, "Put the laptop away in the nightstand drawer.") == [
+        Condition("Drawer", item="Laptop")]
+
+
+def test_only_things_the_instruction_names_and_only_where_they_were_put():
+    # the pen goes into the box as well, but the instruction never names it; the laptop is carried, then let fall
+    plan = _plan("GoToObject('Pen'); PickupObject('Pen'); GoToObject('Box'); PutObject('Pen', 'Box')",
+                 "GoToObject('Laptop'); PickupObject('Laptop'); DropHandObject('Laptop')")
+    assert placements(plan, BEDROOM, SKILLS, "Move the laptop.") == []
+    assert placements(plan, BEDROOM, SKILLS, "Put the pen in the box.") == [Condition("Box", item="Pen")]
+
+
+def test_a_thing_left_where_it_was_is_no_placement():
+    plan = _plan("GoToObject('Laptop'); CloseObject('Laptop')")
+    assert placements(plan, BEDROOM, SKILLS, "Close the laptop.") == []
+
+
+def test_the_steps_holder_replaces_the_stated_one_and_the_rest_of_the_statement_stands():
+    stated = [Condition("Laptop", state="CLOSED"), Condition("SideTable", item="Laptop"),
+              Condition("DeskLamp", state="OFF"), Condition("Bed", item="Pillow")]
+    assert merge(stated, [Condition("Drawer", item="Laptop")]) == [
+        Condition("Laptop", state="CLOSED"), Condition("DeskLamp", state="OFF"), Condition("Bed", item="Pillow"),
+        Condition("Drawer", item="Laptop")]
+
+
+def test_a_holder_said_to_be_empty_that_the_steps_fill_is_no_longer_said_empty():
+    stated = [Condition("BathtubBasin", item="Cloth"), Condition("CounterTop", state="EMPTY"),
+              Condition("GarbageCan", item="Plunger")]
+    assert merge(stated, [Condition("CounterTop", item="Cloth")]) == [
+        Condition("GarbageCan", item="Plunger"), Condition("CounterTop", item="Cloth")]
+
+
+def test_a_placement_of_a_slice_overrules_the_whole_and_nothing_placed_changes_nothing():
+    stated = [Condition("Apple", state="SLICED"), Condition("CounterTop", item="Apple")]
+    assert merge(stated, []) == stated
+    assert merge(stated, [Condition("Fridge", item="AppleSliced")]) == [
+        Condition("Apple", state="SLICED"), Condition("Fridge", item="AppleSliced")]
