@@ -2,9 +2,9 @@
 
 The goal stage says in one breath what must hold; the decomposition says it step by step, each step checked in the
 dry-run world as it is written. They fail differently: asked to put the laptop "in the nightstand drawer", the
-1.5B states ``Laptop in SideTable`` and writes ``PutObject('Laptop', 'Drawer')``. Where the two disagree on where
-a thing the instruction names must end up, the steps are taken; a state (on, off, sliced ...) is taken from the
-statement alone, since the decomposition's state changes are mostly its means (a fridge opened, a coffee machine
+1.5B states ``Laptop in SideTable`` and writes ``PutObject('Laptop', 'Drawer')``. Where the steps put a thing the
+instruction names into a holder it names, the goal has the thing there; a state (on, off, sliced ...) is taken from
+the statement alone, since the decomposition's state changes are mostly its means (a fridge opened, a coffee machine
 left on) rather than what was asked. Measured on the development half (docs/measurements.md).
 """
 
