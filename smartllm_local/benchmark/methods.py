@@ -139,7 +139,8 @@ class GoalPlanner:
         else:
             conditions = parse_goal_statement(result.stage("goal").output, where="<goal output>").conditions
         placed = self._placements(result) if self.reads_steps(task) else []
-        conditions = merge(conditions, placed)
+        if placed:
+            conditions = merge(conditions, placed)
         record = plan_to_goal(conditions, task.floor_plan, self.catalogue.team(task.robots), self.catalogue.skills,
                               time_limit=self.time_limit, name=task.id, world=self.world)
         record.placements = [condition_line(c) for c in placed]

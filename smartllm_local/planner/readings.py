@@ -39,12 +39,12 @@ def placements(plan: Plan, scene: SceneObjects, skills: SkillSet, instruction: s
 
 def merge(stated: Sequence[Condition], placed: Sequence[Condition]) -> list[Condition]:
     """The statement with the steps' holders: a thing the steps placed is where they placed it (its stated
-    holders dropped), and a holder stated empty that now holds something is no longer said to be empty."""
+    holders dropped), and a holder stated empty that the steps fill is no longer said to be empty."""
     moved = {base_type(c.item or "") for c in placed}
-    kept = [c for c in stated if c.item is None or base_type(c.item) not in moved]
-    goals = kept + [c for c in placed if c not in kept]
-    filled = {c.subject for c in goals if c.item is not None}
-    return [c for c in goals if not (c.state == "EMPTY" and c.subject in filled)]
+    filled = {c.subject for c in placed}
+    kept = [c for c in stated if not ((c.item is not None and base_type(c.item) in moved)
+                                      or (c.state == "EMPTY" and c.subject in filled))]
+    return kept + [c for c in placed if c not in kept]
 
 
 def _holders(world: WorldCheck) -> set[tuple[str, str]]:
