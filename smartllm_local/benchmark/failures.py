@@ -151,11 +151,15 @@ def _stated(task_folder: Path, domain: Domain) -> list[Condition] | None:
     if statement.refusal is not None:
         return None
     record = task_folder / "allocation" / "record.json"
-    placed = json.loads(record.read_text(encoding="utf-8")).get("placements") or [] if record.is_file() else []
-    if not placed:
-        return statement.conditions
-    return merge(statement.conditions, parse_goal_statement("\n".join(placed), where=str(record),
-                                                            states=states).conditions)
+    try:
+        placed = json.loads(record.read_text(encoding="utf-8")).get("placements") or [] if record.is_file() else []
+        if not placed:
+            return statement.conditions
+        return merge(statement.conditions, parse_goal_statement("\n".join(placed), where=str(record),
+                                                                states=states).conditions)
+    except (OSError, ValueError, AttributeError, PlanError) as exc:
+        raise UserError(f"{record}: the placements the goal-planner read cannot be read ({exc}): run the task "
+                        "again (benchmark run resumes it) to judge its failure") from exc
 
 
 def _lazy(end: Callable[[], list[dict[str, Any]]]) -> Callable[[Condition], bool]:

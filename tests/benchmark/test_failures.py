@@ -142,6 +142,10 @@ def test_the_goal_planner_is_judged_on_the_goal_it_planned_for_with_the_steps_pl
     (folder / "kitchen-05" / "allocation").mkdir()
     (folder / "kitchen-05" / "allocation" / "record.json").write_text(json.dumps({"placements": ["Apple in Fridge"]}))
     assert F.run_failures(folder)[0].kind == F.GOAL_NOT_INSTRUCTION
+    for damaged in ('{"placements": ["Apple in"]}', '{"placements": ', '["Apple in Fridge"]'):
+        (folder / "kitchen-05" / "allocation" / "record.json").write_text(damaged)
+        with pytest.raises(UserError, match="record.json: the placements the goal-planner read cannot be read"):
+            F.run_failures(folder)
 
 
 def test_the_report_counts_each_kind_per_category(tmp_path):
