@@ -23,6 +23,7 @@ from ..planner.baselines import allocate_by, random_chooser, rule_chooser
 from ..planner.constraints.feasibility import function_needs
 from ..planner.constraints.goal import goal_vocabulary
 from ..planner.pipeline import Planner
+from ..planner.progress import SILENT
 from ..planner.readings import merge, placements
 from ..planner.result import PlanResult, StageRecord
 from ..planner.steps import Step
@@ -141,9 +142,12 @@ class GoalPlanner:
         placed = self._placements(result) if self.reads_steps(task) else []
         if placed:
             conditions = merge(conditions, placed)
+        progress = self.planner.progress if self.planner is not None else SILENT
+        progress.stage_started("allocation", 0)  # a search, which a plan's display shows as a stage too
         record = plan_to_goal(conditions, task.floor_plan, self.catalogue.team(task.robots), self.catalogue.skills,
                               time_limit=self.time_limit, name=task.id, world=self.world)
         record.placements = [condition_line(c) for c in placed]
+        progress.stage_ended(record)
         result.add(record)
         if record.refusal is not None:
             result.refusal = record.refusal

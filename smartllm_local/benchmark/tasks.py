@@ -124,6 +124,13 @@ def _check_line(data: Any, catalogue: Catalogue, where: str, world: World) -> tu
     return task, []
 
 
+def given_task(instruction: str, floor_plan: str, robots: Sequence[int]) -> Task:
+    """A task given on the command line rather than read from a task file: an instruction, a scene and a team,
+    with no goal conditions to score it by (what a method plans from, as it plans a benchmark task)."""
+    return Task(id="given", category="", floor_plan=floor_plan, instruction=instruction, robots=tuple(robots),
+                goals=(), trans=None, max_trans=None, feasible=True, source="the command line")
+
+
 def load_tasks(paths: Path | str | Sequence[Path | str] | None = None, *,
                catalogue: Catalogue | None = None, domain: Domain | None = None) -> list[Task]:
     """Read task files (default: the domain's benchmark/*.jsonl, household's by default) and check every line.

@@ -11,7 +11,7 @@ from typing import Any
 
 import typer
 
-from ..benchmark.methods import DEFAULT_TIME_LIMIT, METHODS, MODEL_FREE, make_method
+from ..benchmark.methods import METHODS, MODEL_FREE, make_method
 from ..benchmark.results import summary_table, variability_table
 from ..benchmark.run import run_benchmark
 from ..benchmark.run_store import RunStore
@@ -38,6 +38,8 @@ from .options import (
     DOMAIN,
     DOMAIN_HELP,
     MAX_SEED,
+    PLANNER_TIME_LIMIT,
+    READ_STEPS,
     TASKS,
     THOR_BUILD,
     ModelOptions,
@@ -180,12 +182,8 @@ def run(
         "or by a rule (a capable robot, else the smallest capable team); the model states the goal and Fast "
         "Downward finds the steps; the same with the task's own goal conditions "
         "as the goal (an oracle: no model); the reference plans (no model).")),
-    planner_time_limit: float = typer.Option(DEFAULT_TIME_LIMIT, "--planner-time-limit", metavar="SECONDS", help=(
-        "The goal-planner's search time per task; a task whose search runs out of it fails with an error.")),
-    read_steps: bool = typer.Option(True, "--read-steps/--statement-only", help=(
-        "The goal-planner: the model also decomposes the task, and where its steps put a thing the instruction "
-        "names into a holder it names, the goal has it there, whatever the goal statement said "
-        "(--statement-only: the statement alone, a decomposition fewer).")),
+    planner_time_limit: float = PLANNER_TIME_LIMIT,
+    read_steps: bool = READ_STEPS,
     tasks: Path | None = TASKS,
     category: str | None = typer.Option(None, help=f"Only this category: {', '.join(CATEGORIES)}."),
     task: list[str] | None = typer.Option(None, help="Only these task ids (repeatable)."),

@@ -14,6 +14,7 @@ from typing import Any
 
 import typer
 
+from ..benchmark.methods import DEFAULT_TIME_LIMIT
 from ..domain import Domain, load_domain
 from ..errors import UserError
 from ..planner.backends import (
@@ -302,6 +303,12 @@ CATALOGUE = typer.Option(None, help=CATALOGUE_HELP)
 THOR_BUILD = typer.Option(None, help=THOR_BUILD_HELP)
 TASKS = typer.Option(None, help="A task file (default: the project's benchmark).")
 DOMAIN = typer.Option(None, help=DOMAIN_HELP)
+PLANNER_TIME_LIMIT = typer.Option(DEFAULT_TIME_LIMIT, "--planner-time-limit", metavar="SECONDS", help=(
+    "The goal-planner's search time per task; a task whose search runs out of it fails with an error."))
+READ_STEPS = typer.Option(True, "--read-steps/--statement-only", help=(
+    "The goal-planner: the model also decomposes the task, and where its steps put a thing the instruction "
+    "names into a holder it names, the goal has it there, whatever the goal statement said "
+    "(--statement-only: the statement alone, a decomposition fewer)."))
 
 
 def _check_ranges(*, backend: str, temperature: float, seed: int, candidates: int, goal_candidates: int,

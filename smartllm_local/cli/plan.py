@@ -5,13 +5,15 @@ from __future__ import annotations
 
 import json
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import typer
 
+from ..benchmark.methods import METHODS, MODEL_FREE, make_method
 from ..benchmark.run import execute_scored
-from ..benchmark.tasks import Task, find_task, has_words, load_tasks
+from ..benchmark.tasks import Task, find_task, given_task, has_words, load_tasks
 from ..benchmark.trace_file import TRACE, write_trace
 from ..domain import Domain, load_domain
 from ..errors import UserError
@@ -33,6 +35,8 @@ from .execute import metrics_lines
 from .options import (
     CATALOGUE,
     DOMAIN,
+    PLANNER_TIME_LIMIT,
+    READ_STEPS,
     TASKS,
     THOR_BUILD,
     ModelOptions,
@@ -41,6 +45,10 @@ from .options import (
     refuse_household_options,
 )
 from .progress import PlanProgress
+
+#: The methods ``plan`` offers: those that plan with the model (the others plan from a benchmark task's goals or
+#: its reference plan, in ``benchmark run``).
+PLAN_METHODS = tuple(m for m in METHODS if m not in MODEL_FREE)
 
 
 @model_options(without=("parallel",))  # one task: nothing to plan at once with it
@@ -56,6 +64,11 @@ def plan_command(
     dispatch: Path | None = typer.Option(None, "--dispatch", metavar="LAB.toml", help=(
         "Run the plan on the lab's robots: each skill call goes to the function this dispatch file names "
         "for it (see smartllm-local dispatch); exit 1 if an action failed.")),
+    method: str = typer.Option("smartllm", help=(
+        f"{', '.join(PLAN_METHODS)}: SMART-LLM's stages; the model's decomposition with robots at random (seeded) "
+        "or by a rule; the model states the goal and Fast Downward finds the steps (see `benchmark run`).")),
+    planner_time_limit: float = PLANNER_TIME_LIMIT,
+    read_steps: bool = READ_STEPS,
     goals: bool = typer.Option(False, "--goals", help=(
         "Also state the task's goals (the goal stage: what must hold when it is done, from the instruction and "
         "the scene alone); print them after the plan and write goals.txt with --out.")),
@@ -69,23 +82,26 @@ def plan_command(
     *,
     model_settings: dict[str, Any],
 ) -> None:
-    """Plan a task with a local model: decomposition, coalition, allocation; print the allocated plan."""
+    """Plan a task with a local model: decomposition, coalition, allocation (or another --method); print the
+    allocated plan."""
     options = ModelOptions(**model_settings)
+    _check_method(method, planner_time_limit)
     if out is not None:
         check_output_folder(out, "--out")
     dom = with_catalogue(load_domain(domain), catalogue)
     refuse_household_options(dom, floor_plan, thor_build)
-    if goals or options.config.goal_check:
+    if goals or options.config.goal_check or method == "goal-planner":
         load_goal_examples(dom.prompts_dir())  # a domain without them fails before the model loads
     instruction, scene, team_ids, chosen = _what_to_plan(dom, instruction, floor_plan, robots, tasks, task)
     team = dom.catalogue.team(team_ids)
     functions = _where_to_run(dom, team, execute=execute, dispatch=dispatch, thor_build=thor_build)
-    planner, result, stated = _plan(options, dom, instruction, scene, team_ids, quiet=quiet, goals=goals)
+    how = Method(method, chosen or given_task(instruction, scene, team_ids), planner_time_limit, read_steps)
+    planner, result, stated = _plan(options, dom, how, quiet=quiet, goals=goals)
     for notice in result.notices:
         print(f"notice: {notice}", file=sys.stderr)
     execution, scores, dispatched = _run_plan(result, chosen, dom, team, functions, execute=execute,
                                               thor_build=thor_build)
-    extra = _record(planner, scores, dispatched, stated)
+    extra = _record(planner, method, scores, dispatched, stated)
     if out is not None:
         _write_out(out, result, extra, execution, scores)
     _print_result(result, extra, scores, dispatched, as_json, chosen)
@@ -124,11 +140,11 @@ def _run_plan(result: PlanResult, chosen: Task | None, dom: Domain, team: list[R
     return execution, scores, dispatched
 
 
-def _record(planner: Planner, scores: Scores | None, dispatched: Execution | None,
+def _record(planner: Planner, method: str, scores: Scores | None, dispatched: Execution | None,
             stated: StatedGoals | None) -> dict[str, Any]:
-    """What the plan's record holds besides the plan (the model, and the metrics, dispatch and goals where they
-    were asked for): printed with ``--json`` and written with ``--out``."""
-    extra: dict[str, Any] = {"model": planner.backend.model, "backend": planner.backend.name,
+    """What the plan's record holds besides the plan (the method, the model, and the metrics, dispatch and goals
+    where they were asked for): printed with ``--json`` and written with ``--out``."""
+    extra: dict[str, Any] = {"method": method, "model": planner.backend.model, "backend": planner.backend.name,
                              "chat_template": planner.chat_status}
     if scores is not None:
         extra["metrics"] = scores.metrics()
@@ -151,21 +167,49 @@ def _write_out(out: Path, result: PlanResult, extra: dict[str, Any], execution: 
         (out / TRACE).unlink(missing_ok=True)
 
 
-def _plan(options: ModelOptions, dom: Domain, instruction: str, scene: str, team_ids: list[int], *,
-          quiet: bool, goals: bool) -> tuple[Planner, PlanResult, StatedGoals | None]:
-    """Load the model and plan, then state the goals if asked, each stage shown on stderr as it runs (unless
-    ``quiet``)."""
+@dataclass(frozen=True)
+class Method:
+    """The method ``plan`` runs (:data:`PLAN_METHODS`), on which task, with the goal-planner's settings."""
+
+    name: str
+    task: Task
+    planner_time_limit: float
+    read_steps: bool
+
+
+def _check_method(method: str, planner_time_limit: float) -> None:
+    """A method ``plan`` cannot run, or a time limit the goal-planner cannot keep, is an error before anything
+    loads."""
+    if method in MODEL_FREE:
+        raise UserError(f"--method {method} plans with no model, from a benchmark task's "
+                        f"{'goal conditions' if method.startswith('goal-planner') else 'reference plan'}: run it "
+                        f"with `smartllm-local benchmark run --method {method} --task ID --out DIR`; plan offers "
+                        f"{', '.join(PLAN_METHODS)}")
+    if method not in PLAN_METHODS:
+        raise UserError(f"--method must be one of {', '.join(PLAN_METHODS)}, not {method!r}")
+    if not planner_time_limit > 0:
+        raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
+
+
+def _plan(options: ModelOptions, dom: Domain, how: Method, *, quiet: bool,
+          goals: bool) -> tuple[Planner, PlanResult, StatedGoals | None]:
+    """Load the model and plan with the method, then state the goals if asked, each stage shown on stderr as it
+    runs (unless ``quiet``)."""
+    task = how.task
     with PlanProgress(quiet=quiet) as progress:
         model = options.model or ("the served model" if options.backend == "server" else default_model())
         with progress.loading(f"the model {model}"):
             planner = options.planners(dom.catalogue, dom)[0]
         try:
             planner.progress, progress.kept = progress, examples_kept(planner.backend)
-            result = planner.plan(instruction, scene, team_ids)
+            method = make_method(how.name, dom.catalogue, planner, planner_time_limit=how.planner_time_limit,
+                                 world=world_of(dom), read_steps=how.read_steps)
+            result = planner.plan(task.instruction, task.floor_plan, task.robots, steps=method.steps(task))
             stated = None
             if goals:  # the goal check's statement where it ran; else the goal stage now, written to --out too
                 ran = result.stages.get("goal")
-                stated = restated_goals(ran, planner.scene(scene)) if ran else planner.goals(instruction, scene)
+                stated = restated_goals(ran, planner.scene(task.floor_plan)) if ran else \
+                    planner.goals(task.instruction, task.floor_plan)
                 if ran is None:
                     result.add(stated.record)
             return planner, result, stated
@@ -226,7 +270,7 @@ def _print_result(result: PlanResult, extra: dict[str, Any], scores: Scores | No
         typer.echo(json.dumps({"allocated": result.allocated, "refusal": result.refusal,
                                "error": result.error or None, **extra}))
         return
-    typer.echo(result.allocated or f"# no valid plan: {result.error}", nl=False)
+    typer.echo(result.allocated or f"# no valid plan: {result.error}\n", nl=False)
     if scores is not None:
         fix = f"task {chosen.id} gives none" if chosen is not None else \
             "a free instruction has neither: plan --task ID to score against a task's"

@@ -108,7 +108,8 @@ class PlanProgress:
 
     def stage_started(self, stage: str, prompt_tokens: int) -> None:
         if self.bar is not None:
-            self._task = self.bar.add_task(stage, detail=f"evaluating the prompt ({prompt_tokens:,} tokens)")
+            self._task = self.bar.add_task(stage, detail=f"evaluating the prompt ({prompt_tokens:,} tokens)"
+                                           if prompt_tokens else "planning without the model")
 
     def prompt_evaluated(self, stage: str, *, tokens: int, shared: int, reused: int, seconds: float) -> None:
         self._writing_since = time.perf_counter()
@@ -141,7 +142,10 @@ class PlanProgress:
 
 def stage_summary(record: StageRecord) -> str:
     """A finished stage in a line: its prompt, the tokens it wrote (the model's and those the grammar forced) and
-    how fast, and its time."""
+    how fast, and its time; for a stage no model wrote (a search), the first line it wrote, and its time."""
+    if not (record.prompt_tokens or record.generated_tokens or record.forced_tokens):  # no model wrote it
+        said = record.error or next((line.lstrip("# ") for line in record.output.splitlines() if line.strip()), "")
+        return f"{said}; {record.seconds:.1f} s in all"
     writing = max(0.0, record.seconds - record.prompt_seconds)
     return (f"prompt {record.prompt_tokens:,} tokens ({record.reused_tokens:,} reused) in "
             f"{record.prompt_seconds:.1f} s; {_written(record.generated_tokens, record.forced_tokens)} in "

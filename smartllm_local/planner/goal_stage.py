@@ -22,6 +22,7 @@ from .asked import coverage, named_in_full, present_yet_refused
 from .backends.base import Backend
 from .candidates import mean_logprob, write_all
 from .constraints.goal import GoalConstraint, goal_vocabulary
+from .progress import SILENT
 from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
 from .result import PlanResult, StageRecord
 from .stages import Fitted, fit_prompt, run_stage
@@ -116,7 +117,8 @@ def _candidate(planner: Planner, backend: Backend, k: int, prompt: Fitted, scene
     task = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=[])
     rng = planner.stage_rng(task, STAGE if k == 0 else f"{STAGE} candidate {k}")
     run_stage(record, backend, prompt, constraint, output_budget=GOAL_BUDGET,
-              sampling=planner.config.candidates.sampling(planner.config.sampling, k), rng=rng)
+              sampling=planner.config.candidates.sampling(planner.config.sampling, k), rng=rng,
+              progress=planner.progress if k == 0 else SILENT)
     if constraint is not None and constraint.must_refuse:
         record.refused_by = "grammar"
     elif record.refusal is not None:

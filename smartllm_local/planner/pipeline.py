@@ -413,12 +413,14 @@ class Planner:
 
     # ------------------------------------------------------------------ task
 
-    def plan(self, instruction: str, floor_plan: str | int, robot_ids: Sequence[int]) -> PlanResult:
-        """All stages for one task (:meth:`steps`); the allocated plan (or the refusal) is in the result."""
+    def plan(self, instruction: str, floor_plan: str | int, robot_ids: Sequence[int],
+             steps: Sequence[Step] | None = None) -> PlanResult:
+        """All stages for one task (:meth:`steps`, or another method's ``steps``); the allocated plan (or the
+        refusal) is in the result."""
         self.catalogue.team(robot_ids)  # an unknown robot fails here, before any stage runs
         scene = self.scene(floor_plan)
         result = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=list(robot_ids))
-        run_steps(self.steps(), result)
+        run_steps(self.steps() if steps is None else steps, result)
         self.conclude(result)
         return result
 

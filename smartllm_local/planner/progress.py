@@ -18,7 +18,8 @@ class StageProgress(Protocol):
     """The events of one stage, in this order: started, prompt evaluated, tokens written (any number), ended."""
 
     def stage_started(self, stage: str, prompt_tokens: int) -> None:
-        """``stage`` begins: its prompt of ``prompt_tokens`` tokens is about to be evaluated."""
+        """``stage`` begins: its prompt of ``prompt_tokens`` tokens is about to be evaluated (0 for a stage no model
+        writes, as the goal-planner's search; only its end follows)."""
 
     def prompt_evaluated(self, stage: str, *, tokens: int, shared: int, reused: int, seconds: float) -> None:
         """The prompt is evaluated, in ``seconds``: ``reused`` of its ``tokens`` came from states kept by an

@@ -181,6 +181,21 @@ def test_methods_and_seeds_are_checked_before_any_work(tmp_path, args, parts):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("args, parts", [
+    (["--method", "reference"], ["--method reference plans with no model, from a benchmark task's reference plan",
+                                 "benchmark run --method reference --task ID --out DIR",
+                                 "plan offers smartllm, decomp-random, decomp-rule, goal-planner"]),
+    (["--method", "goal-planner-oracle"], ["from a benchmark task's goal conditions"]),
+    (["--method", "pddl"], ["--method must be one of smartllm, decomp-random, decomp-rule, goal-planner, not 'pddl'"]),
+    (["--method", "goal-planner", "--planner-time-limit", "0"],
+     ["--planner-time-limit must be a positive number of seconds, not 0"]),
+])
+def test_a_method_plan_cannot_run_is_refused_before_any_work(tmp_path, args, parts):
+    one_line_error(cli("plan", "Put the apple in the fridge", "--floor-plan", "6", "--robots", "1", "--out", "out",
+                       *args, cwd=tmp_path), *parts)
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("command", [
     ["plan", "Put the apple in the fridge", "--floor-plan", "6", "--robots", "1"],
     ["benchmark", "run"],

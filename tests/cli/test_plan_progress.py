@@ -79,3 +79,25 @@ def test_a_backend_that_does_not_say_what_it_reused_gets_no_explanation():
     log = io.StringIO()
     _plan(PlanProgress(Console(file=log, force_terminal=False), kept=None))
     assert "evaluated" not in log.getvalue() and len(log.getvalue().splitlines()) == 3
+
+
+@pytest.mark.parametrize("terminal", [True, False])
+def test_a_stage_no_model_writes_shows_what_it_found_or_its_error(terminal):
+    """The goal-planner's search: no prompt to evaluate, no tokens; its line says what it found, or why not."""
+    out = io.StringIO()
+    found = StageRecord("allocation", output="# goal-planner: Fast Downward's shortest plan, 6 steps\n#\nimport x\n",
+                        seconds=0.42)
+    failed = StageRecord("allocation", error="the goal holds already: there is nothing to plan", seconds=0.7)
+    with PlanProgress(Console(file=out, force_terminal=terminal, width=250)) as progress:
+        for record in (found, failed):
+            progress.stage_started("allocation", 0)
+            progress.stage_ended(record)
+    text = ESCAPE.sub("", out.getvalue())
+    assert "evaluating the prompt" not in text and "tokens" not in text
+    assert "goal-planner: Fast Downward's shortest plan, 6 steps; 0.4 s in all" in text
+    assert "the goal holds already: there is nothing to plan; 0.7 s in all" in text
+    if not terminal:
+        assert text.splitlines() == ["allocation: goal-planner: Fast Downward's shortest plan, 6 steps; 0.4 s in all",
+                                     "allocation: the goal holds already: there is nothing to plan; 0.7 s in all"]
+    else:
+        assert "planning without the model" in text

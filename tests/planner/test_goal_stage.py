@@ -198,7 +198,8 @@ def test_the_measure_reads_goals_only_after_the_stage_answers():
 
 @pytest.fixture(scope="module")
 def goals_run(tmp_path_factory):
-    """SmolLM2 plans kitchen-01 with --goals, from a copy of the task file with every task's goals removed."""
+    """SmolLM2 plans kitchen-02 with the goal-planner and --goals, from a copy of the task file with every task's
+    goals removed: the goal stage, the decomposition it reads, Fast Downward's search."""
     root = tmp_path_factory.mktemp("goals")
     lines = []
     for path in HOUSEHOLD.task_files():
@@ -210,14 +211,14 @@ def goals_run(tmp_path_factory):
     tasks.write_text("\n".join(lines) + "\n")
     out = root / "run"
     proc = subprocess.run([sys.executable, "-m", "smartllm_local", "plan", "--tasks", str(tasks), "--task",
-                           "kitchen-01", "--no-coalition", "--goals", "--out", str(out)],
+                           "kitchen-02", "--method", "goal-planner", "--goals", "--out", str(out)],
                           capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr
-    return out, proc.stdout
+    return out, proc.stdout, proc.stderr
 
 
 def test_plan_goals_writes_the_goal_stage_beside_the_others(goals_run):
-    out, stdout = goals_run
+    out, stdout, _ = goals_run
     stated = (out / "goals.txt").read_text()
     assert {p.name for p in (out / "goal").iterdir()} >= {"prompt.txt", "grammar.gbnf", "raw_output.txt"}
     assert "# Your task" in (out / "goal" / "prompt.txt").read_text()
@@ -229,12 +230,29 @@ def test_plan_goals_writes_the_goal_stage_beside_the_others(goals_run):
     assert recorded["stated"] == ([] if statement.refusal else statement.text().splitlines())
 
 
+def test_plan_with_the_goal_planner_plans_its_stated_goals_and_shows_its_search(goals_run):
+    """``plan --method goal-planner``: the goal stage, the decomposition read for its placements, and Fast
+    Downward's search as the allocation, each shown as it ends, written to --out as a benchmark run writes them."""
+    out, stdout, stderr = goals_run
+    assert json.loads((out / "result.json").read_text())["method"] == "goal-planner"
+    assert {p.name for p in out.iterdir()} >= {"goal", "decomposition", "allocation", "allocated.py"}
+    assert not (out / "coalition").exists()
+    allocated = (out / "allocated.py").read_text()
+    assert allocated.startswith(("# goal-planner: Fast Downward's", "# INFEASIBLE: the planner found no plan"))
+    assert stdout.startswith(allocated)
+    if not allocated.startswith("# INFEASIBLE"):  # the PDDL it searched is kept
+        assert (out / "allocation" / "prompt.txt").read_text().startswith(";; domain.pddl")
+    shown = [line for line in stderr.splitlines() if not line.startswith("notice:")]
+    assert [line.split(":")[0] for line in shown][-2:] == ["decomposition", "allocation"]
+    assert allocated.splitlines()[0].lstrip("# ") in shown[-1]
+
+
 def test_the_goal_stage_states_the_same_goals_without_the_task_s_goals(goals_run, smollm2):
     """The run above never had kitchen-01's goals; stated from the real task, the goals are the same."""
     from smartllm_local.cli.options import ModelOptions
     from smartllm_local.planner.pipeline import Planner
 
-    task = next(t for t in TASKS if t.id == "kitchen-01")
+    task = next(t for t in TASKS if t.id == "kitchen-02")
     assert task.goals
     planner = Planner(smollm2, HOUSEHOLD.catalogue, ModelOptions(model="smollm2").config)
     assert planner.goals(task.instruction, task.floor_plan).record.output == (goals_run[0] / "goals.txt").read_text()
