@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import json
 import sys
-from dataclasses import dataclass
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import typer
 
-from ..benchmark.methods import METHODS, MODEL_FREE, make_method
+from ..benchmark.methods import METHODS, MODEL_FREE, Method, make_method
 from ..benchmark.run import execute_scored
 from ..benchmark.tasks import Task, find_task, given_task, has_words, load_tasks
 from ..benchmark.trace_file import TRACE, write_trace
@@ -95,8 +95,11 @@ def plan_command(
     instruction, scene, team_ids, chosen = _what_to_plan(dom, instruction, floor_plan, robots, tasks, task)
     team = dom.catalogue.team(team_ids)
     functions = _where_to_run(dom, team, execute=execute, dispatch=dispatch, thor_build=thor_build)
-    how = Method(method, chosen or given_task(instruction, scene, team_ids), planner_time_limit, read_steps)
-    planner, result, stated = _plan(options, dom, how, quiet=quiet, goals=goals)
+    planner, result, stated = _plan(options, dom, chosen or given_task(instruction, scene, team_ids),
+                                    lambda planner: make_method(method, dom.catalogue, planner,
+                                                                planner_time_limit=planner_time_limit,
+                                                                world=world_of(dom), read_steps=read_steps),
+                                    quiet=quiet, goals=goals)
     for notice in result.notices:
         print(f"notice: {notice}", file=sys.stderr)
     execution, scores, dispatched = _run_plan(result, chosen, dom, team, functions, execute=execute,
@@ -167,16 +170,6 @@ def _write_out(out: Path, result: PlanResult, extra: dict[str, Any], execution: 
         (out / TRACE).unlink(missing_ok=True)
 
 
-@dataclass(frozen=True)
-class Method:
-    """The method ``plan`` runs (:data:`PLAN_METHODS`), on which task, with the goal-planner's settings."""
-
-    name: str
-    task: Task
-    planner_time_limit: float
-    read_steps: bool
-
-
 def _check_method(method: str, planner_time_limit: float) -> None:
     """A method ``plan`` cannot run, or a time limit the goal-planner cannot keep, is an error before anything
     loads."""
@@ -191,20 +184,18 @@ def _check_method(method: str, planner_time_limit: float) -> None:
         raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
 
 
-def _plan(options: ModelOptions, dom: Domain, how: Method, *, quiet: bool,
+def _plan(options: ModelOptions, dom: Domain, task: Task, method_for: Callable[[Planner], Method], *, quiet: bool,
           goals: bool) -> tuple[Planner, PlanResult, StatedGoals | None]:
-    """Load the model and plan with the method, then state the goals if asked, each stage shown on stderr as it
-    runs (unless ``quiet``)."""
-    task = how.task
+    """Load the model and plan ``task`` with the method ``method_for`` makes on the model's planner, then state
+    the goals if asked, each stage shown on stderr as it runs (unless ``quiet``)."""
     with PlanProgress(quiet=quiet) as progress:
         model = options.model or ("the served model" if options.backend == "server" else default_model())
         with progress.loading(f"the model {model}"):
             planner = options.planners(dom.catalogue, dom)[0]
         try:
             planner.progress, progress.kept = progress, examples_kept(planner.backend)
-            method = make_method(how.name, dom.catalogue, planner, planner_time_limit=how.planner_time_limit,
-                                 world=world_of(dom), read_steps=how.read_steps)
-            result = planner.plan(task.instruction, task.floor_plan, task.robots, steps=method.steps(task))
+            steps = method_for(planner).steps(task)
+            result = planner.plan(task.instruction, task.floor_plan, task.robots, steps=steps)
             stated = None
             if goals:  # the goal check's statement where it ran; else the goal stage now, written to --out too
                 ran = result.stages.get("goal")
