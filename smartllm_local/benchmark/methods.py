@@ -24,7 +24,7 @@ from ..planner.constraints.feasibility import function_needs
 from ..planner.constraints.goal import goal_vocabulary
 from ..planner.pipeline import Planner
 from ..planner.progress import SILENT
-from ..planner.readings import merge, placements
+from ..planner.readings import may_place, merge, placements
 from ..planner.result import PlanResult, StageRecord
 from ..planner.steps import Step
 from ..robots import Catalogue
@@ -116,8 +116,12 @@ class GoalPlanner:
 
     def reads_steps(self, task: Task) -> bool:
         """Whether the task's decomposition is read: with ``read_steps``, where its scene has holders to put things
-        in (a site's goals are states alone, so its steps could say nothing the statement does not)."""
-        return self.read_steps and any(goal_vocabulary(self.world.scene(task.floor_plan)).holders.values())
+        in (a site's goals are states alone, so its steps could say nothing the statement does not) and its
+        instruction names one (the steps are read only for holders it names: :func:`~..planner.readings.may_place`)."""
+        if not self.read_steps:
+            return False
+        scene = self.world.scene(task.floor_plan)
+        return any(goal_vocabulary(scene).holders.values()) and may_place(task.instruction, scene)
 
     def state_goals(self, result: PlanResult) -> None:
         assert self.planner is not None

@@ -37,6 +37,13 @@ def placements(plan: Plan, scene: SceneObjects, skills: SkillSet, instruction: s
                   key=lambda c: (c.item or "", c.subject))
 
 
+def may_place(instruction: str, scene: SceneObjects) -> bool:
+    """Whether :func:`placements` could find anything here: it reads only holders the instruction names, so an
+    instruction that names none of the scene's receptacles (the only things that hold others) has no steps worth
+    writing for it ("chop the lettuce and switch the light off")."""
+    return any(names(instruction, holder) for holder in scene.types_for("receptacle"))
+
+
 def merge(stated: Sequence[Condition], placed: Sequence[Condition]) -> list[Condition]:
     """The statement with the steps' holders: a thing the steps placed is where they placed it (its stated
     holders dropped), and a holder stated empty that the steps fill is no longer said to be empty."""

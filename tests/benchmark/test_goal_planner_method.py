@@ -42,6 +42,8 @@ def test_the_methods_stages_and_options():
     method = make_method("goal-planner", CATALOGUE, None, planner_time_limit=5)
     assert isinstance(method, GoalPlanner) and method.time_limit == 5
     assert [s.name for s in method.steps(task)] == ["goal", "decomposition", "allocation"]  # the steps read too
+    # "Chop the lettuce and switch the light off" names no holder: no placement could be read, no steps written
+    assert [s.name for s in method.steps(TASKS["kitchen-08"])] == ["goal", "allocation"]
     statement_only = make_method("goal-planner", CATALOGUE, None, read_steps=False)
     assert [s.name for s in statement_only.steps(task)] == ["goal", "allocation"]
     assert [s.name for s in make_method("goal-planner-oracle", CATALOGUE, None, read_steps=True).steps(task)] == [

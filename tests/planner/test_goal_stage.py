@@ -198,7 +198,7 @@ def test_the_measure_reads_goals_only_after_the_stage_answers():
 
 @pytest.fixture(scope="module")
 def goals_run(tmp_path_factory):
-    """SmolLM2 plans kitchen-02 with the goal-planner and --goals, from a copy of the task file with every task's
+    """SmolLM2 plans kitchen-17 with the goal-planner and --goals, from a copy of the task file with every task's
     goals removed: the goal stage, the decomposition it reads, Fast Downward's search."""
     root = tmp_path_factory.mktemp("goals")
     lines = []
@@ -211,7 +211,7 @@ def goals_run(tmp_path_factory):
     tasks.write_text("\n".join(lines) + "\n")
     out = root / "run"
     proc = subprocess.run([sys.executable, "-m", "smartllm_local", "plan", "--tasks", str(tasks), "--task",
-                           "kitchen-02", "--method", "goal-planner", "--goals", "--out", str(out)],
+                           "kitchen-17", "--method", "goal-planner", "--goals", "--out", str(out)],
                           capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr
     return out, proc.stdout, proc.stderr
@@ -252,7 +252,7 @@ def test_the_goal_stage_states_the_same_goals_without_the_task_s_goals(goals_run
     from smartllm_local.cli.options import ModelOptions
     from smartllm_local.planner.pipeline import Planner
 
-    task = next(t for t in TASKS if t.id == "kitchen-02")
+    task = next(t for t in TASKS if t.id == "kitchen-17")
     assert task.goals
     planner = Planner(smollm2, HOUSEHOLD.catalogue, ModelOptions(model="smollm2").config)
     assert planner.goals(task.instruction, task.floor_plan).record.output == (goals_run[0] / "goals.txt").read_text()
