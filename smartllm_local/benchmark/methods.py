@@ -116,12 +116,8 @@ class GoalPlanner:
 
     def reads_steps(self, task: Task) -> bool:
         """Whether the task's decomposition is read: with ``read_steps``, where its scene has holders to put things
-        in (a site's goals are states alone, so its steps could say nothing the statement does not) and its
-        instruction names one (the steps are read only for holders it names: :func:`~..planner.readings.may_place`)."""
-        if not self.read_steps:
-            return False
-        scene = self.world.scene(task.floor_plan)
-        return any(goal_vocabulary(scene).holders.values()) and may_place(task.instruction, scene)
+        in (a site's goals are states alone, so its steps could say nothing the statement does not)."""
+        return self.read_steps and any(goal_vocabulary(self.world.scene(task.floor_plan)).holders.values())
 
     def state_goals(self, result: PlanResult) -> None:
         assert self.planner is not None
@@ -133,8 +129,12 @@ class GoalPlanner:
             result.error = stated.error
 
     def decompose(self, result: PlanResult) -> None:
-        assert self.planner is not None
-        self.planner.decompose(result)
+        """The decomposition to read, where the instruction names a holder of the scene: the steps are read only
+        for holders it names (:func:`~..planner.readings.may_place`), so elsewhere none is written (the stage
+        adds no record; a run's tasks keep the same steps)."""
+        if may_place(result.instruction, self.world.scene(result.floor_plan)):
+            assert self.planner is not None
+            self.planner.decompose(result)
 
     def allocate(self, task: Task, result: PlanResult) -> None:
         from ..planner.classical.planning import plan_to_goal  # Unified Planning loads only for this method
@@ -159,8 +159,9 @@ class GoalPlanner:
             result.error = record.error
 
     def _placements(self, result: PlanResult) -> list[Condition]:
-        """Where the task's decomposition puts the things its instruction names."""
-        plan = result.stage("decomposition").plan
+        """Where the task's decomposition (if one was written) puts the things its instruction names."""
+        record = result.stages.get("decomposition")
+        plan = record.plan if record is not None else None
         if not isinstance(plan, Plan) or plan.is_refusal:
             return []
         return placements(plan, self.world.scene(result.floor_plan), self.catalogue.skills, result.instruction)

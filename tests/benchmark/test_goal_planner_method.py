@@ -42,8 +42,14 @@ def test_the_methods_stages_and_options():
     method = make_method("goal-planner", CATALOGUE, None, planner_time_limit=5)
     assert isinstance(method, GoalPlanner) and method.time_limit == 5
     assert [s.name for s in method.steps(task)] == ["goal", "decomposition", "allocation"]  # the steps read too
-    # "Chop the lettuce and switch the light off" names no holder: no placement could be read, no steps written
-    assert [s.name for s in method.steps(TASKS["kitchen-08"])] == ["goal", "allocation"]
+    # every task of a run has the same steps; where the instruction names no holder, no decomposition is written
+    chop = TASKS["kitchen-08"]  # "Chop the lettuce and switch the light off."
+    assert [s.name for s in method.steps(chop)] == ["goal", "decomposition", "allocation"]
+    result = PlanResult(chop.instruction, chop.floor_plan, list(chop.robots))
+    result.add(StageRecord("goal", output="Lettuce sliced\nLightSwitch off\n"))
+    run_steps(method.steps(chop)[1:], result)
+    assert list(result.stages) == ["goal", "allocation"] and result.stage("allocation").placements == []
+    assert result.stage("allocation").output.startswith("# goal-planner: Fast Downward's")
     statement_only = make_method("goal-planner", CATALOGUE, None, read_steps=False)
     assert [s.name for s in statement_only.steps(task)] == ["goal", "allocation"]
     assert [s.name for s in make_method("goal-planner-oracle", CATALOGUE, None, read_steps=True).steps(task)] == [
