@@ -192,6 +192,20 @@ def test_plan_dispatch_runs_the_model_s_plan_on_the_lab_s_functions(tmp_path, ca
     assert sorted(map(tuple, (c["objects"] for c in logged))) == sorted(tuple(a["objects"]) for a in actions)
     assert run.returncode == 0
 
+    # the goal-planner's plan goes the same way, each object by the scene's own id (kitchen-02: bread sliced)
+    (tmp_path / "calls.jsonl").unlink()
+    run = subprocess.run([SCRIPT, "plan", "--task", "kitchen-02", "--method", "goal-planner", "--statement-only",
+                          "--dispatch", "all.toml", "--json"], cwd=tmp_path, env=env, capture_output=True, text=True,
+                         timeout=600)
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout)
+    assert report["method"] == "goal-planner" and report["allocated"].startswith("# goal-planner: Fast Downward's")
+    logged = [json.loads(line) for line in (tmp_path / "calls.jsonl").read_text().splitlines()]
+    assert len(logged) == len(report["dispatch"]["actions"]) >= 1
+    actions = report["dispatch"]["actions"]
+    assert all(a["success"] for a in actions) and [c["objects"] for c in logged] == [a["objects"] for a in actions]
+    assert any(a["skill"] == "SliceObject" and a["objects"][0].startswith("Bread|") for a in actions), actions
+
     run = plan("--dispatch", "some.toml")  # kitchen-01's robot has skills this file leaves out
     assert run.returncode == 2 and "names no function for" in run.stderr and "[skills]" in run.stderr
     run = plan("--dispatch", "all.toml", "--execute")
