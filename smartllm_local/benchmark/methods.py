@@ -203,6 +203,16 @@ METHODS = ("smartllm", "decomp-random", "decomp-rule", "goal-planner", "goal-pla
 MODEL_FREE = frozenset({"reference", "goal-planner-oracle"})
 
 
+def check_time_limit(planner_time_limit: float) -> None:
+    """The goal-planner's search time per task must be a positive number of seconds.
+
+    Raises:
+        UserError: it is not.
+    """
+    if not planner_time_limit > 0:
+        raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
+
+
 def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_dir: Path | None = None, *,
                 planner_time_limit: float = DEFAULT_TIME_LIMIT, world: World | None = None,
                 read_steps: bool = True) -> Method:
@@ -214,8 +224,7 @@ def make_method(name: str, catalogue: Catalogue, planner: Planner | None, plans_
     if name not in METHODS:
         raise UserError(f"--method must be one of {', '.join(METHODS)}, not {name!r}")
     if name.startswith("goal-planner"):
-        if not planner_time_limit > 0:
-            raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
+        check_time_limit(planner_time_limit)
         return GoalPlanner(planner, catalogue, time_limit=planner_time_limit, oracle=name == "goal-planner-oracle",
                            world=world, read_steps=read_steps)
     assert planner is not None

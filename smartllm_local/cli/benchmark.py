@@ -11,7 +11,7 @@ from typing import Any
 
 import typer
 
-from ..benchmark.methods import METHODS, MODEL_FREE, make_method
+from ..benchmark.methods import METHODS, MODEL_FREE, check_time_limit, make_method
 from ..benchmark.results import summary_table, variability_table
 from ..benchmark.run import run_benchmark
 from ..benchmark.run_store import RunStore
@@ -201,7 +201,8 @@ def run(
     tasks_files = [tasks] if tasks else dom.task_files()
     loaded, half, found = _load(dom, tasks, split)
     chosen = _chosen_tasks(half, found, category, task, split)
-    _check_run(dom, loaded, found, method=method, split=split, thor_build=thor_build)
+    _check_run(dom, loaded, found, method=method, split=split, thor_build=thor_build,
+               planner_time_limit=planner_time_limit)
     chosen_seeds = parse_seeds(seeds, options.seed)
     if len(chosen_seeds) > 1 and options.config.sampling.temperature == 0 and method != "decomp-random":
         raise UserError("--seeds needs --temperature above 0: greedy decoding writes the same plans for every seed")
@@ -213,11 +214,13 @@ def run(
 
 
 def _check_run(dom: Domain, loaded: list[Task], found: Split | None, *, method: str, split: str | None,
-               thor_build: Path | None) -> None:
-    """Check the method and the world's build before anything is written or loaded; warn (and go on) where a run
-    of every task finds the domain's split does not fit its tasks."""
+               thor_build: Path | None, planner_time_limit: float) -> None:
+    """Check the method, its time limit and the world's build before anything is written or loaded; warn (and go
+    on) where a run of every task finds the domain's split does not fit its tasks."""
     if method not in METHODS:
         raise UserError(f"--method must be one of {', '.join(METHODS)}, not {method!r}")
+    if method.startswith("goal-planner"):
+        check_time_limit(planner_time_limit)
     problems = split_problems(found, loaded) if found is not None and split is None else []
     if problems:  # a run of every task goes on, and records the split as it is for the report
         print("warning: " + "\nwarning: ".join(problems) + "\nwarning: the report's test-half rows go by the split "

@@ -11,7 +11,7 @@ from typing import Any
 
 import typer
 
-from ..benchmark.methods import METHODS, MODEL_FREE, Method, make_method
+from ..benchmark.methods import METHODS, MODEL_FREE, Method, check_time_limit, make_method
 from ..benchmark.run import execute_scored
 from ..benchmark.tasks import Task, find_task, given_task, has_words, load_tasks
 from ..benchmark.trace_file import TRACE, write_trace
@@ -180,8 +180,8 @@ def _check_method(method: str, planner_time_limit: float) -> None:
                         f"{', '.join(PLAN_METHODS)}")
     if method not in PLAN_METHODS:
         raise UserError(f"--method must be one of {', '.join(PLAN_METHODS)}, not {method!r}")
-    if not planner_time_limit > 0:
-        raise UserError(f"--planner-time-limit must be a positive number of seconds, not {planner_time_limit:g}")
+    if method.startswith("goal-planner"):
+        check_time_limit(planner_time_limit)
 
 
 def _plan(options: ModelOptions, dom: Domain, task: Task, method_for: Callable[[Planner], Method], *, quiet: bool,
