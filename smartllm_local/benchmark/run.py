@@ -76,7 +76,8 @@ class TaskOutcome:
                                         "completed_lines": r.completed_lines,
                                         **({"repairs": len(r.repairs), "unrepaired": r.unrepaired,
                                             "ended_at_goals": r.ended_at_goals, "finished": r.finish is not None,
-                                            "idle_steps": len(r.idle_steps)}
+                                            "folded": bool(r.finish and r.finish.get("into")),
+                                            "errands": len(r.errands), "idle_steps": len(r.idle_steps)}
                                            if r.stage == "decomposition" else {})}
                               for r in self.result.stages.values()}
             if self.result.notices:

@@ -63,7 +63,8 @@ class ModelOptions:
                  select: str = "verifier", goal_candidates: int = DEFAULT_GOAL_CANDIDATES,
                  goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
                  no_repair: bool = False, no_finish_goals: bool = False,
-                 one_at_a_time: bool = False, keep_idle_steps: bool = False):
+                 one_at_a_time: bool = False, keep_idle_steps: bool = False, finish_apart: bool = False,
+                 keep_errands: bool = False):
         _check_ranges(backend=backend, temperature=temperature, seed=seed, candidates=candidates,
                       goal_candidates=goal_candidates, candidate_temperature=candidate_temperature, select=select,
                       n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers)
@@ -101,7 +102,9 @@ class ModelOptions:
             repair=not no_repair,
             finish_goals=not no_finish_goals,
             together=not one_at_a_time,
+            drop_errands=not keep_errands,
             drop_idle=not keep_idle_steps,
+            fold_finish=not finish_apart,
         )
         self.seed = seed
 
@@ -238,6 +241,14 @@ _KEEP_IDLE_STEPS = typer.Option(False, "--keep-idle-steps", help=(
     "Keep the decomposition's pairs of steps that undo each other in a sub-task with nothing changed (a fridge "
     "opened and closed with nothing put in), rather than take them out before the teams are formed (see "
     "docs/planner.md, \"Idle steps\")."))
+_KEEP_ERRANDS = typer.Option(False, "--keep-errands", help=(
+    "Keep the decomposition's steps on a thing a sub-task picks up that the instruction does not name and no "
+    "stated goal is about, rather than take them out where the dry run shows them unneeded (see docs/planner.md, "
+    "\"Errands\")."))
+_FINISH_APART = typer.Option(False, "--finish-apart", help=(
+    "Call the planner's last sub-task after the model's, rather than write its steps at the end of the model's "
+    "last sub-task where the dry run ends the same (one transition fewer; see docs/planner.md, \"The planner's "
+    "last sub-task\")."))
 
 #: Every model option: its parameter name, type and typer option, in the order --help lists them.
 MODEL_PARAMETERS = [
@@ -258,6 +269,7 @@ MODEL_PARAMETERS = [
         ("goal_check", bool, _GOAL_CHECK), ("no_stop_at_goals", bool, _NO_STOP_AT_GOALS),
         ("no_repair", bool, _NO_REPAIR), ("no_finish_goals", bool, _NO_FINISH_GOALS),
         ("one_at_a_time", bool, _ONE_AT_A_TIME), ("keep_idle_steps", bool, _KEEP_IDLE_STEPS),
+        ("keep_errands", bool, _KEEP_ERRANDS), ("finish_apart", bool, _FINISH_APART),
     )
 ]
 

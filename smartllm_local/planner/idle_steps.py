@@ -38,7 +38,9 @@ _WHERE_ROBOTS_STAND = frozenset({"distance", "visible", "isInteractable"})
 
 
 @dataclass(frozen=True)
-class _Step:
+class Step:
+    """A skill call of a decomposition's text: its line, its function (by order written), skill and objects."""
+
     line: int  # its index among the text's lines
     function: int
     skill: str
@@ -50,7 +52,7 @@ def drop_idle_steps(text: str, scene: SceneObjects, skills: SkillSet) -> tuple[s
     them), and the lines taken out (none: the text as it was). A text with a line this does not know (a helper
     call) is left as it is."""
     lines = text.splitlines(keepends=True)
-    steps = _steps(lines, skills)
+    steps = skill_steps(lines, skills)
     if steps is None:
         return text, []
     actions = {name: s.action for name, s in skills.items()}
@@ -58,27 +60,28 @@ def drop_idle_steps(text: str, scene: SceneObjects, skills: SkillSet) -> tuple[s
              if second.function == first.function and _undoes(first, second, actions)]
     if not pairs:
         return text, []
-    base = _outcome(steps, set(), scene, skills)
+    base = dry_outcome(steps, set(), scene, skills)
     dropped: set[int] = set()
     for first, second in pairs:
         pair = {first.line, second.line}
         if not pair & dropped:
-            for trial in (pair | _gotos_before(steps, pair, actions), pair):
+            for trial in (pair | gotos_before(steps, pair, actions), pair):
                 taken = dropped | trial
-                if _acts(steps, first.function, taken, actions) and _same(base, _outcome(steps, taken, scene, skills)):
+                if acts(steps, first.function, taken, actions) \
+                        and _same(base, dry_outcome(steps, taken, scene, skills)):
                     dropped = taken
                     break
     if not dropped:
         return text, []
     dropped |= _sleeps_after(lines, steps, dropped, actions)
-    dropped |= _comments_above(lines, dropped)
+    dropped |= comments_above(lines, dropped)
     return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
 
 
-def _steps(lines: Sequence[str], skills: SkillSet) -> list[_Step] | None:
+def skill_steps(lines: Sequence[str], skills: SkillSet) -> list[Step] | None:
     """The skill calls of each function's body, in order; None where a body holds a line other than a comment,
     a sleep or a skill call."""
-    steps: list[_Step] = []
+    steps: list[Step] = []
     function = -1
     for n, line in enumerate(lines):
         if line.startswith("def "):
@@ -92,16 +95,16 @@ def _steps(lines: Sequence[str], skills: SkillSet) -> list[_Step] | None:
         match = CALL_LINE.match(line.rstrip("\n"))
         if match is None or match.group(1) not in skills:
             return None
-        steps.append(_Step(n, function, match.group(1), tuple(o for o in match.group(3, 4) if o is not None)))
+        steps.append(Step(n, function, match.group(1), tuple(o for o in match.group(3, 4) if o is not None)))
     return steps
 
 
-def _undoes(first: _Step, second: _Step, actions: dict[str, str]) -> bool:
+def _undoes(first: Step, second: Step, actions: dict[str, str]) -> bool:
     undoing = UNDONE_BY.get(actions[first.skill])
     return undoing is not None and actions[second.skill] == undoing and first.objects[:1] == second.objects[:1]
 
 
-def _gotos_before(steps: Sequence[_Step], pair: Collection[int], actions: dict[str, str]) -> set[int]:
+def gotos_before(steps: Sequence[Step], pair: Collection[int], actions: dict[str, str]) -> set[int]:
     """The GoToObject steps right before each step of the pair (in its function): they led there."""
     gotos = set()
     for before, step in zip(steps, steps[1:]):
@@ -110,17 +113,25 @@ def _gotos_before(steps: Sequence[_Step], pair: Collection[int], actions: dict[s
     return gotos
 
 
-def _acts(steps: Sequence[_Step], function: int, dropped: Collection[int], actions: dict[str, str]) -> bool:
+def acts(steps: Sequence[Step], function: int, dropped: Collection[int], actions: dict[str, str]) -> bool:
     """Whether the function keeps an action (a body of GoToObject steps alone is not a sub-task)."""
     return any(s.function == function and s.line not in dropped and actions[s.skill] for s in steps)
 
 
-def _outcome(steps: Sequence[_Step], dropped: Collection[int], scene: SceneObjects,
-             skills: SkillSet) -> tuple[set[int], str]:
-    """The lines whose calls fail, and the world's end state, with ``dropped`` left out."""
+def dry_run(steps: Sequence[Step], dropped: Collection[int], scene: SceneObjects,
+            skills: SkillSet) -> tuple[set[int], WorldCheck]:
+    """The lines whose calls fail, with ``dropped`` left out, and the world they leave (a notional robot per
+    function, in the order written, as the decomposition's world check runs them)."""
     world = WorldCheck(scene, skills, MAX_SUBTASKS)
     failed = {s.line for s in steps if s.line not in dropped
               and not world.perform([(None, s.skill, s.objects)], [min(s.function, MAX_SUBTASKS - 1)])}
+    return failed, world
+
+
+def dry_outcome(steps: Sequence[Step], dropped: Collection[int], scene: SceneObjects,
+                skills: SkillSet) -> tuple[set[int], str]:
+    """The lines whose calls fail, and the world's end state, with ``dropped`` left out."""
+    failed, world = dry_run(steps, dropped, scene, skills)
     objects = [{k: v for k, v in o.items() if k not in _WHERE_ROBOTS_STAND} for o in world.objects()]
     return failed, json.dumps(objects, sort_keys=True, default=str)
 
@@ -129,7 +140,7 @@ def _same(base: tuple[set[int], str], trial: tuple[set[int], str]) -> bool:
     return trial[0] <= base[0] and trial[1] == base[1]
 
 
-def _sleeps_after(lines: Sequence[str], steps: Sequence[_Step], dropped: Collection[int],
+def _sleeps_after(lines: Sequence[str], steps: Sequence[Step], dropped: Collection[int],
                   actions: dict[str, str]) -> set[int]:
     """The sleeps right after a dropped switch-on (comments aside): they waited for it."""
     sleeps = set()
@@ -143,7 +154,7 @@ def _sleeps_after(lines: Sequence[str], steps: Sequence[_Step], dropped: Collect
     return sleeps
 
 
-def _comments_above(lines: Sequence[str], dropped: Collection[int]) -> set[int]:
+def comments_above(lines: Sequence[str], dropped: Collection[int]) -> set[int]:
     """The comment lines right above a dropped line (they said what it would do)."""
     comments = set()
     for n in dropped:

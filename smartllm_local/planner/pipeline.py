@@ -42,6 +42,8 @@ from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
 from .decoding.sampling import Sampling
+from .errands import drop_errands
+from .finish_fold import fold_finish
 from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
 from .idle_steps import drop_idle_steps
 from .progress import SILENT, StageProgress
@@ -106,7 +108,9 @@ class PlannerConfig:
     repair: bool = True
     finish_goals: bool = True
     together: bool = True
+    drop_errands: bool = True
     drop_idle: bool = True
+    fold_finish: bool = True
 
 
 class Planner:
@@ -173,14 +177,30 @@ class Planner:
                 result, scene, team, prompt, lane, k, self.progress if k == 0 else SILENT))
             record = self._choose(result, scene, records)  # type: ignore[arg-type]
             record.seconds = time.perf_counter() - started
-        if self.config.drop_idle and self.config.world_check and isinstance(record.plan, Plan) \
-                and not record.plan.is_refusal:
-            record.output, record.idle_steps = drop_idle_steps(record.output, scene, self.catalogue.skills)
-            if record.idle_steps:
-                record.plan = None  # parsed again below, from the text the coalition and the allocation read
+        self._tidy(record, result, scene)
         result.add(record)
         self._finish_plan_stage(record, result, form="decomposed", scene=scene, parsed=record.plan)
         return record
+
+    def _tidy(self, record: StageRecord, result: PlanResult, scene: SceneObjects) -> None:
+        """The chosen decomposition without its errands nobody asked for (:mod:`.errands`) and its idle steps
+        (:mod:`.idle_steps`), the planner's last sub-task folded into the model's last (:mod:`.finish_fold`): the
+        text the coalition and the allocation read."""
+        if not (self.config.world_check and isinstance(record.plan, Plan) and not record.plan.is_refusal):
+            return
+        skills, config = self.catalogue.skills, self.config
+        if config.drop_errands:
+            record.output, record.errands = drop_errands(record.output, scene, skills, result.instruction,
+                                                         stated_conditions(result, scene))
+        if config.drop_idle:
+            record.output, record.idle_steps = drop_idle_steps(record.output, scene, skills)
+        into = None
+        if config.fold_finish and record.finish is not None:
+            record.output, into = fold_finish(record.output, scene, skills)
+            if into is not None:
+                record.finish = {**record.finish, "into": into}
+        if record.errands or record.idle_steps or into is not None:
+            record.plan = None  # parsed again, from the text the coalition and the allocation read
 
     def _decomposition(self, result: PlanResult, scene: SceneObjects, team: Sequence[Robot], prompt: Fitted,
                        backend: Backend, k: int, progress: StageProgress) -> StageRecord:

@@ -79,23 +79,27 @@ def test_sequential_world_checked_plans_succeed_in_every_action():
     assert plans >= 10 and clean >= 0.7 * plans, (plans, clean)
 
 
-def test_a_restated_allocation_never_strands_a_later_step():
+@pytest.mark.parametrize("both", [False, pytest.param(True, marks=pytest.mark.heavy)])
+def test_a_restated_allocation_never_strands_a_later_step(both):
     """Robots chosen at random for every step of every benchmark task's decomposition (checked): a
     robot is offered only if the rest of the body can still be done, so the allocation never reaches
     a step no robot can do (a greedy choice, as a one-step look-ahead makes, did: a robot sent ahead
     while another still had to act where it stood). Nor does the decomposition (a comment was once
-    offered where no step could follow it)."""
+    offered where no step could follow it). Every task written one sub-task after another and in threads
+    (the heavy suite); the default suite writes every other task each way."""
     allocated = 0
     for seed in range(2):
         rng = random.Random(seed)
-        for task in load_tasks():
+        for k, task in enumerate(load_tasks()):
+            if not both and k % 2 != seed:
+                continue
             # A budget that binds nowhere (a tight one has its own test).
             planned = _plan(task, rng, sequential=seed % 2 == 0, budget=4000)
             if planned is None:
                 continue
             allocated += 1
             assert planned[1] == (0, 0), (task.id, seed, planned[0].source)
-    assert allocated >= 40, allocated
+    assert allocated >= (40 if both else 20), allocated
 
 
 def test_a_body_the_coalition_accepts_is_not_a_dead_end_for_the_restated_allocation_where_one_of_two_is_broken():
