@@ -10,7 +10,7 @@ from smartllm_local.planner.idle_steps import drop_idle_steps
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
 
-from .test_idle_steps import COFFEE, IDLE
+from .test_idle_steps import COFFEE, IDLE, decomposed
 
 CATALOGUE = load_domain().catalogue
 SKILLS = CATALOGUE.skills
@@ -67,24 +67,11 @@ def test_without_stated_goals_nothing_is_taken_out():
 def test_the_planner_records_the_errands_and_keep_errands_leaves_them(monkeypatch):
     """The decomposition's record keeps the lines taken out; the coalition reads the plan without them (and without
     the idle fridge); --keep-errands leaves the plan as the model wrote it."""
-    from smartllm_local.planner.goal_stage import STAGE
-    from smartllm_local.planner.pipeline import Planner, PlannerConfig
-    from smartllm_local.planner.result import PlanResult, StageRecord
+    from smartllm_local.planner.pipeline import PlannerConfig
 
-    from .fakes import FakeBackend
-
-    def written(self, result, scene, team, prompt, backend, k, progress):
-        record = StageRecord("decomposition", output=PLAN)
-        self._finish_plan_stage(record, result, form="decomposed", scene=scene)
-        return record
-
-    monkeypatch.setattr(Planner, "decomposition_prompt", lambda self, instruction, scene, team: None)
-    monkeypatch.setattr(Planner, "_decomposition", written)
     for drop in (True, False):
-        planner = Planner(FakeBackend(), CATALOGUE, PlannerConfig(drop_errands=drop))
-        result = PlanResult(ASKED, "FloorPlan6", [13, 18])
-        result.add(StageRecord(STAGE, output="Mug in CoffeeMachine\nApple in Fridge\n"))
-        record = planner.decompose(result)
+        record = decomposed(monkeypatch, PLAN, PlannerConfig(drop_errands=drop),
+                            goals="Mug in CoffeeMachine\nApple in Fridge\n")
         first = record.plan.functions[0]
         skills = [step.skill for step in first.body if hasattr(step, "skill")]
         assert record.errands == ((CUP + CUP_PUT).splitlines(keepends=True) if drop else [])

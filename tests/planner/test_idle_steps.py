@@ -134,25 +134,35 @@ def test_a_plan_with_a_line_it_does_not_know_is_left_as_it_is():
     assert drop_idle_steps(helper, scene_objects(6), SKILLS) == (helper, [])
 
 
-def test_the_planner_hands_the_coalition_the_decomposition_without_its_idle_steps(monkeypatch):
-    """The decomposition's record keeps the lines taken out; its output and parsed plan, which the coalition and
-    the allocation read, are without them; --keep-idle-steps leaves the model's plan as it wrote it."""
-    from smartllm_local.planner.pipeline import Planner, PlannerConfig
+def decomposed(monkeypatch, output: str, config, goals: str = ""):
+    """The decomposition stage's record where the model wrote ``output`` (a fake backend) for the coffee-and-apple
+    instruction in FloorPlan6 with robots 13 and 18, and the goal stage stated ``goals``."""
+    from smartllm_local.planner.goal_stage import STAGE
+    from smartllm_local.planner.pipeline import Planner
     from smartllm_local.planner.result import PlanResult, StageRecord
 
     from .fakes import FakeBackend
 
     def written(self, result, scene, team, prompt, backend, k, progress):
-        record = StageRecord("decomposition", output=COFFEE)
+        record = StageRecord("decomposition", output=output)
         self._finish_plan_stage(record, result, form="decomposed", scene=scene)
         return record
 
     monkeypatch.setattr(Planner, "decomposition_prompt", lambda self, instruction, scene, team: None)
     monkeypatch.setattr(Planner, "_decomposition", written)
+    result = PlanResult("Make me a coffee and put the apple in the fridge.", "FloorPlan6", [13, 18])
+    if goals:
+        result.add(StageRecord(STAGE, output=goals))
+    return Planner(FakeBackend(), CATALOGUE, config).decompose(result)
+
+
+def test_the_planner_hands_the_coalition_the_decomposition_without_its_idle_steps(monkeypatch):
+    """The decomposition's record keeps the lines taken out; its output and parsed plan, which the coalition and
+    the allocation read, are without them; --keep-idle-steps leaves the model's plan as it wrote it."""
+    from smartllm_local.planner.pipeline import PlannerConfig
+
     for drop in (True, False):
-        planner = Planner(FakeBackend(), CATALOGUE, PlannerConfig(drop_idle=drop))
-        result = PlanResult("Make me a coffee and put the apple in the fridge.", "FloorPlan6", [13, 18])
-        record = planner.decompose(result)
+        record = decomposed(monkeypatch, COFFEE, PlannerConfig(drop_idle=drop))
         steps = [step.skill for fn in record.plan.functions for step in fn.body if hasattr(step, "skill")]
         assert (record.output == COFFEE.replace(IDLE, "")) == drop
         assert record.idle_steps == (IDLE.splitlines(keepends=True) if drop else [])
