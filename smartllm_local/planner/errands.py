@@ -11,8 +11,9 @@ sub-task's steps on it (going to it, picking it up, putting or dropping it), wit
 each and the comments right above them, are taken out where the dry run (a notional robot per sub-task, in the
 order written) shows them unneeded: no call fails that did not, every stated goal that held still holds, and the
 sub-task keeps an action. A knife fetched for a slice stays (the slice fails without it), as does anything the
-instruction names. Only the model's own plan, its stated goals and the instruction are read; a plan with no stated
-goals is left as it is (:mod:`.idle_steps` then takes out an open and close left with nothing put in).
+instruction names. An open and close left with nothing put in between is then taken out by :mod:`.idle_steps`.
+Only the model's own plan, its stated goals and the instruction are read; a plan with no stated goals is left as
+it is.
 """
 
 from __future__ import annotations

@@ -10,6 +10,7 @@ from smartllm_local.planner.idle_steps import drop_idle_steps
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
 
+from .constraints.test_finish import SLICE_BREAD
 from .test_idle_steps import COFFEE, IDLE, decomposed
 
 CATALOGUE = load_domain().catalogue
@@ -27,16 +28,7 @@ CUP_PUT = """    PutObject('Cup', 'Fridge')
 PLAN = COFFEE.replace("    # go to the fridge\n", CUP + "    # go to the fridge\n", 1) \
     .replace("    # place the coffee inside\n", CUP_PUT + "    # place the coffee inside\n", 1)
 
-SLICE = """def subtask1_slice_bread():
-    GoToObject('Knife')
-    PickupObject('Knife')
-    GoToObject('Bread')
-    SliceObject('Bread')
-    GoToObject('CounterTop')
-    PutObject('Knife', 'CounterTop')
-
-subtask1_slice_bread()
-"""
+SLICE = "".join(SLICE_BREAD)
 
 
 def test_a_cup_nobody_asked_for_is_taken_out_and_the_fridge_left_idle_goes_after_it():

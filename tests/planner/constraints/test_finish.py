@@ -16,6 +16,7 @@ from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.repair import Repairer
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import run_constraint, run_tokens
+from smartllm_local.planner.finish_fold import fold_finish
 from smartllm_local.scoring import Condition, condition_holds, containment
 from smartllm_local.worlds import scene_objects
 from tests.planner.writers import TokenAdversary
@@ -85,9 +86,11 @@ def test_goals_no_plan_of_the_team_meets_add_nothing():
 @pytest.mark.parametrize("kind, tasks", [("random", 3), pytest.param("longest", 8, marks=pytest.mark.heavy)])
 def test_writers_that_write_as_models_do_keep_every_guarantee_with_the_last_sub_task(kind, tasks):
     """Adversarial writers with the tasks' goals stated: the output parses and keeps its budget; where the
-    planner wrote a last sub-task, every call of it succeeds and the goals hold at the end."""
+    planner wrote a last sub-task, every call of it succeeds and the goals hold at the end; and folded into the
+    model's last sub-task (or left apart, :mod:`smartllm_local.planner.finish_fold`), the plan parses, fails no
+    call the plan apart did not, and meets the goals."""
     rng = random.Random(5)
-    made = 0
+    made = folded = 0
     for task in [t for t in load_tasks() if t.feasible][:tasks]:
         goals = statement_of(task.goals).conditions
         decomposer = _decomposer(task.floor_plan, goals)
@@ -98,7 +101,11 @@ def test_writers_that_write_as_models_do_keep_every_guarantee_with_the_last_sub_
             finish = text.split("meet_goals():\n", 1)[1]
             assert not [f for f in failed if f"{f[0]}('" in finish], (task.id, text)
             made += 1
-    assert made > 0
+            after, into = fold_finish(text, scene_objects(task.floor_plan), SKILLS)
+            dry, failed_after = _final_state(after, task.floor_plan)
+            assert len(failed_after) <= len(failed) and _met(dry, goals), (task.id, after)
+            folded += into is not None
+    assert made > 0 and folded > 0
 
 
 def test_a_goal_on_an_object_the_model_acted_on_is_left_to_the_model():
