@@ -16,6 +16,7 @@ from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.repair import Repairer
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import run_constraint, run_tokens
+from smartllm_local.planner.errands import drop_errands
 from smartllm_local.planner.finish_fold import fold_finish
 from smartllm_local.scoring import Condition, condition_holds, containment
 from smartllm_local.worlds import scene_objects
@@ -88,14 +89,20 @@ def test_writers_that_write_as_models_do_keep_every_guarantee_with_the_last_sub_
     """Adversarial writers with the tasks' goals stated: the output parses and keeps its budget; where the
     planner wrote a last sub-task, every call of it succeeds and the goals hold at the end; and folded into the
     model's last sub-task (or left apart, :mod:`smartllm_local.planner.finish_fold`), the plan parses, fails no
-    call the plan apart did not, and meets the goals."""
+    call the plan apart did not, and meets the goals. Without its errands (:mod:`smartllm_local.planner.errands`)
+    every plan parses too, fails no more calls and meets no fewer goals."""
     rng = random.Random(5)
-    made = folded = 0
+    made = folded = errands = 0
     for task in [t for t in load_tasks() if t.feasible][:tasks]:
         goals = statement_of(task.goals).conditions
         decomposer = _decomposer(task.floor_plan, goals)
         text = run_tokens(decomposer, TokenAdversary(kind, rng), 900)
         dry, failed = _final_state(text, task.floor_plan)
+        kept, dropped = drop_errands(text, scene_objects(task.floor_plan), SKILLS, task.instruction, goals)
+        dry_kept, failed_kept = _final_state(kept, task.floor_plan)
+        assert len(failed_kept) <= len(failed), (task.id, kept)
+        assert sum(_met(dry_kept, [g]) for g in goals) >= sum(_met(dry, [g]) for g in goals), (task.id, kept)
+        errands += bool(dropped)
         if decomposer.finish_made is not None:
             assert _met(dry, goals), (task.id, text)
             finish = text.split("meet_goals():\n", 1)[1]
@@ -105,7 +112,7 @@ def test_writers_that_write_as_models_do_keep_every_guarantee_with_the_last_sub_
             dry, failed_after = _final_state(after, task.floor_plan)
             assert len(failed_after) <= len(failed) and _met(dry, goals), (task.id, after)
             folded += into is not None
-    assert made > 0 and folded > 0
+    assert made > 0 and folded > 0 and errands > 0
 
 
 def test_a_goal_on_an_object_the_model_acted_on_is_left_to_the_model():
