@@ -242,7 +242,7 @@ _KEEP_IDLE_STEPS = typer.Option(False, "--keep-idle-steps", help=(
     "opened and closed with nothing put in), rather than take them out before the teams are formed (see "
     "docs/planner.md, \"Idle steps\")."))
 _KEEP_ERRANDS = typer.Option(False, "--keep-errands", help=(
-    "Keep the decomposition's steps on a thing a sub-task picks up that the instruction does not name and no "
+    "Keep the decomposition's steps on a thing a sub-task acts on that the instruction does not name and no "
     "stated goal is about, rather than take them out where the dry run shows them unneeded (see docs/planner.md, "
     "\"Errands\")."))
 _FINISH_APART = typer.Option(False, "--finish-apart", help=(

@@ -6,62 +6,114 @@ as a need: the coffee's sub-task then needs a robot that opens fridges as well a
 and the apple's sub-task waits for it (a transition the reference plan does not make: RU 0 for a plan that met
 every goal).
 
-So a thing a sub-task picks up that the instruction does not name and no stated goal is about is an errand: the
-sub-task's steps on it (going to it, picking it up, putting or dropping it), with the GoToObject steps that led to
-each and the comments right above them, are taken out where the dry run (a notional robot per sub-task, in the
-order written) shows them unneeded: no call fails that did not, every stated goal that held still holds, and the
-sub-task keeps an action. A knife fetched for a slice stays (the slice fails without it), as does anything the
-instruction names. An open and close left with nothing put in between is then taken out by :mod:`.idle_steps`.
-Only the model's own plan, its stated goals and the instruction are read; a plan with no stated goals is left as
-it is.
+So a thing a sub-task acts on (picks up, switches, opens, pulls...) that the instruction does not name and no
+stated goal is about is an errand: the sub-task's steps on it, with the GoToObject steps that led to each, the
+sleeps after a switch-on and the comments right above them, are taken out where the dry run (a notional robot per
+sub-task, in the order written) shows them unneeded: no call fails that did not, every stated goal that held still
+holds, every thing the instruction names or a goal is about ends as it did (what it holds aside: a cup nobody asked
+for leaves the fridge). A sub-task whose every action is an errand goes whole (its definition, and its thread or
+its call) where another sub-task still acts. A knife fetched for a slice stays (the slice fails without it), as
+does a faucet that fills a mug the instruction names (the mug would end empty) and anything the instruction
+names. An open and close left with nothing put in between is then taken out by
+:mod:`.idle_steps`. Only the model's own plan, its stated goals and the instruction are read; a plan with no stated
+goals is left as it is.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import json
+import re
+from collections.abc import Collection, Sequence
 
 from ..scene import SceneObjects
 from ..scoring import Condition
 from ..skills import SkillSet
 from ..world.object_types import base_type
 from .asked import names
-from .idle_steps import Step, acts, comments_above, dry_run, gotos_before, skill_steps
+from .constraints.format import INDENT
+from .constraints.world_check import WorldCheck
+from .idle_steps import WHERE_ROBOTS_STAND, Step, acts, comments_above, dry_run, gotos_before, skill_steps, sleeps_after
+
+#: An object's fields that an errand may change on a thing that was asked for: where the robots stand, and what it
+#: holds (each thing held is an object of its own, asked for or not).
+_ASIDE = WHERE_ROBOTS_STAND | {"receptacleObjectIds"}
+#: An orchestration line that makes a thread: its variable and its target.
+_THREAD = re.compile(r"^(\w+) = threading\.Thread\(target=(\w+)\)$")
 
 
 def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: str,
                  goals: Sequence[Condition]) -> tuple[str, list[str]]:
-    """The decomposition without its errands (and the GoToObject steps and comments that served them), and the
-    lines taken out (none: the text as it was)."""
+    """The decomposition without its errands (and the GoToObject steps and comments that served them; a sub-task of
+    errands alone, whole), and the lines taken out (none: the text as it was)."""
     lines = text.splitlines(keepends=True)
     steps = skill_steps(lines, skills) if goals else None
     if not steps:
         return text, []
     actions = {name: s.action for name, s in skills.items()}
     wanted = {base_type(o) for c in goals for o in (c.subject, c.item) if o}
+    asked = wanted | {t for t in scene.types if names(instruction, t)}
     base_failed, world = dry_run(steps, set(), scene, skills)
-    base_met = world.met(goals)
+    base_met, base_ends = world.met(goals), _ends(world, asked)
     dropped: set[int] = set()
-    for function, thing in _carried(steps, actions):
-        if thing in wanted or names(instruction, thing):
+    gone: set[int] = set()  # functions all of whose actions were errands
+    for function, thing in _handled(steps, actions):
+        if thing in asked:
             continue
         errand = {s.line for s in steps if s.function == function and s.objects and base_type(s.objects[0]) == thing}
         taken = dropped | errand | gotos_before(steps, errand, actions)
-        if not acts(steps, function, taken, actions):
-            continue
+        whole = not acts(steps, function, taken, actions)
+        if whole:
+            if not any(acts(steps, s.function, taken, actions) for s in steps if s.function != function):
+                continue  # the plan keeps a sub-task
+            taken |= {s.line for s in steps if s.function == function}
         failed, world = dry_run(steps, taken, scene, skills)
-        if failed <= base_failed and world.met(goals) >= base_met:
+        if failed <= base_failed and world.met(goals) >= base_met and _ends(world, asked) == base_ends:
             dropped = taken
+            gone |= {function} if whole else set()
     if not dropped:
         return text, []
+    dropped |= sleeps_after(lines, steps, dropped, actions)
     dropped |= comments_above(lines, dropped)
+    for function in gone:
+        dropped |= _function_lines(lines, function)
     return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
 
 
-def _carried(steps: Sequence[Step], actions: dict[str, str]) -> list[tuple[int, str]]:
-    """Each function's picked-up object types, in the order first picked up."""
+def _function_lines(lines: Sequence[str], function: int) -> set[int]:
+    """The lines of the ``function``-th definition (its header, its body and the blank line after it) and of the
+    orchestration that runs it (its call, or its thread's creation, start and join)."""
+    defs = [n for n, line in enumerate(lines) if line.startswith("def ")]
+    header = defs[function]
+    name = lines[header][len("def "):lines[header].index("(")]
+    end = header + 1
+    while end < len(lines) and lines[end].startswith(INDENT):
+        end += 1
+    taken = set(range(header, end + (end < len(lines) and not lines[end].strip())))
+    thread = None
+    for n, line in enumerate(lines):
+        line = line.rstrip("\n")
+        if line == f"{name}()":
+            taken.add(n)
+        elif (made := _THREAD.match(line)) is not None and (made.group(2) == name or made.group(1) == thread):
+            thread = made.group(1) if made.group(2) == name else None
+            taken |= {n} if thread else set()
+        elif thread is not None and line in (f"{thread}.start()", f"{thread}.join()"):
+            taken.add(n)
+    return taken
+
+
+def _handled(steps: Sequence[Step], actions: dict[str, str]) -> list[tuple[int, str]]:
+    """Each function's object types that a step acts on (picks up, switches, opens, pulls...), in the order first
+    acted on; a GoToObject alone acts on nothing."""
     seen: list[tuple[int, str]] = []
     for step in steps:
         key = (step.function, base_type(step.objects[0]))
-        if actions[step.skill] == "PickupObject" and key not in seen:
+        if actions[step.skill] and key not in seen:
             seen.append(key)
     return seen
+
+
+def _ends(world: WorldCheck, asked: Collection[str]) -> str:
+    """How the things of the asked types end, what they hold aside."""
+    return json.dumps([{k: v for k, v in o.items() if k not in _ASIDE} for o in world.objects()
+                       if base_type(o["objectType"]) in asked], sort_keys=True, default=str)

@@ -34,7 +34,7 @@ UNDONE_BY = {"OpenObject": "CloseObject", "ToggleObjectOn": "ToggleObjectOff"}
 
 #: An object's fields that say where the robots stand, not what state the world is in (a sub-task's robot is its
 #: own: no other sub-task starts where it ended).
-_WHERE_ROBOTS_STAND = frozenset({"distance", "visible", "isInteractable"})
+WHERE_ROBOTS_STAND = frozenset({"distance", "visible", "isInteractable"})
 
 
 @dataclass(frozen=True)
@@ -73,7 +73,7 @@ def drop_idle_steps(text: str, scene: SceneObjects, skills: SkillSet) -> tuple[s
                     break
     if not dropped:
         return text, []
-    dropped |= _sleeps_after(lines, steps, dropped, actions)
+    dropped |= sleeps_after(lines, steps, dropped, actions)
     dropped |= comments_above(lines, dropped)
     return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
 
@@ -132,7 +132,7 @@ def dry_outcome(steps: Sequence[Step], dropped: Collection[int], scene: SceneObj
                 skills: SkillSet) -> tuple[set[int], str]:
     """The lines whose calls fail, and the world's end state, with ``dropped`` left out."""
     failed, world = dry_run(steps, dropped, scene, skills)
-    objects = [{k: v for k, v in o.items() if k not in _WHERE_ROBOTS_STAND} for o in world.objects()]
+    objects = [{k: v for k, v in o.items() if k not in WHERE_ROBOTS_STAND} for o in world.objects()]
     return failed, json.dumps(objects, sort_keys=True, default=str)
 
 
@@ -140,7 +140,7 @@ def _same(base: tuple[set[int], str], trial: tuple[set[int], str]) -> bool:
     return trial[0] <= base[0] and trial[1] == base[1]
 
 
-def _sleeps_after(lines: Sequence[str], steps: Sequence[Step], dropped: Collection[int],
+def sleeps_after(lines: Sequence[str], steps: Sequence[Step], dropped: Collection[int],
                   actions: dict[str, str]) -> set[int]:
     """The sleeps right after a dropped switch-on (comments aside): they waited for it."""
     sleeps = set()

@@ -29,7 +29,7 @@ from ..robots import Catalogue, Robot
 from ..scene import SceneObjects
 from ..skills import SkillSet
 from ..worlds import Ai2ThorWorld, World
-from .asked import as_goal, invented
+from .asked import as_goal, invented, names
 from .backends.base import Backend
 from .candidates import Candidates, mean_logprob, write_all
 from .constraints.coalition import LINE as COALITION_LINE
@@ -213,9 +213,11 @@ class Planner:
         goals = stated_conditions(result, scene) if config.stop_at_goals or config.finish_goals else []
         repairer = Repairer(world, skills) if world is not None and (config.repair or config.finish_goals) \
             and Repairer.fits(world) else None
+        asked = [c for c in goals if names(result.instruction, c.item or c.subject)]
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
-                                    for_team=team, goals=goals, repairer=repairer, stop=config.stop_at_goals,
-                                    repair=config.repair, finish=config.finish_goals) if config.grammar else None
+                                    for_team=team, goals=goals, asked=asked, repairer=repairer,
+                                    stop=config.stop_at_goals, repair=config.repair,
+                                    finish=config.finish_goals) if config.grammar else None
         rng = self.stage_rng(result, record.stage if k == 0 else f"{record.stage} candidate {k}")
         run_stage(record, backend, prompt, constraint, output_budget=self.config.budgets["decomposition"],
                   sampling=self.config.candidates.sampling(self.config.sampling, k), rng=rng, progress=progress)

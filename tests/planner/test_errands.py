@@ -4,6 +4,8 @@ names and a thing a goal is about stay."""
 
 from __future__ import annotations
 
+import pytest
+
 from smartllm_local.domain import load_domain
 from smartllm_local.planner.errands import drop_errands
 from smartllm_local.planner.idle_steps import drop_idle_steps
@@ -50,6 +52,65 @@ def test_a_knife_the_slice_needs_stays():
     """Nobody names the knife and no goal is about it, but the slice fails without it: not an errand."""
     assert drop_errands(SLICE, scene_objects(6), SKILLS, "Slice the bread.", [Condition("Bread", state="SLICED")]) \
         == (SLICE, [])
+
+
+TV = """def subtask1_tv():
+    GoToObject('Television')
+    SwitchOn('Television')
+"""
+LAPTOP = """    # and the laptop
+    GoToObject('Laptop')
+    SwitchOn('Laptop')
+"""
+
+
+def test_a_thing_switched_on_that_nobody_asked_for_is_an_errand_too():
+    """Asked for the television, the model also switches the laptop on: its steps go, the television's stay."""
+    text, dropped = drop_errands(TV + LAPTOP, scene_objects(201), SKILLS, "Put the TV on.",
+                                 [Condition("Television", state="ON")])
+    assert (text, dropped) == (TV, LAPTOP.splitlines(keepends=True))
+
+
+LAPTOP_TASK = """def subtask2_laptop():
+    # the laptop too
+    GoToObject('Laptop')
+    SwitchOn('Laptop')
+
+"""
+
+
+@pytest.mark.parametrize("orchestration, left", [
+    ("t1 = threading.Thread(target=subtask1_tv)\nt2 = threading.Thread(target=subtask2_laptop)\nt1.start()\n"
+     "t2.start()\nt1.join()\nt2.join()\n", "t1 = threading.Thread(target=subtask1_tv)\nt1.start()\nt1.join()\n"),
+    ("subtask1_tv()\nsubtask2_laptop()\n", "subtask1_tv()\n")])
+def test_a_sub_task_of_errands_alone_goes_with_its_thread_and_a_plan_keeps_one(orchestration, left):
+    """A sub-task whose every action is an errand goes whole: its definition, and its thread (made, started,
+    joined) or its call; the plan's last sub-task stays even when it is all errands."""
+    goals = [Condition("Television", state="ON")]
+    text, dropped = drop_errands(TV + "\n" + LAPTOP_TASK + orchestration, scene_objects(201), SKILLS,
+                                 "Put the TV on.", goals)
+    assert text == TV + "\n" + left
+    assert dropped == [line for line in (LAPTOP_TASK + orchestration).splitlines(keepends=True)
+                       if line not in left.splitlines(keepends=True)]
+    alone = LAPTOP_TASK + "subtask2_laptop()\n"
+    assert drop_errands(alone, scene_objects(201), SKILLS, "Put the TV on.", goals) == (alone, [])
+
+
+FILL = """def subtask1_fill():
+    GoToObject('Mug')
+    PickupObject('Mug')
+    GoToObject('SinkBasin')
+    PutObject('Mug', 'SinkBasin')
+    GoToObject('Faucet')
+    SwitchOn('Faucet')
+"""
+
+
+def test_a_switch_that_changes_a_thing_the_instruction_names_stays():
+    """The stated goals forgot that the mug must be filled, and nobody names the faucet; but without it the mug the
+    instruction names would end empty, so the faucet is no errand."""
+    goals = [Condition("SinkBasin", item="Mug")]
+    assert drop_errands(FILL, scene_objects(6), SKILLS, "Put my mug in the sink and fill it.", goals) == (FILL, [])
 
 
 def test_without_stated_goals_nothing_is_taken_out():

@@ -6,13 +6,18 @@ it acted on the object, the plan has its own idea of it, and a statement that co
 wrong as the plan), go to the planner (the repair's, :mod:`.repair`), for a robot no sub-task has used: its
 shortest plan that meets them all and ends with empty hands is written as one more sub-task, called after the
 model's orchestration, so it starts from the state the model's sub-tasks leave (the state it was planned from),
-every step succeeding in the dry run. Where no plan meets them all in the steps and budget a sub-task has,
-nothing is written.
+every step succeeding in the dry run. Where no plan meets them all in the steps and budget a sub-task has (a
+wrong goal stated beside a right one: "CounterTop empty" beside "Plunger in GarbageCan" for "throw the old plunger
+out"), the most of those whose thing the instruction names are met (each alone first, then the largest sets of
+those met alone, in the order stated), for at most :data:`MOST_SUBSETS` goals left (beyond that, all or nothing:
+each set is a search). A goal on a thing nobody named ("TennisRacket in Bed" for "the bed is a mess") is met only
+with every other goal left: a statement wrong enough to hold a goal no plan meets holds others as wrong.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from itertools import combinations
 from typing import Any
 
 from ...goal_language import condition_line
@@ -22,34 +27,36 @@ from ...world.object_types import base_type
 from .candidates import Candidates
 from .feasibility import WholeTeam
 from .format import INDENT
-from .repair import Repairer
+from .repair import Repair, Repairer
 from .world_check import WorldCheck
 
 #: The name of the planner's sub-task (after ``subtask<k>_``).
 NAME = "meet_goals"
+#: The most goals left for which smaller sets are sought when no plan meets them all.
+MOST_SUBSETS = 4
 
 
 class Finish:
     """One decomposition's last sub-task, sought once its model has ended (``made``: what was written)."""
 
     def __init__(self, repairer: Repairer, candidates: Candidates, whole: WholeTeam | None,
-                 goals: Sequence[Condition], max_steps: int, skills: dict[str, Skill]):
+                 goals: Sequence[Condition], max_steps: int, skills: dict[str, Skill],
+                 asked: Sequence[Condition] = ()):
         self.repairer, self.candidates, self.whole, self.goals, self.max_steps, self.skills = \
             repairer, candidates, whole, list(goals), max_steps, skills
+        self.asked = list(asked)  # the goals whose thing the instruction names
         self.made: dict[str, Any] | None = None
 
     def text(self, world: WorldCheck, k: int, room: int, acted: set[str]) -> str | None:
         """Sub-task ``k`` (its definition and its call) within ``room`` characters, or None: no goal left
-        unmet on an object of none of the types ``acted`` on, no robot left for it, or no plan that meets them
-        all."""
-        unmet = [c for c in self.goals if not world.met([c]) and base_type(c.item or c.subject) not in acted]
-        if not unmet or k > len(world.run.team):
+        unmet on an object of none of the types ``acted`` on, no robot left for it, or no plan that meets any."""
+        left = [c for c in self.goals if not world.met([c]) and base_type(c.item or c.subject) not in acted]
+        if not left or k > len(world.run.team):
             return None
-        whole = self.whole
-        found = self.repairer.meet(k - 1, unmet, self.max_steps, allows=whole.can if whole else None,
-                                   skills=whole.skills if whole else None)
-        if found is None:
+        met = self._meet(k - 1, left)
+        if met is None:
             return None
+        unmet, found = met
         name = f"subtask{k}_{NAME}"
         said = [condition_line(c) for c in unmet]
         lines = [self.candidates.line((self.skills[skill], objects)) for skill, objects in found.calls]
@@ -58,3 +65,25 @@ class Finish:
             return None
         self.made = {"goals": said, "lines": lines, "seconds": found.seconds}
         return text
+
+    def _meet(self, member: int, left: Sequence[Condition]) -> tuple[list[Condition], Repair] | None:
+        """The most goals of ``left`` one plan meets, and that plan: all of them; failing that (for a few), of
+        those whose thing the instruction names, each alone, then the largest sets of those met alone, in the order
+        stated."""
+        whole = self.whole
+
+        def meet(goals: Sequence[Condition]) -> Repair | None:
+            return self.repairer.meet(member, goals, self.max_steps, allows=whole.can if whole else None,
+                                      skills=whole.skills if whole else None)
+
+        every = meet(left)
+        if every is not None:
+            return list(left), every
+        if len(left) > MOST_SUBSETS:
+            return None
+        alone = {n: plan for n, c in enumerate(left) if c in self.asked and (plan := meet([c])) is not None}
+        for size in range(len(alone) - (len(alone) == len(left)), 1, -1):
+            for chosen in combinations(sorted(alone), size):
+                if (plan := meet([left[n] for n in chosen])) is not None:
+                    return [left[n] for n in chosen], plan
+        return next(([left[n]], plan) for n, plan in alone.items()) if alone else None

@@ -103,6 +103,7 @@ class PlanConstraint(Orchestration, Constraint):
         world: WorldCheck | None = None,
         for_team: Sequence[Robot] | None = None,
         goals: Sequence[Condition] = (),
+        asked: Sequence[Condition] = (),
         repairer: Repairer | None = None,
         stop: bool = True,
         repair: bool = True,
@@ -116,7 +117,8 @@ class PlanConstraint(Orchestration, Constraint):
         ``repairer`` (a decomposition's, with a world check): with ``repair``, a call that fails where the
         function stands is offered too, and written after the planner's steps that enable it (see
         :mod:`.repair`); with ``finish`` and goals, the goals the plan leaves unmet are met by a last sub-task
-        of the planner's (:mod:`.finish`). ``together`` (an allocation's): a function that can join the block
+        of the planner's (:mod:`.finish`); where no plan meets them all, the most of those ``asked`` (the goals
+        whose thing the instruction names). ``together`` (an allocation's): a function that can join the block
         of threads being written joins it (no direct call, no start, where a thread is offered), and a restated
         body brings in no robot it can do without, so the plan has as few transitions as the order of its
         functions allows."""
@@ -135,6 +137,7 @@ class PlanConstraint(Orchestration, Constraint):
         self.scene = scene
         self.world = world
         self.goals = list(goals) if world is not None else []
+        self.asked = [c for c in asked if c in self.goals]
         self.stop = stop
         self.joins = together and self.allocated
         self.ended_at_goals = False  # a sub-task was withheld: the goals held
@@ -193,7 +196,8 @@ class PlanConstraint(Orchestration, Constraint):
         """The planner's part in a decomposition: repairs (:mod:`.repair`) and the last sub-task (:mod:`.finish`)."""
         if repairer is not None and repair:
             self.repairs = Repairs(repairer, self.candidates, self.whole, self.max_steps, self.by_name)
-        self.finish = Finish(repairer, self.candidates, self.whole, self.goals, self.max_steps, self.by_name) \
+        self.finish = Finish(repairer, self.candidates, self.whole, self.goals, self.max_steps, self.by_name,
+                             self.asked) \
             if repairer is not None and finish and self.goals and not self.summary else None
         self.finish_text = ""  # the planner's last sub-task, once found
 

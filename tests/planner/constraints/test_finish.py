@@ -30,10 +30,10 @@ SLICE_BREAD = ["def subtask1_slice_bread():\n", "    GoToObject('Knife')\n", "  
 GOALS = [Condition("Bread", state="SLICED"), Condition("Fridge", item="Apple")]
 
 
-def _decomposer(floor_plan, goals, *, finish=True, team=None) -> PlanConstraint:
+def _decomposer(floor_plan, goals, *, finish=True, team=None, asked=()) -> PlanConstraint:
     world = WorldCheck(scene_objects(floor_plan), SKILLS, MAX_SUBTASKS)
     return PlanConstraint(scene_objects(floor_plan), SKILLS, world=world, summary=False, comments=False,
-                          repairer=Repairer(world, SKILLS), goals=goals, finish=finish, for_team=team)
+                          repairer=Repairer(world, SKILLS), goals=goals, finish=finish, for_team=team, asked=asked)
 
 
 def _final_state(text: str, floor_plan) -> tuple[DryRun, list[tuple[str, tuple[str, ...]]]]:
@@ -73,10 +73,18 @@ def test_off_or_with_every_goal_met_the_plan_ends_where_the_model_ends_it():
     assert "meet_goals" not in run_constraint(met, _scripted(SLICE_BREAD), len, 3000) and met.finish_made is None
 
 
-def test_goals_no_plan_of_the_team_meets_add_nothing():
-    """A goal no object of the scene can meet, or one the team lacks the skill for (a robot that cannot open the
-    fridge): no sub-task is written, rather than one that fails."""
-    nowhere = _decomposer(6, [*GOALS, Condition("Television", state="ON")])
+def test_a_goal_no_plan_meets_is_left_the_named_others_met_and_a_team_that_cannot_adds_nothing():
+    """A goal no object of the scene can meet (no television in the kitchen) is left out and the goals on things
+    the instruction names that a plan meets together are still met; where it names none of them, nothing is
+    written (the statement is as likely wrong). A goal the team lacks the skill for (a robot that cannot open the
+    fridge) adds no sub-task, rather than one that fails."""
+    goals = [*GOALS, Condition("Television", state="ON"), Condition("Fridge", item="Tomato")]
+    named = _decomposer(6, goals, asked=goals[1:])
+    text = run_constraint(named, _scripted(SLICE_BREAD), len, 3000)
+    assert named.finish_made["goals"] == ["Apple in Fridge", "Tomato in Fridge"], text
+    dry, failed = _final_state(text, 6)
+    assert not failed and _met(dry, [g for g in goals if g.subject != "Television"])
+    nowhere = _decomposer(6, goals)
     assert "meet_goals" not in run_constraint(nowhere, _scripted(SLICE_BREAD), len, 3000)
     team = [r for r in CATALOGUE.robots.values() if "OpenObject" not in r.skills and "SliceObject" in r.skills][:1]
     weak = _decomposer(6, GOALS, team=team)
