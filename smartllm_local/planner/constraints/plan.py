@@ -110,18 +110,17 @@ class PlanConstraint(Orchestration, Constraint):
         finish: bool = False,
         together: bool = False,
     ):
-        """``team`` (or ``team_size``) makes it an allocation; ``for_team`` is the team a decomposition is
-        written for: it offers only the calls that team can make (see :class:`.feasibility.WholeTeam`), and
-        a refusal only for a reason the catalogue gives (:meth:`_reasons`). ``goals`` (the goal stage's, with a
-        world check): with ``stop``, once they all hold in the dry run, no further sub-task is begun.
-        ``repairer`` (a decomposition's, with a world check): with ``repair``, a call that fails where the
-        function stands is offered too, and written after the planner's steps that enable it (see
-        :mod:`.repair`); with ``finish`` and goals, the goals the plan leaves unmet are met by a last sub-task
-        of the planner's (:mod:`.finish`); where no plan meets them all, the most of those ``asked`` (the goals
-        whose thing the instruction names). ``together`` (an allocation's): a function that can join the block
-        of threads being written joins it (no direct call, no start, where a thread is offered), and a restated
-        body brings in no robot it can do without, so the plan has as few transitions as the order of its
-        functions allows."""
+        """``team`` (or ``team_size``) makes it an allocation; ``for_team`` is the team a decomposition is written
+        for: it offers only the calls that team can make (see :class:`.feasibility.WholeTeam`), and a refusal only
+        for a reason the catalogue gives (:meth:`_reasons`). ``goals`` (the goal stage's, with a world check): with
+        ``stop``, once they all hold in the dry run, no further sub-task is begun. ``repairer`` (a decomposition's,
+        with a world check): with ``repair``, a call that fails where the function stands is offered too, and
+        written after the planner's steps that enable it (see :mod:`.repair`); with ``finish`` and goals, the goals
+        the plan leaves unmet are met by a last sub-task of the planner's (:mod:`.finish`; where no plan meets them
+        all, the most of those ``asked``: the goals whose thing the instruction names). ``together`` (an
+        allocation's): a function that can join the block of threads being written joins it (no direct call, no
+        start, where a thread is offered), and a restated body brings in no robot it can do without, so the plan
+        has as few transitions as the order of its functions allows."""
         super().__init__()
         if team is not None:
             team_size = len(team)
@@ -136,8 +135,7 @@ class PlanConstraint(Orchestration, Constraint):
         self.allow_refusal = allow_refusal
         self.scene = scene
         self.world = world
-        self.goals = list(goals) if world is not None else []
-        self.asked = [c for c in asked if c in self.goals]
+        self.goals, self.asked = (list(goals), list(asked)) if world is not None else ([], [])
         self.stop = stop
         self.joins = together and self.allocated
         self.ended_at_goals = False  # a sub-task was withheld: the goals held
