@@ -30,9 +30,19 @@ from ..scoring import Condition
 from ..skills import SkillSet
 from ..world.object_types import base_type
 from .asked import names
-from .constraints.format import INDENT
 from .constraints.world_check import WorldCheck
-from .idle_steps import WHERE_ROBOTS_STAND, Step, acts, comments_above, dry_run, gotos_before, skill_steps, sleeps_after
+from .idle_steps import (
+    WHERE_ROBOTS_STAND,
+    Step,
+    acts,
+    body_end,
+    comments_above,
+    dry_run,
+    function_name,
+    gotos_before,
+    skill_steps,
+    sleeps_after,
+)
 
 #: An object's fields that an errand may change on a thing that was asked for: where the robots stand, and what it
 #: holds (each thing held is an object of its own, asked for or not).
@@ -84,10 +94,7 @@ def _function_lines(lines: Sequence[str], function: int) -> set[int]:
     orchestration that runs it (its call, or its thread's creation, start and join)."""
     defs = [n for n, line in enumerate(lines) if line.startswith("def ")]
     header = defs[function]
-    name = lines[header][len("def "):lines[header].index("(")]
-    end = header + 1
-    while end < len(lines) and lines[end].startswith(INDENT):
-        end += 1
+    name, end = function_name(lines[header]), body_end(lines, header)
     taken = set(range(header, end + (end < len(lines) and not lines[end].strip())))
     thread = None
     for n, line in enumerate(lines):

@@ -21,8 +21,7 @@ from collections.abc import Sequence
 from ..scene import SceneObjects
 from ..skills import SkillSet
 from .constraints.finish import NAME
-from .constraints.format import INDENT
-from .idle_steps import dry_outcome, skill_steps
+from .idle_steps import body_end, dry_outcome, function_name, skill_steps
 
 
 def fold_finish(text: str, scene: SceneObjects, skills: SkillSet) -> tuple[str, str | None]:
@@ -31,30 +30,18 @@ def fold_finish(text: str, scene: SceneObjects, skills: SkillSet) -> tuple[str, 
     would differ."""
     lines = text.splitlines(keepends=True)
     defs = [n for n, line in enumerate(lines) if line.startswith("def ")]
-    if len(defs) < 2 or not _name(lines[defs[-1]]).endswith(f"_{NAME}"):
+    if len(defs) < 2 or not function_name(lines[defs[-1]]).endswith(f"_{NAME}"):
         return text, None
     last, model = defs[-1], defs[-2]
-    body = _body_end(lines, last)
-    name = _name(lines[last])
+    body = body_end(lines, last)
+    name = function_name(lines[last])
     if lines[last - 1] != "\n" or [line for line in lines[body:] if line.strip()] != [f"{name}()\n"]:
         return text, None
-    end = _body_end(lines, model)
+    end = body_end(lines, model)
     folded = lines[:end] + lines[last + 1:body] + lines[end:last - 1]
     if not _same_outcome(lines, folded, scene, skills):
         return text, None
-    return "".join(folded), _name(lines[model])
-
-
-def _name(line: str) -> str:
-    return line[len("def "):line.index("(")]
-
-
-def _body_end(lines: Sequence[str], header: int) -> int:
-    """The index of the first line after the body of the function defined at ``header``."""
-    end = header + 1
-    while end < len(lines) and lines[end].startswith(INDENT):
-        end += 1
-    return end
+    return "".join(folded), function_name(lines[model])
 
 
 def _same_outcome(before: Sequence[str], after: Sequence[str], scene: SceneObjects, skills: SkillSet) -> bool:

@@ -154,6 +154,19 @@ def sleeps_after(lines: Sequence[str], steps: Sequence[Step], dropped: Collectio
     return sleeps
 
 
+def function_name(header: str) -> str:
+    """The name a ``def`` line defines."""
+    return header[len("def "):header.index("(")]
+
+
+def body_end(lines: Sequence[str], header: int) -> int:
+    """The index of the first line after the body of the function defined at ``header``."""
+    end = header + 1
+    while end < len(lines) and lines[end].startswith(INDENT):
+        end += 1
+    return end
+
+
 def comments_above(lines: Sequence[str], dropped: Collection[int]) -> set[int]:
     """The comment lines right above a dropped line (they said what it would do)."""
     comments = set()
