@@ -1,10 +1,11 @@
 """The planner's last sub-task: the stated goals the model's sub-tasks left unmet, met by Fast Downward.
 
 With the goal stage run first and a world check, once the model has written its sub-tasks and launched them,
-the stated goals that do not hold in the dry run, on objects none of its calls acted on (goals it forgot; where
-it acted on the object, the plan has its own idea of it, and a statement that contradicts the plan is as likely
-wrong as the plan), go to the planner (the repair's, :mod:`.repair`), for a robot no sub-task has used: its
-shortest plan that meets them all and ends with empty hands is written as one more sub-task, called after the
+the stated goals that do not hold in the dry run and that the plan left open go to the planner (the repair's,
+:mod:`.repair`): a thing's place where none of its calls carried the thing, a state where none acted on it (goals it
+forgot: the newspaper pushed, never thrown out; where it carried the thing, or acted on the one whose state is
+stated, the plan has its own idea of it, and a statement that contradicts the plan is as likely wrong as the
+plan). For a robot no sub-task has used, its shortest plan that meets them all and ends with empty hands is written as one more sub-task, called after the
 model's orchestration, so it starts from the state the model's sub-tasks leave (the state it was planned from),
 every step succeeding in the dry run. Where no plan meets them all in the steps and budget a sub-task has (a
 wrong goal stated beside a right one: "CounterTop empty" beside "Plunger in GarbageCan" for "throw the old plunger
@@ -47,10 +48,12 @@ class Finish:
         self.asked = list(asked)  # the goals whose thing the instruction names
         self.made: dict[str, Any] | None = None
 
-    def text(self, world: WorldCheck, k: int, room: int, acted: set[str]) -> str | None:
+    def text(self, world: WorldCheck, k: int, room: int, acted: set[str], carried: set[str]) -> str | None:
         """Sub-task ``k`` (its definition and its call) within ``room`` characters, or None: no goal left
-        unmet on an object of none of the types ``acted`` on, no robot left for it, or no plan that meets any."""
-        left = [c for c in self.goals if not world.met([c]) and base_type(c.item or c.subject) not in acted]
+        unmet that the plan left open (a thing's place where none of the types ``carried`` was it, a state
+        where none ``acted`` on was it), no robot left for it, or no plan that meets any."""
+        left = [c for c in self.goals if not world.met([c])
+                and (base_type(c.item) not in carried if c.item else base_type(c.subject) not in acted)]
         if not left or k > len(world.run.team):
             return None
         met = self._meet(k - 1, left)

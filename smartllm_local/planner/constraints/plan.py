@@ -349,9 +349,11 @@ class PlanConstraint(Orchestration, Constraint):
         """The plan is complete: a blank line before the planner's last sub-task (sought once), if there is one."""
         finish, self.finish = self.finish, None
         assert finish is not None and self.world is not None
-        acted = {base_type(objects[0]) for fn in self.functions for _, skill, objects in fn.calls
-                 if self.skill_actions.get(skill)}
-        text = finish.text(self.world, len(self.functions) + 1, remaining - 1, acted)
+        calls = [(self.skill_actions.get(skill), base_type(objects[0])) for fn in self.functions
+                 for _, skill, objects in fn.calls]
+        acted = {thing for action, thing in calls if action}
+        carried = {thing for action, thing in calls if action == "PickupObject"}
+        text = finish.text(self.world, len(self.functions) + 1, remaining - 1, acted, carried)
         if text is None:
             return None
         self.finish_made, self.finish_text, self.phase = finish.made, text, "finish"

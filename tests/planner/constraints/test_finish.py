@@ -92,6 +92,27 @@ def test_a_goal_no_plan_meets_is_left_the_named_others_met_and_a_team_that_canno
     assert "meet_goals" not in text and weak.finish_made is None
 
 
+def _newspaper(*lines: str) -> list[str]:
+    return ["def subtask1_newspaper():\n", "    GoToObject('Newspaper')\n", *lines, "\n", "subtask1_newspaper()\n"]
+
+
+def test_a_place_goal_on_a_thing_the_model_acted_on_but_never_carried_is_met():
+    """The model pushes the newspaper it was asked to throw out: its place is still the goal's to decide, so the
+    planner throws it out. Where the model carried it somewhere else, the plan has its own idea of its place, and
+    nothing is added (the statement is as likely wrong as the plan)."""
+    goals = [Condition("GarbageCan", item="Newspaper")]
+    pushed = _decomposer(203, goals)
+    text = run_constraint(pushed, _scripted(_newspaper("    PushObject('Newspaper')\n")), len, 3000)
+    assert "PushObject('Newspaper')" in text and pushed.finish_made["goals"] == ["Newspaper in GarbageCan"], text
+    dry, failed = _final_state(text, 203)
+    assert not failed and _met(dry, goals)
+    carried = _decomposer(203, goals)
+    lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Sofa')\n",
+                       "    PutObject('Newspaper', 'Sofa')\n")
+    text = run_constraint(carried, _scripted(lines), len, 3000)
+    assert "PutObject('Newspaper', 'Sofa')" in text and carried.finish_made is None, text
+
+
 @pytest.mark.parametrize("kind, tasks", [("random", 3), pytest.param("longest", 8, marks=pytest.mark.heavy)])
 def test_writers_that_write_as_models_do_keep_every_guarantee_with_the_last_sub_task(kind, tasks):
     """Adversarial writers with the tasks' goals stated: the output parses and keeps its budget; where the
