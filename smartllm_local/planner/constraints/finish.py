@@ -1,18 +1,19 @@
 """The planner's last sub-task: the stated goals the model's sub-tasks left unmet, met by Fast Downward.
 
-With the goal stage run first and a world check, once the model has written its sub-tasks and launched them,
-the stated goals that do not hold in the dry run and that the plan left open go to the planner (the repair's,
+With the goal stage run first and a world check, once the model has written its sub-tasks and launched them, the
+stated goals that do not hold in the dry run and that the plan left open go to the planner (the repair's,
 :mod:`.repair`): a thing's place where none of its calls carried the thing, a state where none acted on it (goals it
 forgot: the newspaper pushed, never thrown out; where it carried the thing, or acted on the one whose state is
-stated, the plan has its own idea of it, and a statement that contradicts the plan is as likely wrong as the
-plan). For a robot no sub-task has used, its shortest plan that meets them all and ends with empty hands is written as one more sub-task, called after the
-model's orchestration, so it starts from the state the model's sub-tasks leave (the state it was planned from),
-every step succeeding in the dry run. Where no plan meets them all in the steps and budget a sub-task has (a
-wrong goal stated beside a right one: "CounterTop empty" beside "Plunger in GarbageCan" for "throw the old plunger
-out"), the most of those whose thing the instruction names are met (each alone first, then the largest sets of
-those met alone, in the order stated), for at most :data:`MOST_SUBSETS` goals left (beyond that, all or nothing:
-each set is a search). A goal on a thing nobody named ("TennisRacket in Bed" for "the bed is a mess") is met only
-with every other goal left: a statement wrong enough to hold a goal no plan meets holds others as wrong.
+stated, the plan has its own idea of it, and a statement that contradicts the plan is as likely wrong as the plan).
+For a robot no sub-task has used, its shortest plan that meets them all and ends with empty hands is written as one
+more sub-task, called after the model's orchestration, so it starts from the state the model's sub-tasks leave (the
+state it was planned from), every step succeeding in the dry run. Where no plan meets them all in the steps and
+budget a sub-task has (a wrong goal stated beside a right one: "CounterTop empty" beside "Plunger in GarbageCan" for
+"throw the old plunger out"), the most of those whose thing the instruction names are met (each alone first, then
+the largest sets of those met alone, in the order stated), for at most :data:`MOST_SUBSETS` goals left (beyond that,
+all or nothing: each set is a search). A goal on a thing nobody named ("TennisRacket in Bed" for "the bed is a
+mess") is met only with every other goal left: a statement wrong enough to hold a goal no plan meets holds others as
+wrong.
 """
 
 from __future__ import annotations
