@@ -242,9 +242,9 @@ _KEEP_IDLE_STEPS = typer.Option(False, "--keep-idle-steps", help=(
     "opened and closed with nothing put in), rather than take them out before the teams are formed (see "
     "docs/planner.md, \"Idle steps\")."))
 _KEEP_ERRANDS = typer.Option(False, "--keep-errands", help=(
-    "Keep the decomposition's steps on a thing a sub-task acts on that the instruction does not name and no "
-    "stated goal is about, rather than take them out where the dry run shows them unneeded (see docs/planner.md, "
-    "\"Errands\")."))
+    "Keep the decomposition's steps on a thing a sub-task acts on that nobody named and no stated goal is about, "
+    "or that change nothing of how a named thing ends, rather than take them out where the dry run shows them "
+    "unneeded (see docs/planner.md, \"Errands\")."))
 _FINISH_APART = typer.Option(False, "--finish-apart", help=(
     "Call the planner's last sub-task after the model's, rather than write its steps at the end of the model's "
     "last sub-task where the dry run ends the same (one transition fewer; see docs/planner.md, \"The planner's "

@@ -6,15 +6,17 @@ as a need: the coffee's sub-task then needs a robot that opens fridges as well a
 and the apple's sub-task waits for it (a transition the reference plan does not make: RU 0 for a plan that met
 every goal).
 
-So a thing a sub-task acts on (picks up, switches, opens, pulls...) that the instruction does not name and no
-stated goal is about is an errand: the sub-task's steps on it, with the GoToObject steps that led to each, the
-sleeps after a switch-on and the comments right above them, are taken out where the dry run (a notional robot per
-sub-task, in the order written) shows them unneeded: no call fails that did not, every stated goal that held still
-holds, every thing the instruction names or a goal is about ends as it did (what it holds aside: a cup nobody asked
-for leaves the fridge). A sub-task whose every action is an errand goes whole (its definition, and its thread or
-its call) where another sub-task still acts. A knife fetched for a slice stays (the slice fails without it), as
-does a faucet that fills a mug the instruction names (the mug would end empty) and anything the instruction
-names. An open and close left with nothing put in between is then taken out by
+So a sub-task's steps on a thing it acts on (picks up, switches, opens, pulls...), with the GoToObject steps that
+led to each, the sleeps after a switch-on and the comments right above them, are an errand where the dry run (a
+notional robot per sub-task, in the order written) shows them unneeded: no call fails that did not, every stated
+goal that held still holds, every thing the instruction names or a goal is about ends as it did (what it holds
+aside: a cup nobody asked for leaves the fridge). On a thing nobody named that is a thing nobody asked for; on a
+named one, steps that change nothing of how it ends (the cloth pushed in the bathtub before another sub-task
+carries it to the counter: the push needed a robot that pushes, and the carrying sub-task waited for it). A
+sub-task whose every action is an errand goes whole (its definition, and its thread or its call) where another
+sub-task still acts. A knife fetched for a slice stays (the slice fails without it), as does a faucet that fills a
+mug the instruction names (the mug would end empty). An open and close left with nothing put in between is then
+taken out by
 :mod:`.idle_steps`. Only the model's own plan, its stated goals and the instruction are read; a plan with no stated
 goals is left as it is.
 """
@@ -67,8 +69,6 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
     dropped: set[int] = set()
     gone: set[int] = set()  # functions all of whose actions were errands
     for function, thing in _handled(steps, actions):
-        if thing in asked:
-            continue
         errand = {s.line for s in steps if s.function == function and s.objects and base_type(s.objects[0]) == thing}
         taken = dropped | errand | gotos_before(steps, errand, actions)
         whole = not acts(steps, function, taken, actions)
