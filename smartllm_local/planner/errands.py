@@ -15,10 +15,10 @@ named one, steps that change nothing of how it ends (the cloth pushed in the bat
 carries it to the counter: the push needed a robot that pushes, and the carrying sub-task waited for it). A
 sub-task whose every action is an errand goes whole (its definition, and its thread or its call) where another
 sub-task still acts. A knife fetched for a slice stays (the slice fails without it), as does a faucet that fills a
-mug the instruction names (the mug would end empty). An open and close left with nothing put in between is then
-taken out by
-:mod:`.idle_steps`. Only the model's own plan, its stated goals and the instruction are read; a plan with no stated
-goals is left as it is.
+mug the instruction names (the mug would end empty). The fridge opened and closed for the cup alone ends as it was
+without those steps, so they go in the same pass; a pair of steps that undo each other beside others on the same
+thing, or in a plan with no stated goals, is :mod:`.idle_steps`' to take out. Only the model's own plan, its stated
+goals and the instruction are read; a plan with no stated goals is left as it is.
 """
 
 from __future__ import annotations
