@@ -65,7 +65,7 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
     wanted = {base_type(o) for c in goals for o in (c.subject, c.item) if o}
     asked = wanted | {t for t in scene.types if names(instruction, t)}
     base_failed, world = dry_run(steps, set(), scene, skills)
-    base_met, base_ends = world.met(goals), _ends(world, asked)
+    base_met, base_ends = world.met(goals), ends(world, asked)
     dropped: set[int] = set()
     gone: set[int] = set()  # functions all of whose actions were errands
     for function, thing in _handled(steps, actions):
@@ -77,7 +77,7 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
                 continue  # the plan keeps a sub-task
             taken |= {s.line for s in steps if s.function == function}
         failed, world = dry_run(steps, taken, scene, skills)
-        if failed <= base_failed and world.met(goals) >= base_met and _ends(world, asked) == base_ends:
+        if failed <= base_failed and world.met(goals) >= base_met and ends(world, asked) == base_ends:
             dropped = taken
             gone |= {function} if whole else set()
     if not dropped:
@@ -120,7 +120,7 @@ def _handled(steps: Sequence[Step], actions: dict[str, str]) -> list[tuple[int, 
     return seen
 
 
-def _ends(world: WorldCheck, asked: Collection[str]) -> str:
+def ends(world: WorldCheck, asked: Collection[str]) -> str:
     """How the things of the asked types end, what they hold aside."""
     return json.dumps([{k: v for k, v in o.items() if k not in _ASIDE} for o in world.objects()
                        if base_type(o["objectType"]) in asked], sort_keys=True, default=str)

@@ -46,6 +46,7 @@ from .errands import drop_errands
 from .finish_fold import fold_finish
 from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
 from .idle_steps import drop_idle_steps
+from .in_turn import free_blocks
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -183,15 +184,19 @@ class Planner:
         return record
 
     def _tidy(self, record: StageRecord, result: PlanResult, scene: SceneObjects) -> None:
-        """The chosen decomposition without its errands nobody asked for (:mod:`.errands`) and its idle steps
-        (:mod:`.idle_steps`), the planner's last sub-task folded into the model's last (:mod:`.finish_fold`): the
-        text the coalition and the allocation read."""
+        """The chosen decomposition without its errands nobody asked for (:mod:`.errands`, and :mod:`.in_turn`'s
+        steps that alone made sub-tasks run in turn) and its idle steps (:mod:`.idle_steps`), the planner's last
+        sub-task folded into the model's last (:mod:`.finish_fold`): the text the coalition and the allocation
+        read."""
         if not (self.config.world_check and isinstance(record.plan, Plan) and not record.plan.is_refusal):
             return
         skills, config = self.catalogue.skills, self.config
         if config.drop_errands:
-            record.output, record.errands = drop_errands(record.output, scene, skills, result.instruction,
-                                                         stated_conditions(result, scene))
+            goals = stated_conditions(result, scene)
+            record.output, record.errands = drop_errands(record.output, scene, skills, result.instruction, goals)
+            record.output, in_turn = free_blocks(record.output, scene, skills, self.catalogue.team(result.robots),
+                                                 result.instruction, goals)
+            record.errands += in_turn
         if config.drop_idle:
             record.output, record.idle_steps = drop_idle_steps(record.output, scene, skills)
         into = None

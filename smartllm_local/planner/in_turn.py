@@ -1,0 +1,139 @@
+"""A step nobody needs that alone makes sub-tasks run in turn, taken out before the teams are formed.
+
+Asked to cut the bread and put the apple in the fridge, with one robot that slices, one that picks up and puts, and
+one that does both and opens fridges, the 1.5B fetched a knife for the slice and then laid it down ("where it
+stands"). Only the fridge's robot can both pick a knife up and drop it, and only it opens fridges, so the two
+sub-tasks it started at once ran in turn: a transition the reference plan, where the picker holds the knife for
+the slicer, does not make (RU 0 for a plan that met every goal).
+
+So, for each block of sub-tasks the decomposition starts at once, the teams that could do each are sought, no robot
+in two: a team has every skill its sub-task uses, lifts its heaviest thing, and for each thing one robot of it
+picks up, has a member that does all that is done to the thing while held (the pick-up and the put, drop or
+throw). Where no such teams exist, one step on a thing nobody asked for (the instruction does not name it and no
+stated goal is about it), with the GoToObject steps right before it and the comments above, is taken out where
+that alone lets them exist and the dry run shows it unneeded, as :mod:`.errands` reads it: no call fails that did
+not, every stated goal that held still holds, every thing the instruction names or a goal is about ends as it did.
+A knife the slice needs stays (the slice fails without it); the drop goes. Only the model's plan, its stated goals,
+the instruction and the team are read; a plan with no stated goals is left as it is.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Collection, Iterator, Sequence
+from itertools import combinations
+
+from ..robots import Robot
+from ..scene import MASS_TOLERANCE, SceneObjects
+from ..scoring import Condition
+from ..skills import SkillSet
+from ..world.object_types import base_type
+from .asked import names
+from .constraints.feasibility import EXACT_COALITIONS
+from .errands import ends
+from .idle_steps import Step, acts, comments_above, dry_run, function_name, gotos_before, skill_steps
+
+#: What a robot does to a thing it holds (its pick-up aside): the same robot must do it.
+_HELD = frozenset({"PutObject", "DropHandObject", "ThrowObject"})
+#: A top-level line of a decomposition's orchestration.
+_THREAD = re.compile(r"^(\w+) = threading\.Thread\(target=(\w+)\)$")
+_START = re.compile(r"^(\w+)\.(start|join)\(\)$")
+_CALL = re.compile(r"^(\w+)\(\)$")
+
+
+def free_blocks(text: str, scene: SceneObjects, skills: SkillSet, team: Sequence[Robot], instruction: str,
+                goals: Sequence[Condition]) -> tuple[str, list[str]]:
+    """The decomposition without the steps that alone kept a block of sub-tasks from having teams apart (and the
+    GoToObject steps and comments that served them), and the lines taken out (none: the text as it was)."""
+    lines = text.splitlines(keepends=True)
+    steps = skill_steps(lines, skills) if goals else None
+    if not steps or not 2 <= len(team) <= EXACT_COALITIONS:
+        return text, []
+    actions = {name: s.action for name, s in skills.items()}
+    asked = {base_type(o) for c in goals for o in (c.subject, c.item) if o} \
+        | {t for t in scene.types if names(instruction, t)}
+    base_failed, world = dry_run(steps, set(), scene, skills)
+    base_met, base_ends = world.met(goals), ends(world, asked)
+    dropped: set[int] = set()
+    for block in _blocks(lines):
+        if _apart(block, steps, dropped, actions, team, scene):
+            continue
+        for step in steps:
+            if step.function not in block or not actions[step.skill] or base_type(step.objects[0]) in asked \
+                    or step.line in dropped:
+                continue
+            taken = dropped | {step.line} | gotos_before(steps, {step.line}, actions)
+            if not acts(steps, step.function, taken, actions) or not _apart(block, steps, taken, actions, team, scene):
+                continue
+            failed, trial = dry_run(steps, taken, scene, skills)
+            if failed <= base_failed and trial.met(goals) >= base_met and ends(trial, asked) == base_ends:
+                dropped = taken
+                break
+    if not dropped:
+        return text, []
+    dropped |= comments_above(lines, dropped)
+    return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
+
+
+def _blocks(lines: Sequence[str]) -> Iterator[set[int]]:
+    """The functions (by order written) each block of the orchestration starts at once, where there are two or
+    more: the threads started before a join."""
+    order = {function_name(line): k for k, line in enumerate(line for line in lines if line.startswith("def "))}
+    targets: dict[str, str] = {}
+    started: set[int] = set()
+    for line in lines:
+        line = line.rstrip("\n")
+        if (made := _THREAD.match(line)) is not None:
+            targets[made.group(1)] = made.group(2)
+        elif (went := _START.match(line)) is not None and went.group(1) in targets:
+            if went.group(2) == "start" and targets[went.group(1)] in order:
+                started.add(order[targets[went.group(1)]])
+            elif went.group(2) == "join" and started:
+                if len(started) > 1:
+                    yield started
+                started = set()
+        elif _CALL.match(line) is not None and started:
+            started = set()  # a direct call waits for nothing it does not follow
+
+
+def _apart(block: Collection[int], steps: Sequence[Step], dropped: Collection[int], actions: dict[str, str],
+           team: Sequence[Robot], scene: SceneObjects) -> bool:
+    """Whether each function of the block, its ``dropped`` steps left out, has a team of its own, no robot in two."""
+    options = [_teams([s for s in steps if s.function == f and s.line not in dropped], actions, team, scene)
+               for f in sorted(block)]
+
+    def assign(k: int, used: frozenset[int]) -> bool:
+        return k == len(options) or any(not used & t and assign(k + 1, used | t) for t in options[k])
+
+    return assign(0, frozenset())
+
+
+def _teams(steps: Sequence[Step], actions: dict[str, str], team: Sequence[Robot],
+           scene: SceneObjects) -> list[frozenset[int]]:
+    """The sets of the team's robots (by index) that can do the function's steps: every skill, the heaviest thing
+    lifted, and for each thing picked up, one member that does all that is done to it while held."""
+    skills = {s.skill for s in steps}
+    heaviest = max((scene.masses.get(s.objects[0], 0.0) for s in steps if actions[s.skill] == "PickupObject"),
+                   default=0.0)
+    held: dict[str, set[str]] = {}
+    for s in steps:
+        if actions[s.skill] == "PickupObject":
+            held.setdefault(s.objects[0], set()).add(s.skill)
+        elif actions[s.skill] in _HELD and s.objects[0] in held:
+            held[s.objects[0]].add(s.skill)
+    able = []
+    for n in range(1, len(team) + 1):
+        for members in combinations(range(len(team)), n):
+            robots = [team[i] for i in members]
+            if skills <= set().union(*(r.skills for r in robots)) \
+                    and sum(r.mass_capacity for r in robots) + MASS_TOLERANCE >= heaviest \
+                    and all(any(done <= r.skills and r.mass_capacity + MASS_TOLERANCE >= scene.masses.get(o, 0.0)
+                                for r in robots) or _lifted_together(o, robots, scene)
+                            for o, done in held.items()):
+                able.append(frozenset(members))
+    return able
+
+
+def _lifted_together(thing: str, robots: Sequence[Robot], scene: SceneObjects) -> bool:
+    """Whether the thing is too heavy for any one robot of the team, so its members lift (and put) it together."""
+    return all(r.mass_capacity + MASS_TOLERANCE < scene.masses.get(thing, 0.0) for r in robots)

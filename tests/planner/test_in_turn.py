@@ -1,0 +1,87 @@
+"""A step on a thing nobody asked for that alone keeps the sub-tasks started at once from having teams apart goes
+before the teams are formed, where the dry run shows it unneeded; a step that is needed, on a thing asked for, or
+in sub-tasks the plan runs in turn anyway, stays."""
+
+from __future__ import annotations
+
+from smartllm_local.domain import load_domain
+from smartllm_local.planner.in_turn import free_blocks
+from smartllm_local.scoring import Condition
+from smartllm_local.worlds import scene_objects
+
+CATALOGUE = load_domain().catalogue
+SKILLS = CATALOGUE.skills
+SCENE = scene_objects(7)
+ASKED = "Cut the bread and put the apple in the fridge."
+GOALS = [Condition("Bread", state="SLICED"), Condition("Fridge", item="Apple")]
+#: Robot 12 slices and drops, robot 25 picks up and puts, robot 17 picks up, puts, drops and opens fridges.
+TEAM = CATALOGUE.team([12, 25, 17])
+
+DROP = """    # lay the knife down where it stands
+    DropHandObject('ButterKnife')
+"""
+CUT = """def subtask1_cut_bread():
+    # go to the bread
+    GoToObject('Bread')
+    # cut it into slices
+    GoToObject('ButterKnife')
+    PickupObject('ButterKnife')
+    GoToObject('Bread')
+    SliceObject('Bread')
+"""
+APPLE = """
+def subtask2_put_apple():
+    GoToObject('Apple')
+    PickupObject('Apple')
+    GoToObject('Fridge')
+    OpenObject('Fridge')
+    PutObject('Apple', 'Fridge')
+    CloseObject('Fridge')
+
+"""
+AT_ONCE = """t1 = threading.Thread(target=subtask1_cut_bread)
+t2 = threading.Thread(target=subtask2_put_apple)
+t1.start()
+t2.start()
+t1.join()
+t2.join()
+"""
+IN_TURN = """t1 = threading.Thread(target=subtask1_cut_bread)
+t1.start()
+t1.join()
+t2 = threading.Thread(target=subtask2_put_apple)
+t2.start()
+t2.join()
+"""
+PLAN = CUT + DROP + APPLE + AT_ONCE
+
+
+def test_a_knife_laid_down_that_alone_needs_the_fridges_robot_goes():
+    """Only robot 17 both picks the knife up and drops it, and only it opens the fridge: with the drop the two
+    sub-tasks cannot have teams apart. Without it robots 12 and 25 cut while 17 does the apple; the knife's
+    pick-up stays (the slice fails without it)."""
+    assert free_blocks(PLAN, SCENE, SKILLS, TEAM, ASKED, GOALS) == (CUT + APPLE + AT_ONCE, DROP.splitlines(True))
+
+
+def test_nothing_goes_where_the_team_has_robots_apart_already():
+    team = CATALOGUE.team([12, 25, 17, 1])  # robot 1 has every skill
+    assert free_blocks(PLAN, SCENE, SKILLS, team, ASKED, GOALS) == (PLAN, [])
+
+
+def test_nothing_goes_where_the_plan_runs_the_sub_tasks_in_turn():
+    plan = CUT + DROP + APPLE + IN_TURN
+    assert free_blocks(plan, SCENE, SKILLS, TEAM, ASKED, GOALS) == (plan, [])
+
+
+def test_a_step_on_a_thing_asked_for_or_without_stated_goals_stays():
+    named = ASKED.replace("Cut the bread", "Cut the bread with the butter knife")
+    assert free_blocks(PLAN, SCENE, SKILLS, TEAM, named, GOALS) == (PLAN, [])
+    knife_goal = [*GOALS, Condition("CounterTop", item="ButterKnife")]
+    assert free_blocks(PLAN, SCENE, SKILLS, TEAM, ASKED, knife_goal) == (PLAN, [])
+    assert free_blocks(PLAN, SCENE, SKILLS, TEAM, ASKED, []) == (PLAN, [])
+
+
+def test_a_drop_the_sub_task_needs_stays():
+    """After laying the knife down the robot picks up a mug: without the drop that pick-up fails."""
+    plan = PLAN.replace(DROP, DROP + "    GoToObject('Mug')\n    PickupObject('Mug')\n")
+    assert free_blocks(plan, SCENE, SKILLS, TEAM, ASKED, GOALS) == (plan, [])
