@@ -1,5 +1,5 @@
-"""The planner's last sub-task folded into the model's last one, so that meeting a forgotten goal costs no
-transition.
+"""The planner's last sub-task folded into one of the model's (its last, as a rule), so that meeting a forgotten
+goal costs no transition.
 
 The planner's last sub-task (:mod:`.constraints.finish`) is called after the model's orchestration: it begins
 when every sub-task of the model has ended, one more transition by the paper's count. Where the team has no
@@ -11,37 +11,53 @@ the dry run (a notional robot per sub-task, in the order written, as the world c
 the same outcome: no call fails that did not, and the world ends in the same state. The model's last sub-task
 runs last in that order, so its robot takes the steps up from the state the planner planned them from, but for
 where it stands and what it holds; a robot still holding something fails the first pickup, and the plan is left
-as it was. Only the model's own plan and the planner's lines are read.
+as it was. An earlier sub-task takes the steps instead where the dry run ends the same with them there and the
+last would then need a robot that another sub-task started with it needs, while the earlier would not: asked to
+fry the potato and put the bread in the fridge, with one robot that switches but cannot open and one that opens
+but cannot switch, the burner switched on in the bread's sub-task made it need both robots, and the potato's
+sub-task waited for it. Only the model's own plan, the planner's lines and the team are read.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
+from ..robots import Robot
 from ..scene import SceneObjects
 from ..skills import SkillSet
+from .constraints.feasibility import EXACT_COALITIONS
 from .constraints.finish import NAME
 from .idle_steps import body_end, dry_outcome, function_name, skill_steps
+from .in_turn import all_apart
 
 
-def fold_finish(text: str, scene: SceneObjects, skills: SkillSet) -> tuple[str, str | None]:
-    """The decomposition with its last sub-task of the planner's written at the end of the model's last sub-task,
-    and that sub-task's name; the text as it was and None where it has no such sub-task or the dry run's outcome
-    would differ."""
+def fold_finish(text: str, scene: SceneObjects, skills: SkillSet,
+                team: Sequence[Robot] = ()) -> tuple[str, str | None]:
+    """The decomposition with its last sub-task of the planner's written at the end of one of the model's, and that
+    sub-task's name; the text as it was and None where it has no such sub-task or the dry run's outcome would
+    differ wherever it went. The model's last sub-task takes it, unless with the ``team`` its sub-tasks started at
+    once then have no teams apart while they would with it in another (the one with the steps needs a robot that
+    another needs)."""
     lines = text.splitlines(keepends=True)
     defs = [n for n, line in enumerate(lines) if line.startswith("def ")]
     if len(defs) < 2 or not function_name(lines[defs[-1]]).endswith(f"_{NAME}"):
         return text, None
-    last, model = defs[-1], defs[-2]
+    last = defs[-1]
     body = body_end(lines, last)
     name = function_name(lines[last])
     if lines[last - 1] != "\n" or [line for line in lines[body:] if line.strip()] != [f"{name}()\n"]:
         return text, None
-    end = body_end(lines, model)
-    folded = lines[:end] + lines[last + 1:body] + lines[end:last - 1]
-    if not _same_outcome(lines, folded, scene, skills):
+    folds = []
+    for model in reversed(defs[:-1]):
+        end = body_end(lines, model)
+        folded = lines[:end] + lines[last + 1:body] + lines[end:last - 1]
+        if _same_outcome(lines, folded, scene, skills):
+            folds.append((folded, function_name(lines[model])))
+    if not folds:
         return text, None
-    return "".join(folded), function_name(lines[model])
+    if 2 <= len(team) <= EXACT_COALITIONS:
+        folds.sort(key=lambda fold: not all_apart(fold[0], skills, team, scene))  # stable: the last first
+    return "".join(folds[0][0]), folds[0][1]
 
 
 def _same_outcome(before: Sequence[str], after: Sequence[str], scene: SceneObjects, skills: SkillSet) -> bool:

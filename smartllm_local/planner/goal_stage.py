@@ -10,20 +10,21 @@ does not run it.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from ..errors import PlanError
 from ..goal_language import GoalStatement, parse_goal_statement
 from ..scene import GoalVocabulary, SceneObjects
 from ..scoring import Condition
-from .asked import coverage, named_in_full, present_yet_refused
+from ..world.object_types import base_type
+from .asked import coverage, named_in_full, names, present_yet_refused
 from .backends.base import Backend
 from .candidates import mean_logprob, write_all
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .progress import SILENT
-from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
+from .prompting.goal_prompt import GoalExample, goal_prompt, load_asked_states, load_goal_examples, states_asked
 from .result import PlanResult, StageRecord
 from .stages import Fitted, fit_prompt, run_stage
 
@@ -95,9 +96,11 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), goal_examples(planner), planner.backend,
                         GOAL_BUDGET, planner.chat)
     count = planner.config.goal_candidates
+    asked = {state: _named(words, state, vocabulary)
+             for state, words in states_asked(instruction, load_asked_states(planner.world.examples_dir())).items()}
 
     def write(backend: Backend, k: int) -> StatedGoals:
-        return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, refusals=refusals)
+        return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, asked, refusals=refusals)
 
     if count == 1:
         return write(planner.backend, 0)
@@ -108,11 +111,21 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     return chosen
 
 
+def _named(words: str, state: str, vocabulary: GoalVocabulary) -> list[str]:
+    """The types the words name that can be in the state; a slice type only where its whole is not among them
+    ("the potato" is the Potato, not its slices)."""
+    named = [t for t in vocabulary.types if state in vocabulary.states.get(t, ()) and names(words, t)]
+    return [t for t in named if base_type(t) == t or base_type(t) not in named]
+
+
 def _candidate(planner: Planner, backend: Backend, k: int, prompt: Fitted, scene: SceneObjects,
-               vocabulary: GoalVocabulary, instruction: str, *, refusals: bool) -> StatedGoals:
-    """Goal candidate ``k`` (the planner's sampling for the first, the candidates' for the others) on ``backend``."""
+               vocabulary: GoalVocabulary, instruction: str, asked: Mapping[str, Sequence[str]], *,
+               refusals: bool) -> StatedGoals:
+    """Goal candidate ``k`` (the planner's sampling for the first, the candidates' for the others) on ``backend``;
+    ``asked``: the states the instruction asks for in so many words, each with the things its words name that
+    can be in it (owed where the model leaves them out)."""
     record = StageRecord(STAGE, chat_template=planner.chat_status)
-    constraint = GoalConstraint(vocabulary, allow_refusal=refusals) if planner.config.grammar else None
+    constraint = GoalConstraint(vocabulary, allow_refusal=refusals, asked=asked) if planner.config.grammar else None
     # No team: the goal is what the instruction asks, whoever reaches it.
     task = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=[])
     rng = planner.stage_rng(task, STAGE if k == 0 else f"{STAGE} candidate {k}")
@@ -132,6 +145,9 @@ def _candidate(planner: Planner, backend: Backend, k: int, prompt: Fitted, scene
         record.refusal = statement.refusal
         record.refused_by = record.refused_by or "model"
     elif statement is not None:
+        if constraint is not None and constraint.owed:  # asked for in so many words: the surest goals, first
+            statement = replace(statement, goals=tuple(sorted(statement.goals, key=lambda g: not any(
+                c in constraint.owed for c in g.conditions()))))
         record.output = statement.text() + "\n"  # each type by its name, each holder "in"; raw_output as written
     return StatedGoals(record, statement)
 

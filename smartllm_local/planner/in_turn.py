@@ -55,15 +55,15 @@ def free_blocks(text: str, scene: SceneObjects, skills: SkillSet, team: Sequence
     base_failed, world = dry_run(steps, set(), scene, skills)
     base_met, base_ends = world.met(goals), ends(world, asked)
     dropped: set[int] = set()
-    for block in _blocks(lines):
-        if _apart(block, steps, dropped, actions, team, scene):
+    for block in blocks(lines):
+        if apart(block, steps, dropped, actions, team, scene):
             continue
         for step in steps:
             if step.function not in block or not actions[step.skill] or base_type(step.objects[0]) in asked \
                     or step.line in dropped:
                 continue
             taken = dropped | {step.line} | gotos_before(steps, {step.line}, actions)
-            if not acts(steps, step.function, taken, actions) or not _apart(block, steps, taken, actions, team, scene):
+            if not acts(steps, step.function, taken, actions) or not apart(block, steps, taken, actions, team, scene):
                 continue
             failed, trial = dry_run(steps, taken, scene, skills)
             if failed <= base_failed and trial.met(goals) >= base_met and ends(trial, asked) == base_ends:
@@ -75,7 +75,16 @@ def free_blocks(text: str, scene: SceneObjects, skills: SkillSet, team: Sequence
     return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
 
 
-def _blocks(lines: Sequence[str]) -> Iterator[set[int]]:
+def all_apart(lines: Sequence[str], skills: SkillSet, team: Sequence[Robot], scene: SceneObjects) -> bool:
+    """Whether every block of sub-tasks the text starts at once has teams apart (a text of other lines: no)."""
+    steps = skill_steps(lines, skills)
+    if steps is None:
+        return False
+    actions = {name: s.action for name, s in skills.items()}
+    return all(apart(block, steps, (), actions, team, scene) for block in blocks(lines))
+
+
+def blocks(lines: Sequence[str]) -> Iterator[set[int]]:
     """The functions (by order written) each block of the orchestration starts at once, where there are two or
     more: the threads started before a join."""
     order = {function_name(line): k for k, line in enumerate(line for line in lines if line.startswith("def "))}
@@ -96,8 +105,8 @@ def _blocks(lines: Sequence[str]) -> Iterator[set[int]]:
             started = set()  # a direct call waits for nothing it does not follow
 
 
-def _apart(block: Collection[int], steps: Sequence[Step], dropped: Collection[int], actions: dict[str, str],
-           team: Sequence[Robot], scene: SceneObjects) -> bool:
+def apart(block: Collection[int], steps: Sequence[Step], dropped: Collection[int], actions: dict[str, str],
+          team: Sequence[Robot], scene: SceneObjects) -> bool:
     """Whether each function of the block, its ``dropped`` steps left out, has a team of its own, no robot in two."""
     options = [_teams([s for s in steps if s.function == f and s.line not in dropped], actions, team, scene)
                for f in sorted(block)]

@@ -201,7 +201,7 @@ class Planner:
             record.output, record.idle_steps = drop_idle_steps(record.output, scene, skills)
         into = None
         if config.fold_finish and record.finish is not None:
-            record.output, into = fold_finish(record.output, scene, skills)
+            record.output, into = fold_finish(record.output, scene, skills, self.catalogue.team(result.robots))
             if into is not None:
                 record.finish = {**record.finish, "into": into}
         if record.errands or record.idle_steps or into is not None:

@@ -44,7 +44,7 @@ class StageRecord:
     repairs: list[dict[str, Any]] = field(default_factory=list)  # the planner's lines before a model's (repair)
     unrepaired: int = 0  # lines the model wrote that the planner could not enable (taken back)
     finish: dict[str, Any] | None = None  # the planner's last sub-task: goals met, lines, search, `into` (finish_fold)
-    errands: list[str] = field(default_factory=list)  # a decomposition's lines taken out as errands (errands.py, in_turn.py)
+    errands: list[str] = field(default_factory=list)  # lines taken out as errands (errands.py, in_turn.py)
     idle_steps: list[str] = field(default_factory=list)  # a decomposition's lines taken out as idle (idle_steps.py)
     dropped_goals: list[str] = field(default_factory=list)  # stated goals out of reach nobody asked for (asked.py)
     overturned: str = ""  # a goal stage's refusal for a thing the scene has, stated again without it (asked.py)

@@ -80,3 +80,53 @@ def test_folded_the_apple_runs_beside_the_other_sub_task_with_two_robots():
 def _shortest(choose, remaining):
     text = shortest_line(choose)
     return text, len(text)
+
+
+FRY_AND_CHILL = """def subtask1_fry_potato():
+    GoToObject('Pan')
+    PickupObject('Pan')
+    GoToObject('StoveBurner')
+    PutObject('Pan', 'StoveBurner')
+
+def subtask2_chill_bread():
+    GoToObject('Bread')
+    PickupObject('Bread')
+    GoToObject('Fridge')
+    OpenObject('Fridge')
+    PutObject('Bread', 'Fridge')
+    CloseObject('Fridge')
+
+t1 = threading.Thread(target=subtask1_fry_potato)
+t2 = threading.Thread(target=subtask2_chill_bread)
+t1.start()
+t2.start()
+t1.join()
+t2.join()
+"""
+MEET = """
+def subtask3_meet_goals():
+    # the goals left: Potato in Pan; Potato cooked
+    GoToObject('Potato')
+    PickupObject('Potato')
+    GoToObject('Pan')
+    PutObject('Potato', 'Pan')
+    GoToObject('StoveBurner')
+    SwitchOn('StoveBurner')
+
+subtask3_meet_goals()
+"""
+
+
+def test_the_planners_steps_go_to_the_sub_task_that_keeps_the_teams_apart():
+    """Robot 13 carries and switches but cannot open; robot 18 opens and carries but cannot switch. In the bread's
+    sub-task (the model's last) the burner's switch would need both robots and the potato's sub-task would wait; in
+    the potato's, each sub-task has a robot of its own. Without a team, the model's last takes them, as before."""
+    scene, team = scene_objects(1), CATALOGUE.team([13, 18])
+    steps = MEET.split("():\n", 1)[1].split("\n\n", 1)[0] + "\n"
+    folded, into = fold_finish(FRY_AND_CHILL + MEET, scene, SKILLS, team)
+    assert into == "subtask1_fry_potato"
+    assert folded == FRY_AND_CHILL.replace("'StoveBurner')\n\n", "'StoveBurner')\n" + steps + "\n", 1)
+    dry, failed = _final_state(folded, 1)
+    assert not failed and _met(dry, [Condition("Pan", item="Potato"), Condition("Potato", state="COOKED")])
+    assert fold_finish(FRY_AND_CHILL + MEET, scene, SKILLS)[1] == "subtask2_chill_bread"
+    assert fold_finish(FRY_AND_CHILL + MEET, scene, SKILLS, CATALOGUE.team([1, 2]))[1] == "subtask2_chill_bread"

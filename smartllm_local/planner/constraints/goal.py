@@ -10,10 +10,18 @@ after ``off``; ``Desk empty`` and ``Pen in Desk``, in either order), is not offe
 never repeats or contradicts itself. A thing may be said to be in two holders, since holders nest (a ball in
 the Bed is in the Floor too). A blank line ends the statement after at least one condition; the first line
 may instead be a refusal. At most :data:`MAX_GOALS` conditions.
+
+A state the instruction asks for in so many words (``asked``: "fry the potato", COOKED) that the model ends its
+statement without is owed: after the blank line comes a line of that state, then a blank line again. Its thing is
+the model's choice among those the asking words name ("the potato") that the world can give the state, or where
+they name none ("boil some water"), among all the scene's that it can. A small model states where the potato goes
+and forgets that it must be cooked; the plan is then made for the goals stated. The goal stage puts the owed lines
+first in the statement it keeps: where no plan meets every goal, the planner meets the first it can.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from itertools import count
 
 from ...goal_language import OPPOSITES, PREPOSITIONS, STATE_WORDS, aliases, parse_goal_statement
@@ -35,9 +43,15 @@ def goal_vocabulary(scene: SceneObjects) -> GoalVocabulary:
 class GoalConstraint(Constraint):
     """The goal stage: conditions, one a line, then a blank line (or one refusal line)."""
 
-    def __init__(self, vocabulary: GoalVocabulary, *, allow_refusal: bool = True, max_goals: int = MAX_GOALS):
+    def __init__(self, vocabulary: GoalVocabulary, *, allow_refusal: bool = True, max_goals: int = MAX_GOALS,
+                 asked: Mapping[str, Sequence[str]] | None = None):
         super().__init__()
         self.vocabulary, self.allow_refusal, self.max_goals = vocabulary, allow_refusal, max_goals
+        able = {state for states in vocabulary.states.values() for state in states}
+        # A state nothing here can be in asks for nothing.
+        self.asked = {state: named for state, named in (asked or {}).items() if state in able}
+        self.owing = False  # the model ended its statement; the states asked that it left out follow
+        self.owed: list[Condition] = []  # the conditions written for them
         self.said: list[Condition] = []
         self.names: dict[str, list[str]] = {kind: [kind] for kind in vocabulary.types}
         for alias, kind in aliases(vocabulary.types).items():
@@ -56,6 +70,8 @@ class GoalConstraint(Constraint):
     def next(self, remaining: int) -> Choose | None:
         if self.ended or self.refusal is not None or len(self.said) == self.max_goals:
             return None
+        if self.owing:
+            return self._owed(remaining)
         options: dict[str, Node] = {}
         if not self.said and (self.allow_refusal or self.must_refuse) and self.refusal_len <= remaining:
             options["refusal"] = refusal_line()
@@ -68,10 +84,34 @@ class GoalConstraint(Constraint):
         return self._choose(rules, options)
 
     def _advance(self, kind: str, piece: str) -> None:
-        if kind == "condition":
-            self.said.extend(parse_goal_statement(piece, types=self.vocabulary.types).conditions)
+        if kind in ("condition", "owed"):
+            said = parse_goal_statement(piece, types=self.vocabulary.types).conditions
+            self.said.extend(said)
+            self.owed.extend(said if kind == "owed" else ())
         elif kind == "end":
-            self.ended = True
+            self.ended = self.owing or not self._missing()
+            self.owing = not self.ended
+
+    def _missing(self) -> list[str]:
+        """The states asked for that no condition said so far states."""
+        said = {c.state for c in self.said}
+        return [state for state in self.asked if state not in said]
+
+    def _owed(self, remaining: int) -> Choose | None:
+        """A line of a state asked for and left out (where one still fits), else the blank line that ends."""
+        said = {(c.subject, s) for c in self.said if c.state for s in (c.state, OPPOSITES.get(c.state, c.state))}
+        lines = []
+        for state in self._missing():
+            kinds = [kind for kind in self.vocabulary.types if state in self.vocabulary.states.get(kind, ())
+                     and (kind, state) not in said]
+            named = [kind for kind in kinds if kind in self.asked[state]]
+            names = [name for kind in named or kinds for name in self.names[kind]]
+            if names:
+                lines.append(seq(alt(*names), f" {STATE_WORDS[state]}\n"))
+        options: dict[str, Node] = {"end": "\n"}
+        if lines and longest(alt(*lines), {}) + 1 <= remaining:
+            options = {"owed": alt(*lines)}
+        return self._choose({}, options)
 
     def _conditions(self) -> tuple[Node | None, dict[str, Node]]:
         """A condition line of those still to be said (None: none), and the rules it refers to. Types that

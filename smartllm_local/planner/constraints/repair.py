@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 
 from ...errors import SmartLLMError
 from ...executor.dry_run import DryRun
-from ...scoring import Condition
+from ...scoring import Condition, condition_holds, containment
 from ...skills import Skill, SkillSet
 from .candidates import Candidate, Candidates, acts_on
 from .feasibility import WholeTeam
@@ -111,7 +111,7 @@ class Repairer:
         if found is None:
             return None
         calls, seconds = found
-        if not 0 < len(calls) <= most or not self._usable(member, calls, allows):
+        if not 0 < len(calls) <= most or not self._usable(member, calls, allows, goals):
             return None
         return Repair(tuple(calls), seconds)
 
@@ -142,14 +142,21 @@ class Repairer:
                 "--no-repair and --no-finish-goals")
         if not found.found or not found.steps:
             return None
-        types = {o["objectId"]: o["objectType"] for o in with_future_pieces(self.run.objects)[0]}  # slices to come
+        objects = with_future_pieces(self.run.objects)[0]  # slices to come
+        types = {o["objectId"]: o["objectType"] for o in objects}
+        # A switch of one thing is written as the thing (the executor switches a StoveBurner by its knob): a plan
+        # names types, and the StoveKnob nearest the robot need not be the one the planner meant.
+        types |= {o["objectId"]: types.get(o["controlledObjects"][0], o["objectType"]) for o in objects
+                  if len(o.get("controlledObjects") or ()) == 1}
         return self._gone_first([(s.skill, tuple(types.get(o, o) for o in s.objects)) for s in found.steps],
                                 place), seconds
 
-    def _usable(self, member: int, calls: Sequence[Written],
-                allows: Callable[[str, Sequence[str]], bool] | None) -> bool:
-        """Whether the plan may make every call (the team's reach and strength) and they succeed as written."""
-        return (allows is None or all(allows(name, objs) for name, objs in calls)) and self._succeeds(member, calls)
+    def _usable(self, member: int, calls: Sequence[Written], allows: Callable[[str, Sequence[str]], bool] | None,
+                goals: Sequence[Condition] = ()) -> bool:
+        """Whether the plan may make every call (the team's reach and strength), and they succeed as written and
+        leave the ``goals`` met (the instance a type names is the executor's choice, not the planner's)."""
+        return (allows is None or all(allows(name, objs) for name, objs in calls)) \
+            and self._succeeds(member, calls, goals)
 
     def _gone_first(self, calls: Sequence[Written], place: str | None) -> list[Written]:
         """The calls as a decomposition writes them: each action where the function last went (a GoToObject
@@ -167,11 +174,16 @@ class Repairer:
                 written.append((name, objects))
         return written
 
-    def _succeeds(self, member: int, calls: Sequence[Written]) -> bool:
-        """Whether the calls, as written (object types, resolved as the executor resolves them), all succeed."""
+    def _succeeds(self, member: int, calls: Sequence[Written], goals: Sequence[Condition] = ()) -> bool:
+        """Whether the calls, as written (object types, resolved as the executor resolves them), all succeed and
+        leave the ``goals`` met."""
         saved = self.run.snapshot()
         try:
-            return all(self.run.apply([member], name, objects).success for name, objects in calls)
+            if not all(self.run.apply([member], name, objects).success for name, objects in calls):
+                return False
+            objects = list(self.run.objects)
+            inside = containment(objects)
+            return all(condition_holds(c, objects, inside) for c in goals)
         finally:
             self.run.restore(saved)
 

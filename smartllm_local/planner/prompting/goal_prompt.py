@@ -1,7 +1,9 @@
 """The goal stage's prompt: worked examples of goal statements, then the task's scene and instruction.
 
 A domain's goal examples are in ``prompts/goal/``: ``examples.json`` lists each one's name, instruction
-and scene (an iTHOR floor plan, or the domain's site), and ``<name>.txt`` holds its statement. Each
+and scene (an iTHOR floor plan, or the domain's site), and ``<name>.txt`` holds its statement;
+``asked_states.toml`` (optional) gives the words by which an instruction asks for each state (see
+:func:`load_asked_states`). Each
 example shows its scene's whole object list, as the task's own is shown, so that the model learns to
 pick from a scene what the instruction is about rather than to name every object listed.
 """
@@ -9,17 +11,25 @@ pick from a scene what the instruction is about rather than to name every object
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+import re
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from ...errors import UserError
 from ...goal_language import STATE_WORDS
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
 from ...scene import GoalTerms, SceneObjects
 from ..constraints.goal import goal_vocabulary
 from .prompts import Prompt
 
 GOAL_FOLDER = "goal"
+ASKED_STATES = "asked_states.toml"
+_CLAUSE = re.compile(r"[,.;:!?]")
 
 
 @dataclass(frozen=True)
@@ -46,6 +56,39 @@ def load_goal_examples(prompts: Path) -> list[GoalExample]:
                         f"{index} listing each example's name, instruction and floor_plan, and a "
                         "<name>.txt holding its goal statement") from exc
     return examples
+
+
+def load_asked_states(prompts: Path) -> dict[str, tuple[re.Pattern[str], ...]]:
+    """Each state's patterns in a domain's ``prompts/goal/asked_states.toml`` (none where there is no such file):
+    ``STATE = ['<regular expression>', ...]``, matched case-insensitively against an instruction."""
+    path = prompts / GOAL_FOLDER / ASKED_STATES
+    if not path.is_file():
+        return {}
+    try:
+        table = tomllib.loads(path.read_text(encoding="utf-8"))
+        patterns = {}
+        for state, listed in table.items():
+            if state not in STATE_WORDS or not isinstance(listed, list):
+                raise ValueError(f"{state!r} is not a state with a list of patterns (the states: "
+                                 f"{', '.join(STATE_WORDS)})")
+            patterns[state] = tuple(re.compile(p, re.IGNORECASE) for p in listed)
+    except (OSError, ValueError, TypeError, re.error) as exc:
+        raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...], "
+                        "or remove the file") from exc
+    return patterns
+
+
+def states_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> dict[str, str]:
+    """The states the instruction asks for in so many words, each with the words that ask for it and the rest
+    of their clause, which name what is to be in it ("fry the potato in a pan, and ...": COOKED, "fry the potato
+    in a pan")."""
+    asked = {}
+    for state, listed in patterns.items():
+        found = [m for p in listed for m in p.finditer(instruction)]
+        if found:
+            asked[state] = " ".join(instruction[m.start():m.end()] + _CLAUSE.split(instruction[m.end():], 1)[0]
+                                    for m in found)
+    return asked
 
 
 def goal_intro(terms: GoalTerms) -> str:

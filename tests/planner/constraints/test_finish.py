@@ -193,3 +193,22 @@ def test_searches_from_threads_never_overlap(monkeypatch):
     for thread in threads:
         thread.join()
     assert most[0] == 1
+
+
+PAN_ON_STOVE = ["def subtask1_fry_potato():\n", "    GoToObject('Pan')\n", "    PickupObject('Pan')\n",
+                "    GoToObject('StoveBurner')\n", "    PutObject('Pan', 'StoveBurner')\n", "\n",
+                "subtask1_fry_potato()\n"]
+
+
+def test_a_goal_the_planners_steps_meet_as_written_a_burner_switched_by_name_not_a_knob():
+    """The potato must be cooked in the pan the model put on a burner. Fast Downward switches the knob that
+    controls that burner; a plan names types, and the knob nearest the robot controls another, so the step is
+    written as the burner (the executor switches a burner by its own knob), and the dry run shows the potato
+    cooked. A plan whose steps, as written, leave a goal unmet is not written."""
+    goals = [Condition("Pan", item="Potato"), Condition("Potato", state="COOKED")]
+    decomposer = _decomposer(1, goals)
+    text = run_constraint(decomposer, _scripted(PAN_ON_STOVE), len, 3000)
+    lines = decomposer.finish_made["lines"]
+    assert "    SwitchOn('StoveBurner')\n" in lines and not any("StoveKnob" in line for line in lines), lines
+    dry, failed = _final_state(text, 1)
+    assert not failed and _met(dry, goals)
