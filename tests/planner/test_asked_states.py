@@ -4,6 +4,7 @@ statement the model ends without one gets a line of it, its thing one the asking
 from __future__ import annotations
 
 import random
+import shutil
 from pathlib import Path
 
 import pytest
@@ -78,3 +79,14 @@ def test_a_domain_without_the_file_asks_for_nothing_and_a_bad_file_is_a_clear_er
     (tmp_path / "goal" / "asked_states.toml").write_text("COOKED = ['(fry']\n")
     with pytest.raises(UserError, match="asked_states.toml"):
         load_asked_states(tmp_path)
+
+
+def test_domain_check_reports_a_goal_example_that_leaves_out_a_state_its_instruction_asks_for(tmp_path: Path):
+    from smartllm_local.planner.prompting.example_check import check_goal_examples
+
+    copy = tmp_path / "household"
+    shutil.copytree(load_domain("household").folder, copy)
+    (copy / "prompts" / "goal" / "chop_and_bin.txt").write_text("Apple in GarbageCan\n")  # "Chop up the lettuce..."
+    problems = check_goal_examples(load_domain(str(copy)))[1]
+    assert len(problems) == 1 and "chop_and_bin.txt: states no thing in a state its instruction asks for" in \
+        problems[0] and "SLICED" in problems[0]

@@ -21,7 +21,7 @@ from ..constraints.restated import RestatedAllocation, restated_bodies
 from ..constraints.world_check import WorldCheck
 from ..decoding.protocol import REFUSAL_PREFIX
 from ..decoding.writer import accepts
-from .goal_prompt import GOAL_FOLDER, load_goal_examples
+from .goal_prompt import ASKED_STATES, GOAL_FOLDER, load_asked_states, load_goal_examples, states_asked
 from .prompts import STAGES, load_examples
 
 
@@ -90,6 +90,7 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
         return 0, []
     try:
         examples = load_goal_examples(domain.prompts_dir())
+        asked = load_asked_states(domain.prompts_dir())
     except SmartLLMError as exc:
         return 0, [str(exc)]
     problems = []
@@ -103,8 +104,14 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
             continue
         # As the stage writes it: the refusal line alone, or the conditions and the blank line that ends them.
         written = ex.statement.rstrip("\n") + ("\n" if ex.statement.startswith(REFUSAL_PREFIX) else "\n\n")
-        if not accepts(GoalConstraint(goal_vocabulary(scene)), written):
+        vocabulary = goal_vocabulary(scene)
+        if not accepts(GoalConstraint(vocabulary), written):
             problems.append(f"{where}: not in the goal grammar of {scene.floor_plan} (one `<Object> <state>` or "
                             "`<Object> in <Receptacle>` a line, naming the scene's objects in states the world can "
                             "give them, each once; or one `# INFEASIBLE: <why>` line)")
+        elif not accepts(GoalConstraint(vocabulary, asked={s: [] for s in states_asked(ex.instruction, asked)}),
+                         written):
+            problems.append(f"{where}: states no thing in a state its instruction asks for in so many words "
+                            f"({', '.join(states_asked(ex.instruction, asked))}: {folder}/{ASKED_STATES}); an example "
+                            "shows the model what to state")
     return len(examples), problems
