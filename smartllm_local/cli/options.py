@@ -243,12 +243,12 @@ _KEEP_IDLE_STEPS = typer.Option(False, "--keep-idle-steps", help=(
     "docs/planner.md, \"Idle steps\")."))
 _KEEP_ERRANDS = typer.Option(False, "--keep-errands", help=(
     "Keep the decomposition's steps on a thing a sub-task acts on that nobody named and no stated goal is about, "
-    "or that change nothing of how a named thing ends, rather than take them out where the dry run shows them "
-    "unneeded (see docs/planner.md, \"Errands\")."))
+    "or that change nothing of how a named thing ends, and a step that alone makes sub-tasks run in turn, rather "
+    "than take them out where the dry run shows them unneeded (see docs/planner.md, \"Errands\")."))
 _FINISH_APART = typer.Option(False, "--finish-apart", help=(
-    "Call the planner's last sub-task after the model's, rather than write its steps at the end of the model's "
-    "last sub-task where the dry run ends the same (one transition fewer; see docs/planner.md, \"The planner's "
-    "last sub-task\")."))
+    "Call the planner's last sub-task after the model's, rather than write its steps at the end of one of the "
+    "model's sub-tasks where the dry run ends the same (one transition fewer; see docs/planner.md, \"The "
+    "planner's last sub-task\")."))
 
 #: Every model option: its parameter name, type and typer option, in the order --help lists them.
 MODEL_PARAMETERS = [
