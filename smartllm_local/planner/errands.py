@@ -50,7 +50,7 @@ from .idle_steps import (
 #: holds (each thing held is an object of its own, asked for or not).
 _ASIDE = WHERE_ROBOTS_STAND | {"receptacleObjectIds"}
 #: An orchestration line that makes a thread: its variable and its target.
-_THREAD = re.compile(r"^(\w+) = threading\.Thread\(target=(\w+)\)$")
+THREAD = re.compile(r"^(\w+) = threading\.Thread\(target=(\w+)\)$")
 
 
 def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: str,
@@ -101,7 +101,7 @@ def _function_lines(lines: Sequence[str], function: int) -> set[int]:
         line = line.rstrip("\n")
         if line == f"{name}()":
             taken.add(n)
-        elif (made := _THREAD.match(line)) is not None and (made.group(2) == name or made.group(1) == thread):
+        elif (made := THREAD.match(line)) is not None and (made.group(2) == name or made.group(1) == thread):
             thread = made.group(1) if made.group(2) == name else None
             taken |= {n} if thread else set()
         elif thread is not None and line in (f"{thread}.start()", f"{thread}.join()"):

@@ -30,13 +30,12 @@ from ..skills import SkillSet
 from ..world.object_types import base_type
 from .asked import names
 from .constraints.feasibility import EXACT_COALITIONS
-from .errands import ends
+from .errands import THREAD, ends
 from .idle_steps import Step, acts, comments_above, dry_run, function_name, gotos_before, skill_steps
 
 #: What a robot does to a thing it holds (its pick-up aside): the same robot must do it.
 _HELD = frozenset({"PutObject", "DropHandObject", "ThrowObject"})
-#: A top-level line of a decomposition's orchestration.
-_THREAD = re.compile(r"^(\w+) = threading\.Thread\(target=(\w+)\)$")
+#: A top-level line of a decomposition's orchestration that starts or joins a thread, or calls a function.
 _START = re.compile(r"^(\w+)\.(start|join)\(\)$")
 _CALL = re.compile(r"^(\w+)\(\)$")
 
@@ -92,7 +91,7 @@ def blocks(lines: Sequence[str]) -> Iterator[set[int]]:
     started: set[int] = set()
     for line in lines:
         line = line.rstrip("\n")
-        if (made := _THREAD.match(line)) is not None:
+        if (made := THREAD.match(line)) is not None:
             targets[made.group(1)] = made.group(2)
         elif (went := _START.match(line)) is not None and went.group(1) in targets:
             if went.group(2) == "start" and targets[went.group(1)] in order:
