@@ -62,8 +62,7 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
     if not steps:
         return text, []
     actions = {name: s.action for name, s in skills.items()}
-    wanted = {base_type(o) for c in goals for o in (c.subject, c.item) if o}
-    asked = wanted | {t for t in scene.types if names(instruction, t)}
+    asked = asked_things(scene, instruction, goals)
     base_failed, world = dry_run(steps, set(), scene, skills)
     base_met, base_ends = world.met(goals), ends(world, asked)
     dropped: set[int] = set()
@@ -87,6 +86,12 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
     for function in gone:
         dropped |= _function_lines(lines, function)
     return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
+
+
+def asked_things(scene: SceneObjects, instruction: str, goals: Sequence[Condition]) -> set[str]:
+    """The types asked for: those a stated goal is about, and those of the scene the instruction names."""
+    return {base_type(o) for c in goals for o in (c.subject, c.item) if o} \
+        | {t for t in scene.types if names(instruction, t)}
 
 
 def _function_lines(lines: Sequence[str], function: int) -> set[int]:

@@ -28,9 +28,8 @@ from ..scene import MASS_TOLERANCE, SceneObjects
 from ..scoring import Condition
 from ..skills import SkillSet
 from ..world.object_types import base_type
-from .asked import names
 from .constraints.feasibility import EXACT_COALITIONS
-from .errands import THREAD, ends
+from .errands import THREAD, asked_things, ends
 from .idle_steps import Step, acts, comments_above, dry_run, function_name, gotos_before, skill_steps
 
 #: What a robot does to a thing it holds (its pick-up aside): the same robot must do it.
@@ -49,8 +48,7 @@ def free_blocks(text: str, scene: SceneObjects, skills: SkillSet, team: Sequence
     if not steps or not 2 <= len(team) <= EXACT_COALITIONS:
         return text, []
     actions = {name: s.action for name, s in skills.items()}
-    asked = {base_type(o) for c in goals for o in (c.subject, c.item) if o} \
-        | {t for t in scene.types if names(instruction, t)}
+    asked = asked_things(scene, instruction, goals)
     base_failed, world = dry_run(steps, set(), scene, skills)
     base_met, base_ends = world.met(goals), ends(world, asked)
     dropped: set[int] = set()
