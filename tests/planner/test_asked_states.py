@@ -48,6 +48,9 @@ def test_a_statement_ended_without_a_state_asked_for_goes_on_with_a_line_of_it()
     # a state nothing of the scene can be in asks for nothing
     assert accepts(GoalConstraint(goal_vocabulary(scene_objects(301)), asked={"COOKED": []}), "Laptop in Bed\n\n")
     assert accepts(GoalConstraint(KITCHEN, asked=asked), "# INFEASIBLE: no stove here\n")  # a refusal owes nothing
+    # an owed line never contradicts the statement: no holder said to hold a thing is owed empty
+    assert not accepts(GoalConstraint(KITCHEN, asked={"EMPTY": ["Fridge"]}), "Apple in Fridge\n\nFridge empty\n\n")
+    assert accepts(GoalConstraint(KITCHEN, asked={"EMPTY": ["Fridge"]}), "Apple in Fridge\n\nSink empty\n\n")
 
 
 @pytest.mark.parametrize("kind", WRITERS)

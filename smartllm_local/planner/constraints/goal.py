@@ -100,6 +100,7 @@ class GoalConstraint(Constraint):
     def _owed(self, remaining: int) -> Choose | None:
         """A line of a state asked for and left out (where one still fits), else the blank line that ends."""
         said = {(c.subject, s) for c in self.said if c.state for s in (c.state, OPPOSITES.get(c.state, c.state))}
+        said |= {(c.subject, EMPTY) for c in self.said if c.state is None}  # a holder with a thing in it
         lines = []
         for state in self._missing():
             kinds = [kind for kind in self.vocabulary.types if state in self.vocabulary.states.get(kind, ())
