@@ -62,9 +62,7 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
     if not steps:
         return text, []
     actions = {name: s.action for name, s in skills.items()}
-    asked = asked_things(scene, instruction, goals)
-    base_failed, world = dry_run(steps, set(), scene, skills)
-    base_met, base_ends = world.met(goals), ends(world, asked)
+    unneeded = Unneeded(steps, scene, skills, instruction, goals)
     dropped: set[int] = set()
     gone: set[int] = set()  # functions all of whose actions were errands
     for function, thing in _handled(steps, actions):
@@ -75,8 +73,7 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
             if not any(acts(steps, s.function, taken, actions) for s in steps if s.function != function):
                 continue  # the plan keeps a sub-task
             taken |= {s.line for s in steps if s.function == function}
-        failed, world = dry_run(steps, taken, scene, skills)
-        if failed <= base_failed and world.met(goals) >= base_met and ends(world, asked) == base_ends:
+        if unneeded(taken):
             dropped = taken
             gone |= {function} if whole else set()
     if not dropped:
@@ -88,10 +85,23 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
     return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
 
 
-def asked_things(scene: SceneObjects, instruction: str, goals: Sequence[Condition]) -> set[str]:
-    """The types asked for: those a stated goal is about, and those of the scene the instruction names."""
-    return {base_type(o) for c in goals for o in (c.subject, c.item) if o} \
-        | {t for t in scene.types if names(instruction, t)}
+class Unneeded:
+    """Whether steps of a decomposition can go, by the dry run (a notional robot per sub-task, in the order
+    written): without them no call fails that did not, every stated goal that held still holds, and every thing of
+    the types ``asked`` (a stated goal is about them, or the instruction names them) ends as it did."""
+
+    def __init__(self, steps: Sequence[Step], scene: SceneObjects, skills: SkillSet, instruction: str,
+                 goals: Sequence[Condition]):
+        self.steps, self.scene, self.skills, self.goals = steps, scene, skills, goals
+        self.asked = {base_type(o) for c in goals for o in (c.subject, c.item) if o} \
+            | {t for t in scene.types if names(instruction, t)}
+        self.failed, world = dry_run(steps, set(), scene, skills)
+        self.met, self.ends = world.met(goals), _ends(world, self.asked)
+
+    def __call__(self, taken: Collection[int]) -> bool:
+        """Whether the steps on the lines ``taken`` can go."""
+        failed, world = dry_run(self.steps, taken, self.scene, self.skills)
+        return failed <= self.failed and world.met(self.goals) >= self.met and _ends(world, self.asked) == self.ends
 
 
 def _function_lines(lines: Sequence[str], function: int) -> set[int]:
@@ -125,7 +135,7 @@ def _handled(steps: Sequence[Step], actions: dict[str, str]) -> list[tuple[int, 
     return seen
 
 
-def ends(world: WorldCheck, asked: Collection[str]) -> str:
+def _ends(world: WorldCheck, asked: Collection[str]) -> str:
     """How the things of the asked types end, what they hold aside."""
     return json.dumps([{k: v for k, v in o.items() if k not in _ASIDE} for o in world.objects()
                        if base_type(o["objectType"]) in asked], sort_keys=True, default=str)

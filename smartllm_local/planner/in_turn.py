@@ -29,8 +29,8 @@ from ..scoring import Condition
 from ..skills import SkillSet
 from ..world.object_types import base_type
 from .constraints.feasibility import EXACT_COALITIONS
-from .errands import THREAD, asked_things, ends
-from .idle_steps import Step, acts, comments_above, dry_run, function_name, gotos_before, skill_steps
+from .errands import THREAD, Unneeded
+from .idle_steps import Step, acts, comments_above, function_name, gotos_before, skill_steps
 
 #: What a robot does to a thing it holds (its pick-up aside): the same robot must do it.
 _HELD = frozenset({"PutObject", "DropHandObject", "ThrowObject"})
@@ -48,22 +48,19 @@ def free_blocks(text: str, scene: SceneObjects, skills: SkillSet, team: Sequence
     if not steps or not 2 <= len(team) <= EXACT_COALITIONS:
         return text, []
     actions = {name: s.action for name, s in skills.items()}
-    asked = asked_things(scene, instruction, goals)
-    base_failed, world = dry_run(steps, set(), scene, skills)
-    base_met, base_ends = world.met(goals), ends(world, asked)
+    unneeded = Unneeded(steps, scene, skills, instruction, goals)
     dropped: set[int] = set()
     for block in blocks(lines):
         if apart(block, steps, dropped, actions, team, scene):
             continue
         for step in steps:
-            if step.function not in block or not actions[step.skill] or base_type(step.objects[0]) in asked \
+            if step.function not in block or not actions[step.skill] or base_type(step.objects[0]) in unneeded.asked \
                     or step.line in dropped:
                 continue
             taken = dropped | {step.line} | gotos_before(steps, {step.line}, actions)
             if not acts(steps, step.function, taken, actions) or not apart(block, steps, taken, actions, team, scene):
                 continue
-            failed, trial = dry_run(steps, taken, scene, skills)
-            if failed <= base_failed and trial.met(goals) >= base_met and ends(trial, asked) == base_ends:
+            if unneeded(taken):
                 dropped = taken
                 break
     if not dropped:

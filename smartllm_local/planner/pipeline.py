@@ -190,18 +190,17 @@ class Planner:
         read."""
         if not (self.config.world_check and isinstance(record.plan, Plan) and not record.plan.is_refusal):
             return
-        skills, config = self.catalogue.skills, self.config
+        skills, config, team = self.catalogue.skills, self.config, self.catalogue.team(result.robots)
         if config.drop_errands:
             goals = stated_conditions(result, scene)
             record.output, record.errands = drop_errands(record.output, scene, skills, result.instruction, goals)
-            record.output, in_turn = free_blocks(record.output, scene, skills, self.catalogue.team(result.robots),
-                                                 result.instruction, goals)
+            record.output, in_turn = free_blocks(record.output, scene, skills, team, result.instruction, goals)
             record.errands += in_turn
         if config.drop_idle:
             record.output, record.idle_steps = drop_idle_steps(record.output, scene, skills)
         into = None
         if config.fold_finish and record.finish is not None:
-            record.output, into = fold_finish(record.output, scene, skills, self.catalogue.team(result.robots))
+            record.output, into = fold_finish(record.output, scene, skills, team)
             if into is not None:
                 record.finish = {**record.finish, "into": into}
         if record.errands or record.idle_steps or into is not None:

@@ -99,12 +99,11 @@ class GoalConstraint(Constraint):
 
     def _owed(self, remaining: int) -> Choose | None:
         """A line of a state asked for and left out (where one still fits), else the blank line that ends."""
-        said = {(c.subject, s) for c in self.said if c.state for s in (c.state, OPPOSITES.get(c.state, c.state))}
-        said |= {(c.subject, EMPTY) for c in self.said if c.state is None}  # a holder with a thing in it
+        closed = self._closed_states()
         lines = []
         for state in self._missing():
             kinds = [kind for kind in self.vocabulary.types if state in self.vocabulary.states.get(kind, ())
-                     and (kind, state) not in said]
+                     and state not in closed.get(kind, ())]
             named = [kind for kind in kinds if kind in self.asked[state]]
             names = [name for kind in named or kinds for name in self.names[kind]]
             if names:
@@ -114,20 +113,26 @@ class GoalConstraint(Constraint):
             options = {"owed": alt(*lines)}
         return self._choose({}, options)
 
+    def _closed_states(self) -> dict[str, set[str]]:
+        """Each type's states no longer offered: those said of it and their opposites, and empty for a holder
+        said to hold a thing."""
+        closed: dict[str, set[str]] = {}
+        for c in self.said:
+            if c.state is not None:
+                closed.setdefault(c.subject, set()).update({c.state, OPPOSITES.get(c.state, c.state)})
+            else:
+                closed.setdefault(c.subject, set()).add(EMPTY)  # a holder with a thing in it is not empty
+        return closed
+
     def _conditions(self) -> tuple[Node | None, dict[str, Node]]:
         """A condition line of those still to be said (None: none), and the rules it refers to. Types that
         may be followed by the same things share a rule."""
-        said_states: dict[str, set[str]] = {}
+        said_states = self._closed_states()
         said_in: dict[str, set[str]] = {}
-        emptied: set[str] = set()  # holders said to be empty: nothing may be said to be in them
         for c in self.said:
-            if c.state is not None:
-                said_states.setdefault(c.subject, set()).update({c.state, OPPOSITES.get(c.state, c.state)})
-                if c.state == EMPTY:
-                    emptied.add(c.subject)
-            else:
+            if c.state is None:
                 said_in.setdefault(c.item or "", set()).add(c.subject)
-                said_states.setdefault(c.subject, set()).add(EMPTY)  # a holder with a thing in it is not empty
+        emptied = {c.subject for c in self.said if c.state == EMPTY}  # nothing may be said to be in them
         groups: dict[tuple[frozenset[str], frozenset[str]], list[str]] = {}
         for kind in self.vocabulary.types:
             states = self.vocabulary.states.get(kind, frozenset()) - said_states.get(kind, set())

@@ -104,14 +104,12 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
             continue
         # As the stage writes it: the refusal line alone, or the conditions and the blank line that ends them.
         written = ex.statement.rstrip("\n") + ("\n" if ex.statement.startswith(REFUSAL_PREFIX) else "\n\n")
-        vocabulary = goal_vocabulary(scene)
+        vocabulary, owed = goal_vocabulary(scene), states_asked(ex.instruction, asked)
         if not accepts(GoalConstraint(vocabulary), written):
             problems.append(f"{where}: not in the goal grammar of {scene.floor_plan} (one `<Object> <state>` or "
                             "`<Object> in <Receptacle>` a line, naming the scene's objects in states the world can "
                             "give them, each once; or one `# INFEASIBLE: <why>` line)")
-        elif not accepts(GoalConstraint(vocabulary, asked={s: [] for s in states_asked(ex.instruction, asked)}),
-                         written):
+        elif not accepts(GoalConstraint(vocabulary, asked={s: [] for s in owed}), written):
             problems.append(f"{where}: states no thing in a state its instruction asks for in so many words "
-                            f"({', '.join(states_asked(ex.instruction, asked))}: {folder}/{ASKED_STATES}); an example "
-                            "shows the model what to state")
+                            f"({', '.join(owed)}: {folder}/{ASKED_STATES}); an example shows the model what to state")
     return len(examples), problems

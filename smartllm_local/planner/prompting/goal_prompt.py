@@ -16,13 +16,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from ...errors import UserError
-from ...goal_language import STATE_WORDS
-
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
+
+from ...errors import UserError
+from ...goal_language import STATE_WORDS
 from ...scene import GoalTerms, SceneObjects
 from ..constraints.goal import goal_vocabulary
 from .prompts import Prompt
