@@ -47,17 +47,17 @@ def fold_finish(text: str, scene: SceneObjects, skills: SkillSet,
     name = function_name(lines[last])
     if lines[last - 1] != "\n" or [line for line in lines[body:] if line.strip()] != [f"{name}()\n"]:
         return text, None
-    folds = []
+    checks_team = 2 <= len(team) <= EXACT_COALITIONS
+    first = None  # the latest sub-task where the dry run ends the same, teams apart or not
     for model in reversed(defs[:-1]):
         end = body_end(lines, model)
         folded = lines[:end] + lines[last + 1:body] + lines[end:last - 1]
-        if _same_outcome(lines, folded, scene, skills):
-            folds.append((folded, function_name(lines[model])))
-    if not folds:
-        return text, None
-    if 2 <= len(team) <= EXACT_COALITIONS:
-        folds.sort(key=lambda fold: not all_apart(fold[0], skills, team, scene))  # stable: the last first
-    return "".join(folds[0][0]), folds[0][1]
+        if not _same_outcome(lines, folded, scene, skills):
+            continue
+        if not checks_team or all_apart(folded, skills, team, scene):
+            return "".join(folded), function_name(lines[model])
+        first = first or ("".join(folded), function_name(lines[model]))
+    return first or (text, None)
 
 
 def _same_outcome(before: Sequence[str], after: Sequence[str], scene: SceneObjects, skills: SkillSet) -> bool:
