@@ -28,7 +28,7 @@ from ..scene import MASS_TOLERANCE, SceneObjects
 from ..scoring import Condition
 from ..skills import SkillSet
 from ..world.object_types import base_type
-from .constraints.feasibility import EXACT_COALITIONS
+from .constraints.feasibility import EXACT_COALITIONS, Need, can_do
 from .errands import THREAD, Unneeded
 from .idle_steps import Step, acts, comments_above, function_name, gotos_before, skill_steps
 
@@ -113,11 +113,13 @@ def apart(block: Collection[int], steps: Sequence[Step], dropped: Collection[int
 
 def _teams(steps: Sequence[Step], actions: dict[str, str], team: Sequence[Robot],
            scene: SceneObjects) -> list[frozenset[int]]:
-    """The sets of the team's robots (by index) that can do the function's steps: every skill, the heaviest thing
-    lifted, and for each thing picked up, one member that does all that is done to it while held."""
-    skills = {s.skill for s in steps}
+    """The sets of the team's robots (by index) that can do the function's steps: what the coalition asks of a team
+    (:func:`.constraints.feasibility.can_do`: every skill, the heaviest thing lifted, where its calls go), and for
+    each thing picked up, one member that does all that is done to it while held."""
     heaviest = max((scene.masses.get(s.objects[0], 0.0) for s in steps if actions[s.skill] == "PickupObject"),
                    default=0.0)
+    demands = (scene.world.call_demand(s.skill, s.objects) for s in steps)
+    need = Need(frozenset(s.skill for s in steps), heaviest, frozenset(d for d in demands if d is not None))
     held: dict[str, set[str]] = {}
     for s in steps:
         if actions[s.skill] == "PickupObject":
@@ -128,15 +130,14 @@ def _teams(steps: Sequence[Step], actions: dict[str, str], team: Sequence[Robot]
     for n in range(1, len(team) + 1):
         for members in combinations(range(len(team)), n):
             robots = [team[i] for i in members]
-            if skills <= set().union(*(r.skills for r in robots)) \
-                    and sum(r.mass_capacity for r in robots) + MASS_TOLERANCE >= heaviest \
-                    and all(any(done <= r.skills and r.mass_capacity + MASS_TOLERANCE >= scene.masses.get(o, 0.0)
-                                for r in robots) or _lifted_together(o, robots, scene)
-                            for o, done in held.items()):
+            if can_do(robots, need) and all(_held_by_one(o, done, robots, scene) for o, done in held.items()):
                 able.append(frozenset(members))
     return able
 
 
-def _lifted_together(thing: str, robots: Sequence[Robot], scene: SceneObjects) -> bool:
-    """Whether the thing is too heavy for any one robot of the team, so its members lift (and put) it together."""
-    return all(r.mass_capacity + MASS_TOLERANCE < scene.masses.get(thing, 0.0) for r in robots)
+def _held_by_one(thing: str, done: set[str], robots: Sequence[Robot], scene: SceneObjects) -> bool:
+    """Whether one of the robots lifts the thing and does all that is ``done`` to it while held; or none lifts it
+    alone, so they lift (and put) it together."""
+    mass = scene.masses.get(thing, 0.0)
+    lifts = [r for r in robots if r.mass_capacity + MASS_TOLERANCE >= mass]
+    return not lifts or any(done <= r.skills for r in lifts)
