@@ -140,7 +140,8 @@ def summary_table(lines: Sequence[Line]) -> str:
                         if counts[f"by {k}"] or k in ("model", "grammar"))
         rows.append(f"{'infeasible':<14}{counts['tasks']:>6}{counts['errors']:>7}"
                     f"   correctly refused {counts['refused']}/{counts['tasks']} ({who})")
-    extra = [line for line in (bending_line(lines), repairs_line(lines), candidates_line(lines)) if line]
+    extra = [line for line in (bending_line(lines), repairs_line(lines), executable_line(lines), candidates_line(lines))
+             if line]
     return "\n".join(rows + extra)
 
 
@@ -160,6 +161,16 @@ def repairs_line(lines: Sequence[Line]) -> str:
             f"enable taken back; {ended} plan(s) ended at the stated goals; {finished} finished by its last "
             f"sub-task ({folded} in the model's last); {errands} errand line(s) taken out in {errand_tasks} task(s); "
             f"{idle} idle line(s) taken out in {idle_tasks} task(s)")
+
+
+def executable_line(lines: Sequence[Line]) -> str:
+    """What the planner changed in the allocations for every call to succeed when the team runs them (threads in
+    turn, calls taken out; "" where it changed nothing)."""
+    ran = [line["tokens"]["allocation"].get("executable", 0)
+           for line in lines if "allocation" in line.get("tokens", {})]
+    if not any(ran):
+        return ""
+    return f"planner in the allocation: {sum(ran)} change(s) in {sum(map(bool, ran))} task(s) so that no call fails"
 
 
 def candidates_line(lines: Sequence[Line]) -> str:

@@ -78,7 +78,8 @@ class TaskOutcome:
                                             "ended_at_goals": r.ended_at_goals, "finished": r.finish is not None,
                                             "folded": bool(r.finish and r.finish.get("into")),
                                             "errands": len(r.errands), "idle_steps": len(r.idle_steps)}
-                                           if r.stage == "decomposition" else {})}
+                                           if r.stage == "decomposition" else {}),
+                                        **({"executable": len(r.executable)} if r.stage == "allocation" else {})}
                               for r in self.result.stages.values()}
             if self.result.notices:
                 data["notices"] = self.result.notices

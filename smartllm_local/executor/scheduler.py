@@ -61,6 +61,7 @@ class TraceEntry:
     error: str
     positions: list[tuple[float, float]] | None = None  # (x, z) of each of ``robots`` after the action
     object_position: tuple[float, float] | None = None  # (x, z) of ``object_id`` after the action
+    line: int = 0  # the plan's line of the skill call (1-based)
 
     def as_dict(self) -> dict[str, Any]:
         """The entry as ``execute --trace`` writes it, with AI2-THOR's names for the action's fields (and the
@@ -328,5 +329,5 @@ class _Run:
                 tick=self.tick, subtask=name, robots=[self.team[m].id for m in members], skill=call.skill,
                 objects=list(call.objects), action=outcome.action, object_id=outcome.object_id,
                 success=outcome.success, error=outcome.error, positions=outcome.positions,
-                object_position=outcome.object_position,
+                object_position=outcome.object_position, line=call.line,
             ))

@@ -43,6 +43,7 @@ from .constraints.world_check import WorldCheck
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
 from .decoding.sampling import Sampling
 from .errands import drop_errands
+from .executable import WORLD_CHECK, for_team
 from .finish_fold import fold_finish
 from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
 from .idle_steps import drop_idle_steps
@@ -319,8 +320,23 @@ class Planner:
         run_stage(record, self.backend, prompt, constraint, output_budget=budget,
                   sampling=self.config.sampling, rng=self.stage_rng(result, record.stage), progress=self.progress)
         self._finish_plan_stage(record, result, form="allocated", scene=scene, team_size=len(team))
+        self._executable(record, result, scene, team)
         result.add(record)
         return record
+
+    def _executable(self, record: StageRecord, result: PlanResult, scene: SceneObjects, team: Sequence[Robot]) -> None:
+        """With the grammar's world check, the allocated plan changed until the team's run fails no call
+        (:mod:`.executable`); refused where no call of it succeeds."""
+        config = self.config
+        if not (config.grammar and config.world_check and isinstance(record.plan, Plan) and not record.plan.is_refusal):
+            return
+        made = for_team(record.output, record.plan, scene, team, self.catalogue.skills)
+        record.output, record.plan, record.executable = made.text, made.plan, made.changes
+        if made.refusal is not None:
+            record.refusal = result.refusal = made.refusal
+            record.refused_by = WORLD_CHECK
+            record.output = f"{REFUSAL_PREFIX}{made.refusal}\n"
+            record.plan = parse_plan(record.output, form="allocated")
 
     def _decomposed(self, result: PlanResult) -> tuple[Plan, list[Robot], SceneObjects]:
         """What the stages after the decomposition start from: its plan, the task's team and its scene."""

@@ -46,6 +46,7 @@ class StageRecord:
     finish: dict[str, Any] | None = None  # the planner's last sub-task: goals met, lines, search, `into` (finish_fold)
     errands: list[str] = field(default_factory=list)  # lines taken out as errands (errands.py, in_turn.py)
     idle_steps: list[str] = field(default_factory=list)  # a decomposition's lines taken out as idle (idle_steps.py)
+    executable: list[str] = field(default_factory=list)  # an allocation's changes for its run to fail no call
     dropped_goals: list[str] = field(default_factory=list)  # stated goals out of reach nobody asked for (asked.py)
     overturned: str = ""  # a goal stage's refusal for a thing the scene has, stated again without it (asked.py)
     placements: list[str] = field(default_factory=list)  # the goal-planner's holders read from the steps (readings.py)
@@ -141,7 +142,8 @@ class PlanResult:
     def refused_by(self) -> str | None:
         """Who refused: "grammar" (no team can do a sub-task the model wrote: it admitted nothing else),
         "rule" (a rule-based allocation found no team), "planner" (the goal-planner's search found no plan),
-        "model", or None."""
+        "goal check" (a stated goal the team cannot reach), "world check" (no call of the allocated plan succeeds
+        with the team), "model", or None."""
         if self.refusal is None:
             return None
         return next((r.refused_by for r in self.stages.values() if r.refusal is not None and r.refused_by), "model")

@@ -39,6 +39,7 @@ from smartllm_local.planner.decoding.writer import (
     run_constraint,
     run_tokens,
 )
+from smartllm_local.planner.executable import for_team
 from smartllm_local.robots import team_skills
 from smartllm_local.skills import DEFAULT_SKILL_SET, SkillSet
 from smartllm_local.world.controller import open_controller
@@ -279,13 +280,14 @@ def _subtasks(rng: random.Random, wanted: int):
     return write
 
 
-def _world_checked(task, rng: random.Random, allocation_writer: TokenWriter, budget: int = 1400):
+def _world_checked(task, rng: random.Random, allocation_writer: TokenWriter, budget: int = 1400, checked: bool = True):
     """The three stages as the planner runs them (world check, restated allocation): a random writer decomposes
     (three sub-tasks) and forms the coalition, ``allocation_writer`` allocates. The allocated plan's text and its
-    dead ends; None where the coalition refuses."""
+    dead ends; None where the coalition refuses. ``checked=False``: no world check in either stage."""
     scene = scene_objects(task.floor_plan)
     team = CATALOGUE.team(task.robots)
-    decomposer = PlanConstraint(scene, CATALOGUE.skills, world=WorldCheck(scene, CATALOGUE.skills, MAX_SUBTASKS))
+    decomposer = PlanConstraint(scene, CATALOGUE.skills,
+                                world=WorldCheck(scene, CATALOGUE.skills, MAX_SUBTASKS) if checked else None)
     text = run_constraint(decomposer, _subtasks(rng, 3), len, budget)
     plan = parse_plan(text, form="decomposed", skills=CATALOGUE.skills, scene_types=scene.types)
     names = [f.name for f in plan.functions]
@@ -296,7 +298,7 @@ def _world_checked(task, rng: random.Random, allocation_writer: TokenWriter, bud
         return None
     allocator = RestatedAllocation(scene, CATALOGUE.skills, team=team, function_names=names,
                                    bodies=restated_bodies(text, names),
-                                   world=WorldCheck(scene_objects(task.floor_plan), CATALOGUE.skills, len(team)))
+                                   world=WorldCheck(scene, CATALOGUE.skills, len(team)) if checked else None)
     allocated = run_tokens(allocator, allocation_writer, allocator.maximum_output())
     return allocated, decomposer.world_counts()[1] + allocator.world_counts()[1]
 
@@ -316,10 +318,11 @@ def _thread_blocks(allocated: str) -> list[list[tuple[str, frozenset[int]]]]:
 def test_no_allocation_runs_a_robot_in_two_threads_at_once(every, seeds):
     """A writer that adds every thread it may to a block and books into it a robot the block already has, over
     every fourth feasible benchmark task (the heavy suite: all, twice), planned as the planner plans (three
-    sub-tasks, world check, restated allocation): no block gives one robot to two of its threads, so when the
-    plan runs every thread of a block begins working at the tick the block starts (none waits for another's
-    robot), and every action of every plan whose check met no dead end succeeds (Exe 1.00). Before, where only a
-    busy robot could do a thread's sub-task, the grammar booked it anyway (6 of these 9 plans)."""
+    sub-tasks, world check, restated allocation, the allocation made executable): no block gives one robot to two
+    of its threads, so when the plan runs every thread of a block begins working at the tick the block starts (none
+    waits for another's robot), and every action of every plan succeeds (Exe 1.00), a plan whose check met a dead
+    end included. Before, where only a busy robot could do a thread's sub-task, the grammar booked it anyway (6 of
+    these 9 plans)."""
     plans = clean = blocks_shared = 0  # blocks_shared: plans with a block of two threads or more
     rng = random.Random("booking")
     booker = Booker(rng)
@@ -332,26 +335,60 @@ def test_no_allocation_runs_a_robot_in_two_threads_at_once(every, seeds):
                 continue
             allocated, dead_ends = planned
             plans += 1
-            blocks = _thread_blocks(allocated)
-            for block in blocks:
+            clean += dead_ends == 0
+            for block in _thread_blocks(allocated):
                 teams = [team for _, team in block]
                 assert all(not a & b for i, a in enumerate(teams) for b in teams[i + 1:]), (task.id, allocated)
+            team = CATALOGUE.team(task.robots)
+            plan = parse_plan(allocated, form="allocated", skills=CATALOGUE.skills, team_size=len(team))
+            made = for_team(allocated, plan, scene_objects(task.floor_plan), team, CATALOGUE.skills)
+            blocks = _thread_blocks(made.text)
             blocks_shared += any(len(block) > 1 for block in blocks)
-            plan = parse_plan(allocated, form="allocated", skills=CATALOGUE.skills, team_size=len(task.robots))
-            execution = run_plan(plan, task.floor_plan, CATALOGUE.team(task.robots), skills=CATALOGUE.skills,
-                                 controller=controller)
+            execution = run_plan(made.plan, task.floor_plan, team, skills=CATALOGUE.skills, controller=controller)
             began = dict(execution.starts)
             for block in blocks:
                 assert len({began[name] for name, _ in block}) == 1, (task.id, block, execution.starts)
-            if dead_ends == 0:
-                clean += 1
-                failed = [(e.subtask, e.skill, e.objects, e.error) for e in execution.trace if not e.success]
-                assert not failed, (task.id, allocated, failed)
+            failed = [(e.subtask, e.skill, e.objects, e.error) for e in execution.trace if not e.success]
+            assert not failed, (task.id, made.text, failed)
     finally:
         controller.stop()
     assert plans >= 8 * seeds * 4 // every and clean >= 0.8 * plans and blocks_shared >= plans // 3, \
         (plans, clean, blocks_shared)
     assert booker.booked == 0  # the grammar never offered a list naming a robot of the open block
+
+
+@pytest.mark.parametrize("seeds", [1, pytest.param(4, marks=pytest.mark.heavy)])
+def test_every_plan_made_executable_runs_with_every_call_succeeding(seeds):
+    """Plans written with no world check at all (random writers in every stage, the allocation's booking robots
+    of the open block where it may), over every feasible benchmark task (the heavy suite: four times): most fail
+    calls as written; made executable as the planner makes its allocations (threads in turn, failing calls
+    out), every call of every one succeeds on the ai2thor Controller (Exe 1.00 by construction)."""
+    rng = random.Random("executable")
+    tasks = [t for t in load_tasks() if t.feasible] * seeds
+    plans = failing = in_turn = refused = 0
+    controller = open_controller(tasks[0].floor_plan, agent_count=len(tasks[0].robots))
+    try:
+        for task in tasks:
+            planned = _world_checked(task, rng, Booker(rng), checked=False)
+            if planned is None:
+                continue
+            team, scene = CATALOGUE.team(task.robots), scene_objects(task.floor_plan)
+            plan = parse_plan(planned[0], form="allocated", skills=CATALOGUE.skills, team_size=len(team))
+            before = run_plan(plan, task.floor_plan, team, skills=CATALOGUE.skills, controller=controller)
+            made = for_team(planned[0], plan, scene, team, CATALOGUE.skills)
+            plans += 1
+            failing += any(not e.success for e in before.trace)
+            assert bool(made.changes) == any(not e.success for e in before.trace), (task.id, made.changes)
+            if made.refusal is not None:  # every call went: nothing is left to run
+                refused += 1
+                assert made.refusal.startswith("no call of the plan succeeds with this team ("), made.refusal
+                continue
+            in_turn += any("one after the other" in c for c in made.changes)
+            after = run_plan(made.plan, task.floor_plan, team, skills=CATALOGUE.skills, controller=controller)
+            assert after.trace and all(e.success for e in after.trace), (task.id, made.text, made.changes)
+    finally:
+        controller.stop()
+    assert plans >= 15 * seeds and failing >= plans // 2 and refused <= plans // 4, (plans, failing, in_turn, refused)
 
 
 def test_a_writer_that_loops_its_lines_has_every_loop_cut():
