@@ -39,6 +39,12 @@ def names(instruction: str, object_type: str) -> bool:
                for word in said for w in _type_words(object_type))
 
 
+def names_a_word(instruction: str, object_type: str) -> bool:
+    """Whether the instruction says a word of the type's name (a plural's ending aside): read strictly, with no
+    shared first letters ("potato" names the Potato, not the Pot; "for" not the Fork)."""
+    return bool(set(_type_words(object_type)) & _forms(_WORD.findall(instruction.lower())))
+
+
 def asks_for(instruction: str, condition: Condition) -> bool:
     """Whether the instruction names an object of the condition (its subject, or what it holds)."""
     return names(instruction, condition.subject) or (condition.item is not None and names(instruction, condition.item))

@@ -10,7 +10,7 @@ does not run it.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -19,12 +19,19 @@ from ..goal_language import GoalStatement, parse_goal_statement
 from ..scene import GoalVocabulary, SceneObjects
 from ..scoring import Condition
 from ..world.object_types import base_type
-from .asked import coverage, named_in_full, names, present_yet_refused
+from .asked import coverage, named_in_full, names_a_word, present_yet_refused
 from .backends.base import Backend
 from .candidates import mean_logprob, write_all
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .progress import SILENT
-from .prompting.goal_prompt import GoalExample, goal_prompt, load_asked_states, load_goal_examples, states_asked
+from .prompting.goal_prompt import (
+    GoalExample,
+    goal_prompt,
+    load_asked_states,
+    load_goal_examples,
+    load_only_where_asked,
+    states_asked,
+)
 from .result import PlanResult, StageRecord
 from .stages import Fitted, fit_prompt, run_stage
 
@@ -96,11 +103,15 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), goal_examples(planner), planner.backend,
                         GOAL_BUDGET, planner.chat)
     count = planner.config.goal_candidates
+    prompts = planner.world.examples_dir()
     asked = {state: _named(words, state, vocabulary)
-             for state, words in states_asked(instruction, load_asked_states(planner.world.examples_dir())).items()}
+             for state, words in states_asked(instruction, load_asked_states(prompts)).items()}
+    only_where_asked = load_only_where_asked(prompts)
+    withheld = set(only_where_asked) - set(states_asked(instruction, only_where_asked))
 
     def write(backend: Backend, k: int) -> StatedGoals:
-        return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, asked, refusals=refusals)
+        return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, asked, withheld,
+                          refusals=refusals)
 
     if count == 1:
         return write(planner.backend, 0)
@@ -112,20 +123,22 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
 
 
 def _named(words: str, state: str, vocabulary: GoalVocabulary) -> list[str]:
-    """The types the words name that can be in the state; a slice type only where its whole is not among them
-    ("the potato" is the Potato, not its slices)."""
-    named = [t for t in vocabulary.types if state in vocabulary.states.get(t, ()) and names(words, t)]
+    """The types a word of the words names (:func:`.asked.names_a_word`) that can be in the state; a slice type
+    only where its whole is not among them ("the potato" is the Potato, not its slices)."""
+    named = [t for t in vocabulary.types if state in vocabulary.states.get(t, ()) and names_a_word(words, t)]
     return [t for t in named if base_type(t) == t or base_type(t) not in named]
 
 
 def _candidate(planner: Planner, backend: Backend, k: int, prompt: Fitted, scene: SceneObjects,
-               vocabulary: GoalVocabulary, instruction: str, asked: Mapping[str, Sequence[str]], *,
-               refusals: bool) -> StatedGoals:
+               vocabulary: GoalVocabulary, instruction: str, asked: Mapping[str, Sequence[str]],
+               withheld: Collection[str], *, refusals: bool) -> StatedGoals:
     """Goal candidate ``k`` (the planner's sampling for the first, the candidates' for the others) on ``backend``;
     ``asked``: the states the instruction asks for in so many words, each with the things its words name that
-    can be in it (owed where the model leaves them out)."""
+    can be in it (owed where the model leaves them out); ``withheld``: the states offered only where asked for, and
+    not asked for."""
     record = StageRecord(STAGE, chat_template=planner.chat_status)
-    constraint = GoalConstraint(vocabulary, allow_refusal=refusals, asked=asked) if planner.config.grammar else None
+    constraint = GoalConstraint(vocabulary, allow_refusal=refusals, asked=asked, withheld=withheld) \
+        if planner.config.grammar else None
     # No team: the goal is what the instruction asks, whoever reaches it.
     task = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=[])
     rng = planner.stage_rng(task, STAGE if k == 0 else f"{STAGE} candidate {k}")

@@ -11,10 +11,12 @@ import pytest
 
 from smartllm_local.domain import load_domain
 from smartllm_local.errors import UserError
+from smartllm_local.goal_language import OPPOSITES
+from smartllm_local.planner.asked import names_a_word
 from smartllm_local.planner.constraints.goal import GoalConstraint, goal_vocabulary
 from smartllm_local.planner.decoding.writer import Report, accepts, run_constraint, run_tokens
 from smartllm_local.planner.goal_stage import GOAL_BUDGET
-from smartllm_local.planner.prompting.goal_prompt import load_asked_states, states_asked
+from smartllm_local.planner.prompting.goal_prompt import load_asked_states, load_only_where_asked, states_asked
 from smartllm_local.worlds import scene_objects
 
 from .test_goal_stage import TASKS, _check_statement
@@ -25,13 +27,14 @@ KITCHEN = goal_vocabulary(scene_objects(1))
 
 
 @pytest.mark.parametrize(("instruction", "asked"), [
-    ("Fry the potato in a pan, and put the bread in the fridge.", {"COOKED": "Fry the potato in a pan"}),
-    ("Switch off the lamp on the side table.", {"OFF": "Switch off the lamp on the side table"}),
-    ("Move the laptop onto the bed and turn the desk lamp off.", {"OFF": "turn the desk lamp off"}),
-    ("Turn on the TV, then shut the laptop.", {"CLOSED": "shut the laptop", "ON": "Turn on the TV"}),
+    ("Fry the potato in a pan, and put the bread in the fridge.", {"COOKED": "the potato in a pan"}),
+    ("Switch off the lamp on the side table.", {"OFF": "off the lamp on the side table"}),
+    ("Move the laptop onto the bed and turn the desk lamp off.", {"OFF": "the desk lamp off"}),
+    ("Turn on the TV, then shut the laptop.", {"CLOSED": "the laptop", "ON": "on the TV"}),
     ("Leave the remote on the sofa and put the TV on.", {}),  # a thing put on a sofa is no state
     ("Could you heat up a potato and chop the tomato?",  # a clause ends at punctuation
-     {"SLICED": "chop the tomato", "HOT": "heat up a potato and chop the tomato"}),
+     {"SLICED": "the tomato", "HOT": "up a potato and chop the tomato"}),
+    ("Switch the TV on.", {"ON": "the TV on"}),  # the verb names nothing: not the LightSwitch
 ])
 def test_the_states_an_instruction_asks_for_and_the_words_that_name_their_thing(instruction, asked):
     assert states_asked(instruction, PATTERNS) == asked
@@ -50,7 +53,37 @@ def test_a_statement_ended_without_a_state_asked_for_goes_on_with_a_line_of_it()
     assert accepts(GoalConstraint(KITCHEN, asked=asked), "# INFEASIBLE: no stove here\n")  # a refusal owes nothing
     # an owed line never contradicts the statement: no holder said to hold a thing is owed empty
     assert not accepts(GoalConstraint(KITCHEN, asked={"EMPTY": ["Fridge"]}), "Apple in Fridge\n\nFridge empty\n\n")
-    assert accepts(GoalConstraint(KITCHEN, asked={"EMPTY": ["Fridge"]}), "Apple in Fridge\n\nSink empty\n\n")
+    # nor of a thing the asking words do not name: where every named thing is closed to it, nothing is owed
+    assert not accepts(GoalConstraint(KITCHEN, asked={"EMPTY": ["Fridge"]}), "Apple in Fridge\n\nSink empty\n\n")
+    assert accepts(GoalConstraint(KITCHEN, asked={"EMPTY": ["Fridge"]}), "Apple in Fridge\n\n\n")  # no line owed
+    assert accepts(GoalConstraint(KITCHEN, asked={"EMPTY": []}), "Apple in Fridge\n\nSink empty\n\n")
+
+
+def test_a_state_asked_of_named_things_is_said_of_no_other_and_a_withheld_state_of_nothing():
+    """Asked to warm the potato, the 0.5B stated the pot hot; it stated the fridge empty where the apple was to go."""
+    assert names_a_word("up a potato for my lunch", "Potato") and not names_a_word("up a potato for my lunch", "Pot")
+    assert not names_a_word("up a potato for my lunch", "Fork") and names_a_word("the keys", "KeyChain")
+    hot = {"HOT": ["Potato"]}
+    assert not accepts(GoalConstraint(KITCHEN, asked=hot), "Pot hot\n\n")
+    assert accepts(GoalConstraint(KITCHEN, asked=hot), "Pot in Microwave\nPotato hot\n\n")
+    assert accepts(GoalConstraint(KITCHEN, asked={"HOT": []}), "Pot hot\n\n")  # the words name nothing
+    assert not accepts(GoalConstraint(KITCHEN, withheld={"EMPTY"}), "Fridge empty\n\n")
+    assert accepts(GoalConstraint(KITCHEN, withheld={"EMPTY"}), "Apple in Fridge\n\n")
+    assert accepts(GoalConstraint(KITCHEN), "Fridge empty\n\n")
+
+
+def test_household_offers_empty_only_where_an_instruction_asks_for_it_and_never_owes_it():
+    only = load_only_where_asked(load_domain("household").prompts_dir())
+    assert set(only) == {"EMPTY"} and "EMPTY" not in PATTERNS
+    assert states_asked("Clear the bed: the book goes on the desk.", only) == {"EMPTY": "the bed"}
+    assert states_asked("Put the apple in the fridge.", only) == {}
+
+
+def test_an_only_where_asked_part_that_is_not_a_table_is_a_clear_error(tmp_path: Path):
+    (tmp_path / "goal").mkdir()
+    (tmp_path / "goal" / "asked_states.toml").write_text("only_where_asked = ['clear']\n")
+    with pytest.raises(UserError, match=r"\[only_where_asked\] is not a table"):
+        load_only_where_asked(tmp_path)
 
 
 @pytest.mark.parametrize("kind", WRITERS)
@@ -61,16 +94,29 @@ def test_adversarial_writers_with_states_asked_write_valid_statements_that_state
         vocabulary = goal_vocabulary(scene)
         able = sorted({s for states in vocabulary.states.values() for s in states})
         for seed in range(4):
-            asked = {s: rng.sample(vocabulary.types, 2) for s in rng.sample(able, min(2, len(able)))}
+            states = rng.sample(able, min(3, len(able)))
+            asked = {s: rng.sample([t for t in vocabulary.types if s in vocabulary.states.get(t, ())], 1)
+                     if seed % 3 else [] for s in states[:2]}
+            withheld = states[2:]
             budget = rng.choice([GOAL_BUDGET, GoalConstraint(vocabulary).minimum_budget() + rng.randint(0, 60)])
-            constraint = GoalConstraint(vocabulary, asked=asked)
+            constraint = GoalConstraint(vocabulary, asked=asked, withheld=withheld)
             if seed % 2:
                 text = run_tokens(constraint, TokenAdversary(kind, random.Random(seed), refusals=0.1), budget, Report())
             else:
                 text = run_constraint(constraint, writer(kind, random.Random(seed), refusals=0.1), len, budget)
             statement = _check_statement(text, scene)
+            for c in statement.conditions:  # a state asked of named things is said of no other; a withheld one never
+                assert c.state not in withheld and c.subject in (asked.get(c.state) or [c.subject]), (asked, text)
             if statement.refusal is None and budget == GOAL_BUDGET and len(statement.conditions) < 8:
-                assert set(asked) <= {c.state for c in statement.conditions}, (asked, text)
+                said = {c.state for c in statement.conditions}
+                # owed, unless the statement closed it for every thing named (said the opposite, filled the holder)
+                assert all(s in said or named and all(_closed(statement, k, s) for k in named)
+                           for s, named in asked.items()), (asked, text)
+
+
+def _closed(statement, kind: str, state: str) -> bool:
+    return any(c.subject == kind and (c.state in (state, OPPOSITES.get(state, state)) or
+                                      c.state is None and state == "EMPTY") for c in statement.conditions)
 
 
 def test_a_domain_without_the_file_asks_for_nothing_and_a_bad_file_is_a_clear_error(tmp_path: Path):
@@ -93,3 +139,14 @@ def test_domain_check_reports_a_goal_example_that_leaves_out_a_state_its_instruc
     problems = check_goal_examples(load_domain(str(copy)))[1]
     assert len(problems) == 1 and "chop_and_bin.txt: states no thing in a state its instruction asks for" in \
         problems[0] and "SLICED" in problems[0]
+
+
+def test_domain_check_reports_a_goal_example_that_states_empty_where_its_instruction_does_not_ask(tmp_path: Path):
+    from smartllm_local.planner.prompting.example_check import check_goal_examples
+
+    copy = tmp_path / "household"
+    shutil.copytree(load_domain("household").folder, copy)
+    (copy / "prompts" / "goal" / "dishes_away.txt").write_text("Bowl in Cabinet\nCup in Cabinet\nSinkBasin empty\n")
+    problems = check_goal_examples(load_domain(str(copy)))[1]
+    assert len(problems) == 1 and "dishes_away.txt: states EMPTY, which the goal stage offers only where" in \
+        problems[0]

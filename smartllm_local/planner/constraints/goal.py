@@ -16,12 +16,16 @@ statement without is owed: after the blank line comes a line of that state, then
 the model's choice among those the asking words name ("the potato") that the world can give the state, or where
 they name none ("boil some water"), among all the scene's that it can. A small model states where the potato goes
 and forgets that it must be cooked; the plan is then made for the goals stated. The goal stage puts the owed lines
-first in the statement it keeps: where no plan meets every goal, the planner meets the first it can.
+first in the statement it keeps: where no plan meets every goal, the planner meets the first it can. Where the
+asking words name some things, the state is not offered of any other thing in the model's own lines either (asked
+to warm the potato, the 0.5B stated the tomato hot). A state the domain offers only where asked for (``withheld``
+otherwise: household's empty, which no goal example states and the small models stated of the fridge they were to
+put the apple in) is not offered at all.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from itertools import count
 
 from ...goal_language import OPPOSITES, PREPOSITIONS, STATE_WORDS, aliases, parse_goal_statement
@@ -44,12 +48,14 @@ class GoalConstraint(Constraint):
     """The goal stage: conditions, one a line, then a blank line (or one refusal line)."""
 
     def __init__(self, vocabulary: GoalVocabulary, *, allow_refusal: bool = True, max_goals: int = MAX_GOALS,
-                 asked: Mapping[str, Sequence[str]] | None = None):
+                 asked: Mapping[str, Sequence[str]] | None = None, withheld: Collection[str] = ()):
         super().__init__()
         self.vocabulary, self.allow_refusal, self.max_goals = vocabulary, allow_refusal, max_goals
+        self.withheld = frozenset(withheld)  # states not offered (not asked for, and offered only where asked)
         able = {state for states in vocabulary.states.values() for state in states}
-        # A state nothing here can be in asks for nothing.
-        self.asked = {state: named for state, named in (asked or {}).items() if state in able}
+        # A state nothing here can be in asks for nothing; a thing named that cannot be in it is not named for it.
+        self.asked = {state: [kind for kind in named if state in vocabulary.states.get(kind, ())]
+                      for state, named in (asked or {}).items() if state in able}
         self.owing = False  # the model ended its statement; the states asked that it left out follow
         self.owed: list[Condition] = []  # the conditions written for them
         self.said: list[Condition] = []
@@ -103,9 +109,8 @@ class GoalConstraint(Constraint):
         lines = []
         for state in self._missing():
             kinds = [kind for kind in self.vocabulary.types if state in self.vocabulary.states.get(kind, ())
-                     and state not in closed.get(kind, ())]
-            named = [kind for kind in kinds if kind in self.asked[state]]
-            names = [name for kind in named or kinds for name in self.names[kind]]
+                     and state not in closed.get(kind, ()) and kind in (self.asked[state] or self.vocabulary.types)]
+            names = [name for kind in kinds for name in self.names[kind]]
             if names:
                 lines.append(seq(alt(*names), f" {STATE_WORDS[state]}\n"))
         options: dict[str, Node] = {"end": "\n"}
@@ -124,6 +129,11 @@ class GoalConstraint(Constraint):
                 closed.setdefault(c.subject, set()).add(EMPTY)  # a holder with a thing in it is not empty
         return closed
 
+    def _asked_of_others(self, kind: str) -> set[str]:
+        """The states asked for of things the asking words name, where ``kind`` is not one of them ("warm the
+        potato": hot of the Potato, not of the Tomato)."""
+        return {state for state, named in self.asked.items() if named and kind not in named}
+
     def _conditions(self) -> tuple[Node | None, dict[str, Node]]:
         """A condition line of those still to be said (None: none), and the rules it refers to. Types that
         may be followed by the same things share a rule."""
@@ -135,7 +145,8 @@ class GoalConstraint(Constraint):
         emptied = {c.subject for c in self.said if c.state == EMPTY}  # nothing may be said to be in them
         groups: dict[tuple[frozenset[str], frozenset[str]], list[str]] = {}
         for kind in self.vocabulary.types:
-            states = self.vocabulary.states.get(kind, frozenset()) - said_states.get(kind, set())
+            states = self.vocabulary.states.get(kind, frozenset()) - said_states.get(kind, set()) - \
+                self._asked_of_others(kind) - self.withheld
             holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set()) - emptied
             if states or holders:
                 groups.setdefault((frozenset(states), frozenset(holders)), []).append(kind)

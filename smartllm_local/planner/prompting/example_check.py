@@ -21,7 +21,14 @@ from ..constraints.restated import RestatedAllocation, restated_bodies
 from ..constraints.world_check import WorldCheck
 from ..decoding.protocol import REFUSAL_PREFIX
 from ..decoding.writer import accepts
-from .goal_prompt import ASKED_STATES, GOAL_FOLDER, load_asked_states, load_goal_examples, states_asked
+from .goal_prompt import (
+    ASKED_STATES,
+    GOAL_FOLDER,
+    load_asked_states,
+    load_goal_examples,
+    load_only_where_asked,
+    states_asked,
+)
 from .prompts import STAGES, load_examples
 
 
@@ -90,7 +97,7 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
         return 0, []
     try:
         examples = load_goal_examples(domain.prompts_dir())
-        asked = load_asked_states(domain.prompts_dir())
+        asked, only = load_asked_states(domain.prompts_dir()), load_only_where_asked(domain.prompts_dir())
     except SmartLLMError as exc:
         return 0, [str(exc)]
     problems = []
@@ -112,4 +119,9 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
         elif not accepts(GoalConstraint(vocabulary, asked={s: [] for s in owed}), written):
             problems.append(f"{where}: states no thing in a state its instruction asks for in so many words "
                             f"({', '.join(owed)}: {folder}/{ASKED_STATES}); an example shows the model what to state")
+        elif not accepts(GoalConstraint(vocabulary, withheld=(withheld := set(only) - set(states_asked(
+                ex.instruction, only)))), written):
+            problems.append(f"{where}: states {', '.join(sorted(withheld))}, which the goal stage offers only where "
+                            f"the instruction asks for it ([only_where_asked] of {folder}/{ASKED_STATES}) and this "
+                            "one does not")
     return len(examples), problems

@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 try:
     import tomllib
@@ -29,6 +30,8 @@ from .prompts import Prompt
 
 GOAL_FOLDER = "goal"
 ASKED_STATES = "asked_states.toml"
+#: The table of ``asked_states.toml`` whose states are offered only where asked for, and never owed.
+ONLY_WHERE_ASKED = "only_where_asked"
 _CLAUSE = re.compile(r"[,.;:!?]")
 
 
@@ -61,11 +64,23 @@ def load_goal_examples(prompts: Path) -> list[GoalExample]:
 def load_asked_states(prompts: Path) -> dict[str, tuple[re.Pattern[str], ...]]:
     """Each state's patterns in a domain's ``prompts/goal/asked_states.toml`` (none where there is no such file):
     ``STATE = ['<regular expression>', ...]``, matched case-insensitively against an instruction."""
+    return _patterns(prompts, lambda table: {k: v for k, v in table.items() if k != ONLY_WHERE_ASKED})
+
+
+def load_only_where_asked(prompts: Path) -> dict[str, tuple[re.Pattern[str], ...]]:
+    """The states the goal grammar offers only where the instruction asks for them in so many words (never owed):
+    the ``[only_where_asked]`` table of ``asked_states.toml``, each state with its patterns."""
+    return _patterns(prompts, lambda table: table.get(ONLY_WHERE_ASKED, {}))
+
+
+def _patterns(prompts: Path, part: Callable[[dict[str, Any]], Any]) -> dict[str, tuple[re.Pattern[str], ...]]:
     path = prompts / GOAL_FOLDER / ASKED_STATES
     if not path.is_file():
         return {}
     try:
-        table = tomllib.loads(path.read_text(encoding="utf-8"))
+        table = part(tomllib.loads(path.read_text(encoding="utf-8")))
+        if not isinstance(table, dict):
+            raise ValueError(f"[{ONLY_WHERE_ASKED}] is not a table")
         patterns = {}
         for state, listed in table.items():
             if state not in STATE_WORDS or not isinstance(listed, list):
@@ -79,16 +94,20 @@ def load_asked_states(prompts: Path) -> dict[str, tuple[re.Pattern[str], ...]]:
 
 
 def states_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> dict[str, str]:
-    """The states the instruction asks for in so many words, each with the words that ask for it and the rest
-    of their clause, which name what is to be in it ("fry the potato in a pan, and ...": COOKED, "fry the potato
-    in a pan")."""
+    """The states the instruction asks for in so many words, each with the words after the asking verb to the end
+    of their clause, which name what is to be in it ("fry the potato in a pan, and ...": COOKED, "the potato in a
+    pan"); the verb names nothing ("switch the TV on" does not ask for the LightSwitch on)."""
     asked = {}
     for state, listed in patterns.items():
         found = [m for p in listed for m in p.finditer(instruction)]
         if found:
-            asked[state] = " ".join(instruction[m.start():m.end()] + _CLAUSE.split(instruction[m.end():], 1)[0]
-                                    for m in found)
+            asked[state] = " ".join(_after_verb(instruction[m.start():m.end()]) +
+                                    _CLAUSE.split(instruction[m.end():], 1)[0] for m in found).strip()
     return asked
+
+
+def _after_verb(words: str) -> str:
+    return words.split(maxsplit=1)[1] if " " in words.strip() else ""
 
 
 def goal_intro(terms: GoalTerms) -> str:
