@@ -37,8 +37,8 @@ from .idle_steps import (
     WHERE_ROBOTS_STAND,
     Step,
     acts,
-    body_end,
     comments_above,
+    definition_lines,
     dry_run,
     function_name,
     gotos_before,
@@ -109,8 +109,7 @@ def _function_lines(lines: Sequence[str], function: int) -> set[int]:
     orchestration that runs it (its call, or its thread's creation, start and join)."""
     defs = [n for n, line in enumerate(lines) if line.startswith("def ")]
     header = defs[function]
-    name, end = function_name(lines[header]), body_end(lines, header)
-    taken = set(range(header, end + (end < len(lines) and not lines[end].strip())))
+    name, taken = function_name(lines[header]), definition_lines(lines, header)
     thread = None
     for n, line in enumerate(lines):
         line = line.rstrip("\n")

@@ -28,7 +28,7 @@ from ..plan_language.ir import MainStep
 from ..robots import Robot
 from ..scene import SceneObjects
 from ..skills import SkillSet
-from .idle_steps import body_end, comments_above
+from .idle_steps import comments_above, definition_lines
 
 #: Who refused, where no call of a plan succeeds.
 WORLD_CHECK = "world check"
@@ -163,11 +163,7 @@ def _without(text: str, plan: Plan, line: int) -> str | None:
     emptied = [body[line]] if _calls(body[line], dropped) == 0 else []
     while emptied:
         function = emptied.pop()
-        end = body_end(lines, function.line - 1)
-        dropped |= set(range(function.line - 1, end))
-        while end < len(lines) and not lines[end].strip():
-            dropped.add(end)  # the blank lines after it
-            end += 1
+        dropped |= definition_lines(lines, function.line - 1)
         dropped |= {s.line - 1 for s in _launching(plan, function.name)}
         for caller in plan.functions:
             calling = {s.line - 1 for s in caller.body if isinstance(s, Call) and s.function == function.name}

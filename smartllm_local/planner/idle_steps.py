@@ -167,6 +167,12 @@ def body_end(lines: Sequence[str], header: int) -> int:
     return end
 
 
+def definition_lines(lines: Sequence[str], header: int) -> set[int]:
+    """The lines of the function defined at ``header``: the header, its body and the blank line after it."""
+    end = body_end(lines, header)
+    return set(range(header, end + (end < len(lines) and not lines[end].strip())))
+
+
 def comments_above(lines: Sequence[str], dropped: Collection[int]) -> set[int]:
     """The comment lines right above a dropped line (they said what it would do)."""
     comments = set()
