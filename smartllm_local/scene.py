@@ -10,7 +10,7 @@ scene without importing the other, and below the worlds, which build these.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -58,6 +58,11 @@ class GoalVocabulary:
     def types(self) -> tuple[str, ...]:
         named = set(self.states) | set(self.holders)
         return tuple(sorted(t for t in named if self.states.get(t) or self.holders.get(t)))
+
+    def less(self, types: Collection[str]) -> GoalVocabulary:
+        """The vocabulary without ``types``, as things or as holders."""
+        return GoalVocabulary({t: s for t, s in self.states.items() if t not in types},
+                              {t: h - set(types) for t, h in self.holders.items() if t not in types})
 
     def state_names(self) -> list[str]:
         """The states any type of the scene can be in, in the scorer's order."""

@@ -1,7 +1,8 @@
 """Whether an instruction names what a stated goal is about: the goal check refuses a task for a goal out of the
 team's reach only where the instruction asked for it, the goal stage's refusal stands only where it is not
 for something the instruction names and the scene has, and among several statements the goal stage keeps one
-that says something of each thing the instruction names in full.
+that says something of each thing the instruction names in full, and its grammar offers no thing the instruction's
+words name only as part of another thing's name (:func:`outnamed`).
 
 The goal stage states goals from the instruction and the scene; a small model also states goals nobody asked
 for (an object the instruction never names). Refusing a feasible task for one of those is refusing it for the
@@ -71,6 +72,33 @@ def named_in_full(instruction: str, types: Sequence[str]) -> list[str]:
     origin = _forms(w for match in ORIGIN.finditer(text) for w in match.group(1).split())
     rest = _forms(_WORD.findall(ORIGIN.sub(" ", text)))
     return [t for t in types if (words := set(_type_words(t))) <= said and not (words <= origin and not words <= rest)]
+
+
+def outnamed(instruction: str, types: Sequence[str]) -> set[str]:
+    """The types whose every name word the instruction says belongs to other types it names as a phrase
+    (:func:`named_as_phrase`): "the bar of soap" names the SoapBar, so "soap" does not name the SoapBottle; "the
+    side table" is not the CoffeeTable. A type whose name holds another's whole name is not outnamed by it ("the
+    sink" may be the SinkBasin)."""
+    phrases = [set(_type_words(t)) for t in types if named_as_phrase(instruction, t)]
+    said = _forms(_WORD.findall(instruction.lower()))
+    out = set()
+    for t in types:
+        words = set(_type_words(t))
+        spoken = words & said
+        if spoken and not any(words == p for p in phrases) and \
+                spoken <= set().union(*(p for p in phrases if not p <= words)):
+            out.add(t)
+    return out
+
+
+def named_as_phrase(instruction: str, object_type: str) -> bool:
+    """Whether the instruction says the type's name as a phrase: its words in order ("the desk lamp", "coffee
+    tables"), or a two-word name's last word, "of", then its first ("a bar of soap")."""
+    words = [re.escape(w) for w in _type_words(object_type)]
+    phrase = r"\s+".join(f"{w}(?:e?s)?" for w in words)
+    if len(words) == 2:
+        phrase += rf"|{words[1]}s?\s+of\s+(?:the\s+|a\s+)?{words[0]}s?"
+    return re.search(rf"\b(?:{phrase})\b", instruction.lower()) is not None
 
 
 def coverage(named: Sequence[str], stated: Sequence[Condition]) -> float:

@@ -15,11 +15,12 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from ..errors import PlanError
-from ..goal_language import GoalStatement, parse_goal_statement
+from ..goal_language import GoalStatement, condition_line, parse_goal_statement
 from ..scene import GoalVocabulary, SceneObjects
-from ..scoring import Condition
+from ..scoring import Condition, condition_holds, containment
+from ..skills import SkillSet
 from ..world.object_types import base_type
-from .asked import coverage, named_in_full, names_a_word, present_yet_refused
+from .asked import coverage, named_in_full, names_a_word, outnamed, present_yet_refused
 from .backends.base import Backend
 from .candidates import mean_logprob, write_all
 from .constraints.goal import GoalConstraint, goal_vocabulary
@@ -100,6 +101,8 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     record's ``candidates``)."""
     scene = planner.scene(floor_plan)
     vocabulary = goal_vocabulary(scene)
+    if planner.config.grammar:  # "the bar of soap": the words name the SoapBar only, not the SoapBottle
+        vocabulary = vocabulary.less(outnamed(instruction, vocabulary.types))
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), goal_examples(planner), planner.backend,
                         GOAL_BUDGET, planner.chat)
     count = planner.config.goal_candidates
@@ -108,18 +111,48 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
              for state, words in states_asked(instruction, load_asked_states(prompts)).items()}
     only_where_asked = load_only_where_asked(prompts)
     withheld = set(only_where_asked) - set(states_asked(instruction, only_where_asked))
+    placed = placed_now(scene, vocabulary, planner.catalogue.skills) if planner.config.grammar else frozenset()
 
     def write(backend: Backend, k: int) -> StatedGoals:
         return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, asked, withheld,
                           refusals=refusals)
 
     if count == 1:
-        return write(planner.backend, 0)
+        return _without_placed(write(planner.backend, 0), placed)
     started = time.perf_counter()
     stated = write_all(planner.backend, count, write)
     chosen = choose_statement(instruction, vocabulary.types, stated)  # type: ignore[arg-type]
     chosen.record.seconds = time.perf_counter() - started
-    return chosen
+    return _without_placed(chosen, placed)
+
+
+def placed_now(scene: SceneObjects, vocabulary: GoalVocabulary, skills: SkillSet) -> frozenset[Condition]:
+    """The ``<Item> in <Receptacle>`` conditions ``vocabulary`` can say that hold in ``scene`` as it begins (its
+    world's dry run, before any call): where each thing is."""
+    objects = scene.world.dry_run(scene.floor_plan, skills).objects
+    inside = containment(objects)
+    sayable = [Condition(holder, item=kind) for kind, holders in vocabulary.holders.items() for holder in holders]
+    return frozenset(c for c in sayable if condition_holds(c, objects, inside))
+
+
+def _without_placed(stated: StatedGoals, placed: Collection[Condition]) -> StatedGoals:
+    """The statement less its lines that put a thing where it is as the scene begins (``placed``), where some line
+    is left: they ask the team for nothing, and a small model states where a thing is now beside where it must go
+    ("take the cloth out of the bathtub and leave it on the counter": ``Cloth in BathtubBasin`` and ``Cloth in
+    CounterTop``, which no plan meets). No household goal puts a thing where its scene has it already. Kept from
+    writing such a line, the models wrote worse in its place (the statue moved off the side table), so it is
+    written, and left out here. A state is kept, though it hold already: a plan may undo it on the way (a fridge
+    opened, a patrol's robots away from their base)."""
+    statement = stated.statement
+    if statement is None or statement.refusal is not None:
+        return stated
+    kept = tuple(g for g in statement.goals if not all(c in placed for c in g.conditions()))
+    if len(kept) in (0, len(statement.goals)):
+        return stated
+    stated.record.placed_already = [condition_line(c) for c in statement.conditions if c in placed]
+    statement = replace(statement, goals=kept)
+    stated.record.output = statement.text() + "\n"
+    return StatedGoals(stated.record, statement)
 
 
 def _named(words: str, state: str, vocabulary: GoalVocabulary) -> list[str]:

@@ -9,7 +9,15 @@ from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.goal_language import parse_goal_statement, statement_of
 from smartllm_local.planner import pipeline
-from smartllm_local.planner.asked import as_goal, coverage, invented, named_in_full, names, present_yet_refused
+from smartllm_local.planner.asked import (
+    as_goal,
+    coverage,
+    invented,
+    named_in_full,
+    names,
+    outnamed,
+    present_yet_refused,
+)
 from smartllm_local.planner.decoding.sampling import Generated
 from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
 from smartllm_local.planner.pipeline import Planner, PlannerConfig
@@ -140,3 +148,42 @@ def test_coverage_is_the_share_of_named_types_some_condition_is_about():
     assert coverage(["SoapBar", "Cloth"], parse_goal_statement("SoapBar in SinkBasin\n").conditions) == 0.5
     assert coverage([], stated) == 1.0
     assert coverage(["Potato"], parse_goal_statement("PotatoSliced in Pan\n").conditions) == 1.0  # a slice of it
+
+
+@pytest.mark.parametrize("instruction, types, out", [
+    ("Put the bar of soap in the sink.", ["SoapBar", "SoapBottle", "SinkBasin", "Sink"], {"SoapBottle"}),
+    ("Put the soap and the spray bottle in a drawer.", ["SoapBar", "SoapBottle", "SprayBottle", "Drawer"], set()),
+    ("Switch off the lamp on the side table.", ["DeskLamp", "SideTable", "CoffeeTable", "DiningTable"],
+     {"CoffeeTable", "DiningTable"}),
+    ("Switch off the desk lamp.", ["DeskLamp", "FloorLamp", "Desk"], {"FloorLamp"}),
+    ("Put the soap in the sink.", ["SoapBar", "Sink", "SinkBasin"], set()),  # "the sink" may be the SinkBasin
+    ("Put the wine bottle next to the soap.", ["WineBottle", "SoapBottle", "SoapBar"], set()),  # "soap" is its own
+    ("Make me a coffee.", ["CoffeeMachine", "CoffeeTable", "Mug"], set()),  # no name said as a phrase
+    ("Put it in two coffee tables.", ["CoffeeTable", "SideTable"], {"SideTable"}),
+])
+def test_a_type_a_word_of_whose_name_belongs_to_another_named_as_a_phrase_is_outnamed(instruction, types, out):
+    assert outnamed(instruction, types) == out
+
+
+class _Prefers(FakeBackend):
+    """Writes the first of ``lines`` the grammar offers, a line a call."""
+
+    def __init__(self, lines: list[str]):
+        super().__init__()
+        self.lines = lines
+
+    def generate(self, context, *, grammar, max_tokens, sampling, stop=(), rng=None, lines=1) -> Generated:
+        self.calls += 1
+        text = next(line for line in self.lines if grammar.matches(line))
+        return Generated([0] * len(text), text, "line")
+
+
+def test_the_goal_stage_offers_no_outnamed_type():
+    """"Put the bar of soap in the sink": the 1.5B stated the SoapBottle (FloorPlan402 has both)."""
+    lines = ["SoapBottle in SinkBasin\n", "SoapBar in SinkBasin\n", "\n"]
+    stated = state_goals(Planner(_Prefers(lines), CATALOGUE, PlannerConfig()), "Put the bar of soap in the sink.",
+                         "FloorPlan402")
+    assert stated.statement.conditions == [Condition("SinkBasin", item="SoapBar")]
+    stated = state_goals(Planner(_Prefers(lines[::2]), CATALOGUE, PlannerConfig()), "Put the soap in the sink.",
+                         "FloorPlan402")
+    assert stated.statement.conditions == [Condition("SinkBasin", item="SoapBottle")]  # "soap" names either

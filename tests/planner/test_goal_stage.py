@@ -41,8 +41,9 @@ NEEDS = {"SLICED": "sliceable", "ON": "toggleable", "OFF": "toggleable", "OPENED
 
 def _check_statement(text: str, scene) -> GoalStatement:
     """Every condition names a type of the scene in a state the world gives it, or a receptacle that can hold
-    it; none twice, none contradicting another."""
-    statement = parse_goal_statement(text, types=scene.types)
+    it; none twice, none contradicting another. Read as the stage reads it: a type by its name or an alias among
+    the types a goal may name."""
+    statement = parse_goal_statement(text, types=goal_vocabulary(scene).types)
     if statement.refusal is not None:
         return statement
     conditions = statement.conditions

@@ -8,8 +8,9 @@ scene has: ``Phone``), so that where the model starts the name it means, the gra
 another (``P`` of "Phone" finished as ``Pen``). A condition already stated, or one that contradicts it (``on``
 after ``off``; ``Desk empty`` and ``Pen in Desk``, in either order), is not offered again, so a statement
 never repeats or contradicts itself. A thing may be said to be in two holders, since holders nest (a ball in
-the Bed is in the Floor too). A blank line ends the statement after at least one condition; the first line
-may instead be a refusal. At most :data:`MAX_GOALS` conditions.
+the Bed is in the Floor too), but in no more (the 1.5B once listed the remote control in eight holders and
+never ended). A blank line ends the statement after at least one condition; the first line may instead be a refusal.
+At most :data:`MAX_GOALS` conditions, the lines owed among them.
 
 A state the instruction asks for in so many words (``asked``: "fry the potato", COOKED) that the model ends its
 statement without is owed: after the blank line comes a line of that state, then a blank line again. Its thing is
@@ -36,6 +37,7 @@ from ..decoding.protocol import Choose, Constraint, longest
 from .format import refusal_line
 
 MAX_GOALS = 8
+MAX_HOLDERS = 2  # holders one thing may be said to be in
 EMPTY = "EMPTY"
 
 
@@ -78,6 +80,8 @@ class GoalConstraint(Constraint):
             return None
         if self.owing:
             return self._owed(remaining)
+        if self.said and len(self.said) + len(self._missing()) >= self.max_goals:
+            return self._choose({}, {"end": "\n"})  # the rest of the room is the owed lines'
         options: dict[str, Node] = {}
         if not self.said and (self.allow_refusal or self.must_refuse) and self.refusal_len <= remaining:
             options["refusal"] = refusal_line()
@@ -147,7 +151,8 @@ class GoalConstraint(Constraint):
         for kind in self.vocabulary.types:
             states = self.vocabulary.states.get(kind, frozenset()) - said_states.get(kind, set()) - \
                 self._asked_of_others(kind) - self.withheld
-            holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set()) - emptied
+            holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set()) - emptied \
+                if len(said_in.get(kind, ())) < MAX_HOLDERS else frozenset()
             if states or holders:
                 groups.setdefault((frozenset(states), frozenset(holders)), []).append(kind)
         rules: dict[str, Node] = {}
