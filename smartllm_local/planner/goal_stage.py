@@ -28,9 +28,8 @@ from .progress import SILENT
 from .prompting.goal_prompt import (
     GoalExample,
     goal_prompt,
-    load_asked_states,
     load_goal_examples,
-    load_only_where_asked,
+    load_state_words,
     states_asked,
 )
 from .result import PlanResult, StageRecord
@@ -106,11 +105,9 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), goal_examples(planner), planner.backend,
                         GOAL_BUDGET, planner.chat)
     count = planner.config.goal_candidates
-    prompts = planner.world.examples_dir()
-    asked = {state: _named(words, state, vocabulary)
-             for state, words in states_asked(instruction, load_asked_states(prompts)).items()}
-    only_where_asked = load_only_where_asked(prompts)
-    withheld = set(only_where_asked) - set(states_asked(instruction, only_where_asked))
+    words = load_state_words(planner.world.examples_dir())
+    asked = {state: _named(said, state, vocabulary) for state, said in states_asked(instruction, words.asked).items()}
+    withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     placed = placed_now(scene, vocabulary, planner.catalogue.skills) if planner.config.grammar else frozenset()
 
     def write(backend: Backend, k: int) -> StatedGoals:

@@ -18,7 +18,7 @@ from smartllm_local.planner.asked import names_a_word
 from smartllm_local.planner.constraints.goal import MAX_HOLDERS, GoalConstraint, goal_vocabulary
 from smartllm_local.planner.decoding.writer import Report, accepts, run_constraint, run_tokens
 from smartllm_local.planner.goal_stage import GOAL_BUDGET, StatedGoals, _without_placed, placed_now
-from smartllm_local.planner.prompting.goal_prompt import load_asked_states, load_only_where_asked, states_asked
+from smartllm_local.planner.prompting.goal_prompt import load_state_words, states_asked
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
@@ -26,7 +26,7 @@ from smartllm_local.worlds import scene_objects
 from .test_goal_stage import TASKS, _check_statement
 from .writers import WRITERS, TokenAdversary, writer
 
-PATTERNS = load_asked_states(load_domain("household").prompts_dir())
+PATTERNS = load_state_words(load_domain("household").prompts_dir()).asked
 KITCHEN = goal_vocabulary(scene_objects(1))
 SKILLS = load_domain("household").catalogue.skills
 
@@ -78,7 +78,7 @@ def test_a_state_asked_of_named_things_is_said_of_no_other_and_a_withheld_state_
 
 
 def test_household_offers_empty_only_where_an_instruction_asks_for_it_and_never_owes_it():
-    only = load_only_where_asked(load_domain("household").prompts_dir())
+    only = load_state_words(load_domain("household").prompts_dir()).only_where_asked
     assert set(only) == {"EMPTY"} and "EMPTY" not in PATTERNS
     assert states_asked("Clear the bed: the book goes on the desk.", only) == {"EMPTY": "the bed"}
     assert states_asked("Put the apple in the fridge.", only) == {}
@@ -88,7 +88,7 @@ def test_an_only_where_asked_part_that_is_not_a_table_is_a_clear_error(tmp_path:
     (tmp_path / "goal").mkdir()
     (tmp_path / "goal" / "asked_states.toml").write_text("only_where_asked = ['clear']\n")
     with pytest.raises(UserError, match=r"\[only_where_asked\] is not a table"):
-        load_only_where_asked(tmp_path)
+        load_state_words(tmp_path)
 
 
 @pytest.mark.parametrize("kind", WRITERS)
@@ -127,14 +127,14 @@ def _closed(statement, kind: str, state: str) -> bool:
 
 
 def test_a_domain_without_the_file_asks_for_nothing_and_a_bad_file_is_a_clear_error(tmp_path: Path):
-    assert load_asked_states(tmp_path) == {}
+    assert load_state_words(tmp_path).asked == {} and load_state_words(tmp_path).only_where_asked == {}
     (tmp_path / "goal").mkdir()
     (tmp_path / "goal" / "asked_states.toml").write_text("COOKD = ['fry']\n")
     with pytest.raises(UserError, match=r"asked_states\.toml: 'COOKD' is not a state"):
-        load_asked_states(tmp_path)
+        load_state_words(tmp_path)
     (tmp_path / "goal" / "asked_states.toml").write_text("COOKED = ['(fry']\n")
     with pytest.raises(UserError, match="asked_states.toml"):
-        load_asked_states(tmp_path)
+        load_state_words(tmp_path)
 
 
 def test_domain_check_reports_a_goal_example_that_leaves_out_a_state_its_instruction_asks_for(tmp_path: Path):

@@ -24,9 +24,8 @@ from ..decoding.writer import accepts
 from .goal_prompt import (
     ASKED_STATES,
     GOAL_FOLDER,
-    load_asked_states,
     load_goal_examples,
-    load_only_where_asked,
+    load_state_words,
     states_asked,
 )
 from .prompts import STAGES, load_examples
@@ -97,7 +96,7 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
         return 0, []
     try:
         examples = load_goal_examples(domain.prompts_dir())
-        asked, only = load_asked_states(domain.prompts_dir()), load_only_where_asked(domain.prompts_dir())
+        words = load_state_words(domain.prompts_dir())
     except SmartLLMError as exc:
         return 0, [str(exc)]
     problems = []
@@ -111,8 +110,8 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
             continue
         # As the stage writes it: the refusal line alone, or the conditions and the blank line that ends them.
         written = ex.statement.rstrip("\n") + ("\n" if ex.statement.startswith(REFUSAL_PREFIX) else "\n\n")
-        vocabulary, owed = goal_vocabulary(scene), states_asked(ex.instruction, asked)
-        withheld = set(only) - set(states_asked(ex.instruction, only))
+        vocabulary, owed = goal_vocabulary(scene), states_asked(ex.instruction, words.asked)
+        withheld = set(words.only_where_asked) - set(states_asked(ex.instruction, words.only_where_asked))
         if not accepts(GoalConstraint(vocabulary), written):
             problems.append(f"{where}: not in the goal grammar of {scene.floor_plan} (one `<Object> <state>` or "
                             "`<Object> in <Receptacle>` a line, naming the scene's objects in states the world can "

@@ -3,7 +3,7 @@
 A domain's goal examples are in ``prompts/goal/``: ``examples.json`` lists each one's name, instruction
 and scene (an iTHOR floor plan, or the domain's site), and ``<name>.txt`` holds its statement;
 ``asked_states.toml`` (optional) gives the words by which an instruction asks for each state (see
-:func:`load_asked_states`). Each
+:func:`load_state_words`). Each
 example shows its scene's whole object list, as the task's own is shown, so that the model learns to
 pick from a scene what the instruction is about rather than to name every object listed.
 """
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -61,35 +61,40 @@ def load_goal_examples(prompts: Path) -> list[GoalExample]:
     return examples
 
 
-def load_asked_states(prompts: Path) -> dict[str, tuple[re.Pattern[str], ...]]:
-    """Each state's patterns in a domain's ``prompts/goal/asked_states.toml`` (none where there is no such file):
-    ``STATE = ['<regular expression>', ...]``, matched case-insensitively against an instruction."""
-    return _patterns(prompts, lambda table: {k: v for k, v in table.items() if k != ONLY_WHERE_ASKED})
+@dataclass(frozen=True)
+class StateWords:
+    """A domain's ``prompts/goal/asked_states.toml``, each state with its patterns (matched case-insensitively
+    against an instruction): ``asked``, the states an instruction asks for in so many words (owed where the model
+    leaves them out); ``only_where_asked``, its ``[only_where_asked]`` table, the states the goal grammar offers only
+    where the instruction asks for them (never owed)."""
+
+    asked: dict[str, tuple[re.Pattern[str], ...]]
+    only_where_asked: dict[str, tuple[re.Pattern[str], ...]]
 
 
-def load_only_where_asked(prompts: Path) -> dict[str, tuple[re.Pattern[str], ...]]:
-    """The states the goal grammar offers only where the instruction asks for them in so many words (never owed):
-    the ``[only_where_asked]`` table of ``asked_states.toml``, each state with its patterns."""
-    return _patterns(prompts, lambda table: table.get(ONLY_WHERE_ASKED, {}))
-
-
-def _patterns(prompts: Path, part: Callable[[dict[str, Any]], Any]) -> dict[str, tuple[re.Pattern[str], ...]]:
+def load_state_words(prompts: Path) -> StateWords:
+    """The domain's state words, read once (none where there is no such file): ``STATE = ['<regular expression>',
+    ...]`` a line, and the same lines under ``[only_where_asked]``."""
     path = prompts / GOAL_FOLDER / ASKED_STATES
     if not path.is_file():
-        return {}
+        return StateWords({}, {})
     try:
-        table = part(tomllib.loads(path.read_text(encoding="utf-8")))
-        if not isinstance(table, dict):
+        table = tomllib.loads(path.read_text(encoding="utf-8"))
+        only = table.pop(ONLY_WHERE_ASKED, {})
+        if not isinstance(only, dict):
             raise ValueError(f"[{ONLY_WHERE_ASKED}] is not a table")
-        patterns = {}
-        for state, listed in table.items():
-            if state not in STATE_WORDS or not isinstance(listed, list):
-                raise ValueError(f"{state!r} is not a state with a list of patterns (the states: "
-                                 f"{', '.join(STATE_WORDS)})")
-            patterns[state] = tuple(re.compile(p, re.IGNORECASE) for p in listed)
+        return StateWords(_patterns(table), _patterns(only))
     except (OSError, ValueError, TypeError, re.error) as exc:
         raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...], "
                         "or remove the file") from exc
+
+
+def _patterns(table: Mapping[str, Any]) -> dict[str, tuple[re.Pattern[str], ...]]:
+    patterns = {}
+    for state, listed in table.items():
+        if state not in STATE_WORDS or not isinstance(listed, list):
+            raise ValueError(f"{state!r} is not a state with a list of patterns (the states: {', '.join(STATE_WORDS)})")
+        patterns[state] = tuple(re.compile(p, re.IGNORECASE) for p in listed)
     return patterns
 
 
