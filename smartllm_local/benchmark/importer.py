@@ -41,7 +41,7 @@ from ..domain import load_domain
 from ..errors import UnknownFloorPlanError, UserError
 from ..robots import Catalogue
 from ..scoring import STATES
-from ..world.object_types import SLICE_RESULTS
+from ..world.object_types import INFORMAL_NAMES, SLICE_RESULTS
 from ..world.scenes import floor_plan_name, load_scene
 from .tasks import check_task
 
@@ -53,37 +53,6 @@ _FILE_RE = re.compile(r"FloorPlan([1-9][0-9]*)((?:pddl)?(?:vague)?(?:_task[0-9]+
 _CLOSERS = {"[": "]", "{": "}"}
 _STATE_ALIASES = {"OPEN": "OPENED", "CLOSE": "CLOSED"}
 
-# Informal name (lower case, letters and digits only) -> AI2-THOR types it may mean, most likely first.
-_SYNONYMS: dict[str, tuple[str, ...]] = {
-    **dict.fromkeys(("trash", "trashcan", "trashbin", "garbage", "garbagebin", "bin", "dustbin", "wastebin",
-                     "wastebasket"), ("GarbageCan",)),
-    "refrigerator": ("Fridge",),
-    **dict.fromkeys(("tv", "telly"), ("Television",)),
-    **dict.fromkeys(("light", "lights", "lightswitches"), ("LightSwitch",)),
-    "lamp": ("DeskLamp", "FloorLamp"),
-    **dict.fromkeys(("couch", "settee"), ("Sofa",)),
-    "table": ("DiningTable", "CoffeeTable", "SideTable"),
-    "kitchensink": ("Sink",),
-    "basin": ("SinkBasin", "BathtubBasin"),
-    **dict.fromkeys(("counter", "kitchencounter"), ("CounterTop",)),
-    **dict.fromkeys(("stove", "burner", "stovetop"), ("StoveBurner",)),
-    **dict.fromkeys(("phone", "mobile", "mobilephone"), ("CellPhone",)),
-    **dict.fromkeys(("remote", "tvremote"), ("RemoteControl",)),
-    **dict.fromkeys(("computer", "notebook"), ("Laptop",)),
-    **dict.fromkeys(("plant", "pottedplant"), ("HousePlant",)),
-    "sponge": ("DishSponge",),
-    "rag": ("Cloth",),
-    "soap": ("SoapBottle", "SoapBar"),
-    "salt": ("SaltShaker",),
-    "pepper": ("PepperShaker",),
-    **dict.fromkeys(("papertowel", "papertowels"), ("PaperTowelRoll",)),
-    **dict.fromkeys(("keys", "key"), ("KeyChain",)),
-    **dict.fromkeys(("clock", "alarm"), ("AlarmClock",)),
-    **dict.fromkeys(("bat", "baseball"), ("BaseballBat",)),
-    "racket": ("TennisRacket",),
-    "tap": ("Faucet",),
-    "wine": ("WineBottle",),
-}
 
 
 @dataclass(frozen=True)
@@ -317,7 +286,7 @@ def _map_name(raw: Any, scene: str, fixes: _Fixes) -> str:
     for form in forms:
         if form in types:
             return _mapped(raw, types[form], "repaired", "", fixes)
-        present = [t for t in _SYNONYMS.get(form, ()) if _key(t) in types]
+        present = [t for t in INFORMAL_NAMES.get(form, ()) if _key(t) in types]
         if len(present) == 1:
             return _mapped(raw, present[0], "repaired", "", fixes)
         if present:

@@ -24,7 +24,8 @@ from ..planner.constraints.feasibility import function_needs
 from ..planner.constraints.goal import goal_vocabulary
 from ..planner.pipeline import Planner
 from ..planner.progress import SILENT
-from ..planner.readings import may_place, merge, placements
+from ..planner.prompting.goal_prompt import load_state_words, states_asked
+from ..planner.readings import may_place, merge, placements, unsettled
 from ..planner.result import PlanResult, StageRecord
 from ..planner.steps import Step
 from ..robots import Catalogue
@@ -145,6 +146,8 @@ class GoalPlanner:
             conditions = parse_goal_statement(result.stage("goal").output, where="<goal output>").conditions
         placed = self._placements(result) if self.reads_steps(task) else []
         if placed:
+            placed = unsettled(placed, conditions, self._asked_into(result.instruction))
+        if placed:
             conditions = merge(conditions, placed)
         progress = self.planner.progress if self.planner is not None else SILENT
         progress.stage_started("allocation", 0)  # a search, which a plan's display shows as a stage too
@@ -157,6 +160,10 @@ class GoalPlanner:
             result.refusal = record.refusal
         elif record.error:
             result.error = record.error
+
+    def _asked_into(self, instruction: str) -> set[str]:
+        """The holders the instruction asks things into in so many words (the goal stage owes their lines)."""
+        return set(states_asked(instruction, load_state_words(self.world.examples_dir()).placements))
 
     def _placements(self, result: PlanResult) -> list[Condition]:
         """Where the task's decomposition (if one was written) puts the things its instruction names."""

@@ -24,7 +24,7 @@ from collections.abc import Iterable, Sequence
 
 from ..goal_language import name_words
 from ..scoring import Condition, Goal
-from ..world.object_types import base_type
+from ..world.object_types import INFORMAL_NAMES, base_type, informal_names
 
 #: How many first letters a word of the instruction and a word of a type's name must share.
 PREFIX = 3
@@ -34,16 +34,18 @@ ORIGIN = re.compile(r"\b(?:from|out of)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?([
 
 
 def names(instruction: str, object_type: str) -> bool:
-    """Whether the instruction names the object type (or the type it is a slice of)."""
+    """Whether the instruction names the object type (or the type it is a slice of), by a word of its name or by
+    an informal name ("the TV": the Television)."""
     said = set(_WORD.findall(instruction.lower()))
     return any(word == w or (min(len(word), len(w)) >= PREFIX and word[:PREFIX] == w[:PREFIX])
-               for word in said for w in _type_words(object_type))
+               for word in said for w in _type_words(object_type)) or _informally(said, object_type)
 
 
 def names_a_word(instruction: str, object_type: str) -> bool:
-    """Whether the instruction says a word of the type's name (a plural's ending aside): read strictly, with no
-    shared first letters ("potato" names the Potato, not the Pot; "for" not the Fork)."""
-    return bool(set(_type_words(object_type)) & _forms(_WORD.findall(instruction.lower())))
+    """Whether the instruction says a word of the type's name or an informal name of it (a plural's ending aside):
+    read strictly, with no shared first letters ("potato" names the Potato, not the Pot; "for" not the Fork)."""
+    said = _forms(_WORD.findall(instruction.lower()))
+    return bool(set(_type_words(object_type)) & said) or _informally(said, object_type)
 
 
 def asks_for(instruction: str, condition: Condition) -> bool:
@@ -63,6 +65,13 @@ def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequen
     return list(out_of_reach) if any(c in asked for c in left) else []
 
 
+def unasked(instruction: str, stated: Sequence[Condition]) -> list[Condition]:
+    """The stated goals nobody asked for (:func:`invented`'s reading: no object of them named, none in a goal that
+    is), where some stated goal was asked for; none where none was."""
+    asked = _asked(instruction, stated)
+    return [c for c in stated if c not in asked] if asked else []
+
+
 def named_in_full(instruction: str, types: Sequence[str]) -> list[str]:
     """The scene's types every word of whose name the instruction says ("the bar of soap": the SoapBar, not
     the SoapBottle; a plural's ending aside), less those it names only as where a thing comes from ("move the
@@ -71,7 +80,8 @@ def named_in_full(instruction: str, types: Sequence[str]) -> list[str]:
     said = _forms(_WORD.findall(text))
     origin = _forms(w for match in ORIGIN.finditer(text) for w in match.group(1).split())
     rest = _forms(_WORD.findall(ORIGIN.sub(" ", text)))
-    return [t for t in types if (words := set(_type_words(t))) <= said and not (words <= origin and not words <= rest)]
+    return [t for t in types if ((words := set(_type_words(t))) <= said or _informally(said, t, in_full=True))
+            and not (words <= origin and not words <= rest)]
 
 
 def outnamed(instruction: str, types: Sequence[str]) -> set[str]:
@@ -143,6 +153,17 @@ def _forms(words: Iterable[str]) -> set[str]:
     for w in words:
         forms |= {w, w[:-1], w[:-2]} if len(w) > 3 and w.endswith("s") and not w.endswith("ss") else {w}
     return forms
+
+
+def _informally(said: set[str], object_type: str, *, in_full: bool = False) -> bool:
+    """Whether a word said is an informal name of the type (or of the type it is a slice of); ``in_full``: one
+    that names it alone and is no word of its name ("the TV": the Television; "the soap" names neither soap in
+    full, nor "the lamp" the DeskLamp)."""
+    kind = base_type(object_type)
+    names = informal_names(kind)
+    if in_full:
+        names = [n for n in names if INFORMAL_NAMES[n] == (kind,) and n not in _type_words(kind)]
+    return bool(said.intersection(names))
 
 
 def _type_words(object_type: str) -> list[str]:

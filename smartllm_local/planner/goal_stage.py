@@ -10,7 +10,7 @@ does not run it.
 from __future__ import annotations
 
 import time
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -20,13 +20,14 @@ from ..scene import GoalVocabulary, SceneObjects
 from ..scoring import Condition, condition_holds, containment
 from ..skills import SkillSet
 from ..world.object_types import base_type
-from .asked import coverage, named_in_full, names_a_word, outnamed, present_yet_refused
+from .asked import coverage, named_in_full, names_a_word, outnamed, present_yet_refused, unasked
 from .backends.base import Backend
 from .candidates import mean_logprob, write_all
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .progress import SILENT
 from .prompting.goal_prompt import (
     GoalExample,
+    StateWords,
     goal_prompt,
     load_goal_examples,
     load_state_words,
@@ -105,22 +106,20 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), goal_examples(planner), planner.backend,
                         GOAL_BUDGET, planner.chat)
     count = planner.config.goal_candidates
-    words = load_state_words(planner.world.examples_dir())
-    asked = {state: _named(said, state, vocabulary) for state, said in states_asked(instruction, words.asked).items()}
-    withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
-    placed = placed_now(scene, vocabulary, planner.catalogue.skills) if planner.config.grammar else frozenset()
+    asked = asked_of(instruction, vocabulary, load_state_words(planner.world.examples_dir()))
+    there = placed_now(scene, vocabulary, planner.catalogue.skills) if planner.config.grammar else frozenset()
 
     def write(backend: Backend, k: int) -> StatedGoals:
-        return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, asked, withheld,
-                          refusals=refusals)
+        return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, asked, refusals=refusals)
 
     if count == 1:
-        return _without_placed(write(planner.backend, 0), placed)
-    started = time.perf_counter()
-    stated = write_all(planner.backend, count, write)
-    chosen = choose_statement(instruction, vocabulary.types, stated)  # type: ignore[arg-type]
-    chosen.record.seconds = time.perf_counter() - started
-    return _without_placed(chosen, placed)
+        chosen = write(planner.backend, 0)
+    else:
+        started = time.perf_counter()
+        chosen = choose_statement(instruction, vocabulary.types, write_all(planner.backend, count, write))
+        chosen.record.seconds = time.perf_counter() - started
+    chosen = _without_placed(chosen, there)
+    return _without_unasked(chosen, instruction, asked) if planner.config.grammar else chosen
 
 
 def placed_now(scene: SceneObjects, vocabulary: GoalVocabulary, skills: SkillSet) -> frozenset[Condition]:
@@ -132,6 +131,19 @@ def placed_now(scene: SceneObjects, vocabulary: GoalVocabulary, skills: SkillSet
     return frozenset(c for c in sayable if condition_holds(c, objects, inside))
 
 
+def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> StatedGoals:
+    """The statement less its lines nobody asked for (:func:`.asked.unasked`: no thing of them named, none in a
+    line that is), where a line asked for is left; a state or a holder asked for in so many words stays ("boil
+    some water": ``Pot hot``). Every goal condition of the household benchmark, held-out tasks included, is asked
+    for so; the small models add a light switched on to moving a laptop, a tomato warmed to boiling water."""
+    statement = stated.statement
+    if statement is None or statement.refusal is not None:
+        return stated
+    out = {c for c in unasked(instruction, statement.conditions)
+           if c.state not in asked.states and c.subject not in asked.placements}
+    return _leave_out(stated, out, "unasked")
+
+
 def _without_placed(stated: StatedGoals, placed: Collection[Condition]) -> StatedGoals:
     """The statement less its lines that put a thing where it is as the scene begins (``placed``), where some line
     is left: they ask the team for nothing, and a small model states where a thing is now beside where it must go
@@ -140,35 +152,65 @@ def _without_placed(stated: StatedGoals, placed: Collection[Condition]) -> State
     writing such a line, the models wrote worse in its place (the statue moved off the side table), so it is
     written, and left out here. A state is kept, though it hold already: a plan may undo it on the way (a fridge
     opened, a patrol's robots away from their base)."""
+    return _leave_out(stated, placed, "placed_already")
+
+
+def _leave_out(stated: StatedGoals, out: Collection[Condition], field: str) -> StatedGoals:
+    """The statement less its goals all of whose conditions are ``out``, where some goal is left; those left out
+    in the record's ``field``."""
     statement = stated.statement
     if statement is None or statement.refusal is not None:
         return stated
-    kept = tuple(g for g in statement.goals if not all(c in placed for c in g.conditions()))
+    kept = tuple(g for g in statement.goals if not all(c in out for c in g.conditions()))
     if len(kept) in (0, len(statement.goals)):
         return stated
-    stated.record.placed_already = [condition_line(c) for c in statement.conditions if c in placed]
+    setattr(stated.record, field, [condition_line(c) for c in statement.conditions if c in out])
     statement = replace(statement, goals=kept)
     stated.record.output = statement.text() + "\n"
     return StatedGoals(stated.record, statement)
 
 
-def _named(words: str, state: str, vocabulary: GoalVocabulary) -> list[str]:
-    """The types a word of the words names (:func:`.asked.names_a_word`) that can be in the state; a slice type
-    only where its whole is not among them ("the potato" is the Potato, not its slices)."""
-    named = [t for t in vocabulary.types if state in vocabulary.states.get(t, ()) and names_a_word(words, t)]
+@dataclass(frozen=True)
+class Asked:
+    """What the instruction asks for in so many words: ``states``, each with the things its words name that can be
+    in it, and ``placements``, each holder with the things to go in it (both owed where the model leaves them
+    out); ``withheld``, the states offered only where asked for, and not asked for."""
+
+    states: Mapping[str, Sequence[str]]
+    withheld: Collection[str]
+    placements: Mapping[str, Sequence[str]]
+
+
+def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> Asked:
+    """What the instruction asks for in so many words, in the domain's ``words``, of the vocabulary's things."""
+    states = {state: _named(said, lambda t, s=state: s in vocabulary.states.get(t, ()), vocabulary)
+              for state, said in states_asked(instruction, words.asked).items()}
+    withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
+    return Asked(states, withheld, placements_asked(instruction, vocabulary, words))
+
+
+def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> dict[str, list[str]]:
+    """The holders of the scene the instruction asks things into in so many words (the domain's ``[placements]``),
+    each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth)."""
+    return {holder: _named(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
+            for holder, said in states_asked(instruction, words.placements).items() if holder in vocabulary.types}
+
+
+def _named(words: str, able: Callable[[str], bool], vocabulary: GoalVocabulary) -> list[str]:
+    """The types a word of the words names (:func:`.asked.names_a_word`) that are ``able`` (can be in the state,
+    or go in the holder, asked for); a slice type only where its whole is not among them ("the potato" is the
+    Potato, not its slices)."""
+    named = [t for t in vocabulary.types if able(t) and names_a_word(words, t)]
     return [t for t in named if base_type(t) == t or base_type(t) not in named]
 
 
 def _candidate(planner: Planner, backend: Backend, k: int, prompt: Fitted, scene: SceneObjects,
-               vocabulary: GoalVocabulary, instruction: str, asked: Mapping[str, Sequence[str]],
-               withheld: Collection[str], *, refusals: bool) -> StatedGoals:
-    """Goal candidate ``k`` (the planner's sampling for the first, the candidates' for the others) on ``backend``;
-    ``asked``: the states the instruction asks for in so many words, each with the things its words name that
-    can be in it (owed where the model leaves them out); ``withheld``: the states offered only where asked for, and
-    not asked for."""
+               vocabulary: GoalVocabulary, instruction: str, asked: Asked, *, refusals: bool) -> StatedGoals:
+    """Goal candidate ``k`` (the planner's sampling for the first, the candidates' for the others) on ``backend``,
+    owing what the instruction ``asked`` for in so many words."""
     record = StageRecord(STAGE, chat_template=planner.chat_status)
-    constraint = GoalConstraint(vocabulary, allow_refusal=refusals, asked=asked, withheld=withheld) \
-        if planner.config.grammar else None
+    constraint = GoalConstraint(vocabulary, allow_refusal=refusals, asked=asked.states, withheld=asked.withheld,
+                                placed=asked.placements) if planner.config.grammar else None
     # No team: the goal is what the instruction asks, whoever reaches it.
     task = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=[])
     rng = planner.stage_rng(task, STAGE if k == 0 else f"{STAGE} candidate {k}")

@@ -219,8 +219,10 @@ class Planner:
         repairer = Repairer(world, skills) if world is not None and (config.repair or config.finish_goals) \
             and Repairer.fits(world) else None
         asked = [c for c in goals if names(result.instruction, c.item or c.subject)]
+        named_holders = [t for t in scene.types_for("receptacle") if names(result.instruction, t)]
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
-                                    for_team=team, goals=goals, asked=asked, repairer=repairer,
+                                    for_team=team, goals=goals, asked=asked, named_holders=named_holders,
+                                    repairer=repairer,
                                     stop=config.stop_at_goals, repair=config.repair,
                                     finish=config.finish_goals) if config.grammar else None
         rng = self.stage_rng(result, record.stage if k == 0 else f"{record.stage} candidate {k}")

@@ -10,7 +10,7 @@ left on) rather than what was asked. Measured on the development half (docs/meas
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 
 from ..plan_language import Plan
 from ..scene import SceneObjects
@@ -19,7 +19,7 @@ from ..skills import SkillSet
 from ..world.object_types import base_type
 from .asked import names
 from .constraints.format import MAX_SUBTASKS
-from .constraints.world_check import WorldCheck
+from .constraints.world_check import WorldCheck, held
 from .verifier import run_subtasks
 
 
@@ -29,9 +29,9 @@ def placements(plan: Plan, scene: SceneObjects, skills: SkillSet, instruction: s
     counts as its whole; a thing carried or let fall is in none). A holder the instruction never names is the
     steps' means (a potato warmed in a mug because the microwave is out of reach), not what was asked."""
     world = WorldCheck(scene, skills, MAX_SUBTASKS)
-    before = _holders(world)
+    before = held(world.objects())
     run_subtasks(world, plan)
-    after = _holders(world)
+    after = held(world.objects())
     return sorted({Condition(holder, item=item) for (item, holder) in after - before
                    if names(instruction, item) and names(instruction, holder)},
                   key=lambda c: (c.item or "", c.subject))
@@ -54,9 +54,9 @@ def merge(stated: Sequence[Condition], placed: Sequence[Condition]) -> list[Cond
     return kept + [c for c in placed if c not in kept]
 
 
-def _holders(world: WorldCheck) -> set[tuple[str, str]]:
-    """(thing's type, its direct holder's type) for every thing in a holder now."""
-    objects = world.objects()
-    by_id = {o["objectId"]: o for o in objects}
-    return {(base_type(by_id[child]["objectType"]), o["objectType"])
-            for o in objects for child in o.get("receptacleObjectIds") or () if child in by_id}
+def unsettled(placed: Sequence[Condition], stated: Sequence[Condition], asked_into: Collection[str]) -> list[Condition]:
+    """The steps' placements of things the statement does not put in a holder the instruction asks things into in
+    so many words (``asked_into``: "throw the cloth away", the GarbageCan): asked to throw the cloth away and to put
+    the soap in the sink, the 1.5B's steps put both in the sink's basin."""
+    settled = {base_type(c.item) for c in stated if c.item is not None and c.subject in asked_into}
+    return [c for c in placed if base_type(c.item or "") not in settled]

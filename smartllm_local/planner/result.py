@@ -49,6 +49,7 @@ class StageRecord:
     executable: list[str] = field(default_factory=list)  # an allocation's changes for its run to fail no call
     dropped_goals: list[str] = field(default_factory=list)  # stated goals out of reach nobody asked for (asked.py)
     placed_already: list[str] = field(default_factory=list)  # stated things where the scene began with them (goal)
+    unasked: list[str] = field(default_factory=list)  # stated goals nobody asked for, left out (goal)
     overturned: str = ""  # a goal stage's refusal for a thing the scene has, stated again without it (asked.py)
     placements: list[str] = field(default_factory=list)  # the goal-planner's holders read from the steps (readings.py)
     loops_ended: int = 0  # loops the loop guard ended: in free text, and of whole lines (see decoding.repetition)

@@ -120,3 +120,42 @@ def is_known_type(object_type: str) -> bool:
 def base_type(object_type: str) -> str:
     """The whole-object type of a slice (``TomatoSliced`` -> ``Tomato``), else the type itself."""
     return SLICE_PARENT.get(object_type, object_type)
+
+
+#: Informal names (lower case, letters and digits only) -> the AI2-THOR types each may mean, most likely first:
+#: how people name things where the type's own words do not ("the TV", "the bin", "the couch").
+INFORMAL_NAMES: Final[dict[str, tuple[str, ...]]] = {
+    **dict.fromkeys(("trash", "trashcan", "trashbin", "garbage", "garbagebin", "bin", "dustbin", "wastebin",
+                     "wastebasket"), ("GarbageCan",)),
+    "refrigerator": ("Fridge",),
+    **dict.fromkeys(("tv", "telly"), ("Television",)),
+    **dict.fromkeys(("light", "lights", "lightswitches"), ("LightSwitch",)),
+    "lamp": ("DeskLamp", "FloorLamp"),
+    **dict.fromkeys(("couch", "settee"), ("Sofa",)),
+    "table": ("DiningTable", "CoffeeTable", "SideTable"),
+    "kitchensink": ("Sink",),
+    "basin": ("SinkBasin", "BathtubBasin"),
+    **dict.fromkeys(("counter", "kitchencounter"), ("CounterTop",)),
+    **dict.fromkeys(("stove", "burner", "stovetop"), ("StoveBurner",)),
+    **dict.fromkeys(("phone", "mobile", "mobilephone"), ("CellPhone",)),
+    **dict.fromkeys(("remote", "tvremote"), ("RemoteControl",)),
+    **dict.fromkeys(("computer", "notebook"), ("Laptop",)),
+    **dict.fromkeys(("plant", "pottedplant"), ("HousePlant",)),
+    "sponge": ("DishSponge",),
+    "rag": ("Cloth",),
+    "soap": ("SoapBottle", "SoapBar"),
+    "salt": ("SaltShaker",),
+    "pepper": ("PepperShaker",),
+    **dict.fromkeys(("papertowel", "papertowels"), ("PaperTowelRoll",)),
+    **dict.fromkeys(("keys", "key"), ("KeyChain",)),
+    **dict.fromkeys(("clock", "alarm"), ("AlarmClock",)),
+    **dict.fromkeys(("bat", "baseball"), ("BaseballBat",)),
+    "racket": ("TennisRacket",),
+    "tap": ("Faucet",),
+    "wine": ("WineBottle",),
+}
+
+
+def informal_names(object_type: str) -> list[str]:
+    """The informal names of :data:`INFORMAL_NAMES` that may mean the type."""
+    return [name for name, types in INFORMAL_NAMES.items() if object_type in types]

@@ -6,7 +6,7 @@ from __future__ import annotations
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.plan_language import parse_plan
-from smartllm_local.planner.readings import may_place, merge, placements
+from smartllm_local.planner.readings import may_place, merge, placements, unsettled
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
 
@@ -81,3 +81,12 @@ def test_steps_are_worth_reading_only_where_the_instruction_names_a_holder_and_n
                                                                                           BEDROOM)
     assert not may_place("Chop the lettuce and switch the light off.", BEDROOM)
     assert sum(not may_place(i, BEDROOM) for i in instructions) >= 5  # the rule spares some decompositions
+
+
+def test_a_thing_the_statement_puts_where_the_instruction_asks_it_in_so_many_words_stays_there():
+    """"Put the bar of soap in the sink and throw the cloth away": the 1.5B's steps put the cloth in the sink's basin,
+    and the goal-planner planned for that, over the statement's `Cloth in GarbageCan`."""
+    stated = [Condition("SinkBasin", item="SoapBar"), Condition("GarbageCan", item="Cloth")]
+    placed = [Condition("SinkBasin", item="Cloth"), Condition("Sink", item="SoapBar")]
+    assert unsettled(placed, stated, {"GarbageCan"}) == [Condition("Sink", item="SoapBar")]
+    assert unsettled(placed, stated, set()) == placed  # nothing asked into a holder: the steps are read as before

@@ -18,7 +18,7 @@ wrong.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from itertools import combinations
 from typing import Any
 
@@ -30,7 +30,7 @@ from .candidates import Candidates
 from .feasibility import WholeTeam
 from .format import INDENT
 from .repair import Repair, Repairer
-from .world_check import WorldCheck
+from .world_check import WorldCheck, held
 
 #: The name of the planner's sub-task (after ``subtask<k>_``).
 NAME = "meet_goals"
@@ -43,18 +43,20 @@ class Finish:
 
     def __init__(self, repairer: Repairer, candidates: Candidates, whole: WholeTeam | None,
                  goals: Sequence[Condition], max_steps: int, skills: dict[str, Skill],
-                 asked: Sequence[Condition] = ()):
+                 asked: Sequence[Condition] = (), named_holders: Collection[str] = ()):
         self.repairer, self.candidates, self.whole, self.goals, self.max_steps, self.skills = \
             repairer, candidates, whole, list(goals), max_steps, skills
         self.asked = list(asked)  # the goals whose thing the instruction names
+        self.named_holders = frozenset(named_holders)  # the holders it names
         self.made: dict[str, Any] | None = None
 
     def text(self, world: WorldCheck, k: int, room: int, acted: set[str], carried: set[str]) -> str | None:
         """Sub-task ``k`` (its definition and its call) within ``room`` characters, or None: no goal left
-        unmet that the plan left open (a thing's place where none of the types ``carried`` was it, a state
+        unmet that the plan left open (a thing's place where none of the types ``carried`` was it, or where it
+        was carried only to holders the instruction does not name while the goal's holder is named; a state
         where none ``acted`` on was it), no robot left for it, or no plan that meets any."""
-        left = [c for c in self.goals if not world.met([c])
-                and (base_type(c.item) not in carried if c.item else base_type(c.subject) not in acted)]
+        left = [c for c in self.goals if not world.met([c]) and (self._left_open(world, c, carried) if c.item
+                                                                 else base_type(c.subject) not in acted)]
         if not left or k > len(world.run.team):
             return None
         met = self._meet(k - 1, left)
@@ -69,6 +71,15 @@ class Finish:
             return None
         self.made = {"goals": said, "lines": lines, "seconds": found.seconds}
         return text
+
+    def _left_open(self, world: WorldCheck, goal: Condition, carried: set[str]) -> bool:
+        """Whether the plan left a thing's place open: it never carried the thing, or it set it down only where
+        the instruction names no holder (the book for the desk put on the floor) while it names the goal's."""
+        thing = base_type(goal.item or "")
+        if thing not in carried:
+            return True
+        holders = {holder for kind, holder in held(world.objects()) if kind == thing}
+        return goal.subject in self.named_holders and not holders & self.named_holders
 
     def _meet(self, member: int, left: Sequence[Condition]) -> tuple[list[Condition], Repair] | None:
         """The most goals of ``left`` one plan meets, and that plan: all of them; failing that (for a few), of
@@ -91,3 +102,4 @@ class Finish:
                 if (plan := meet([left[n] for n in chosen])) is not None:
                     return [left[n] for n in chosen], plan
         return next(([left[n]], plan) for n, plan in alone.items()) if alone else None
+

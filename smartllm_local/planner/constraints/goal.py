@@ -22,6 +22,11 @@ asking words name some things, the state is not offered of any other thing in th
 to warm the potato, the 0.5B stated the tomato hot). A state the domain offers only where asked for (``withheld``
 otherwise: household's empty, which no goal example states and the small models stated of the fridge they were to
 put the apple in) is not offered at all.
+
+A holder the instruction asks things into in so many words (``placed``: "throw the cloth away", the GarbageCan) is
+owed the same way: a line puts each thing the asking words name there (where they name none, "throw it away", one
+thing of the model's choice), and a thing so named is offered in no other holder (asked to throw the cloth away,
+the 0.5B stated it in the sink).
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping, Sequence
 from itertools import count
 
-from ...goal_language import OPPOSITES, PREPOSITIONS, STATE_WORDS, aliases, parse_goal_statement
+from ...goal_language import CONTAINMENT, OPPOSITES, PREPOSITIONS, STATE_WORDS, aliases, parse_goal_statement
 from ...scene import GoalVocabulary, SceneObjects
 from ...scoring import Condition
 from ..decoding.grammar import Node, Ref, alt, seq
@@ -50,7 +55,8 @@ class GoalConstraint(Constraint):
     """The goal stage: conditions, one a line, then a blank line (or one refusal line)."""
 
     def __init__(self, vocabulary: GoalVocabulary, *, allow_refusal: bool = True, max_goals: int = MAX_GOALS,
-                 asked: Mapping[str, Sequence[str]] | None = None, withheld: Collection[str] = ()):
+                 asked: Mapping[str, Sequence[str]] | None = None, withheld: Collection[str] = (),
+                 placed: Mapping[str, Sequence[str]] | None = None):
         super().__init__()
         self.vocabulary, self.allow_refusal, self.max_goals = vocabulary, allow_refusal, max_goals
         self.withheld = frozenset(withheld)  # states not offered (not asked for, and offered only where asked)
@@ -58,6 +64,10 @@ class GoalConstraint(Constraint):
         # A state nothing here can be in asks for nothing; a thing named that cannot be in it is not named for it.
         self.asked = {state: [kind for kind in named if state in vocabulary.states.get(kind, ())]
                       for state, named in (asked or {}).items() if state in able}
+        # A holder nothing here can go in asks for nothing; a thing named that cannot go in it is not named for it.
+        self.placed = {holder: [kind for kind in named if holder in vocabulary.holders.get(kind, ())]
+                       for holder, named in (placed or {}).items()
+                       if any(holder in holders for holders in vocabulary.holders.values())}
         self.owing = False  # the model ended its statement; the states asked that it left out follow
         self.owed: list[Condition] = []  # the conditions written for them
         self.said: list[Condition] = []
@@ -80,7 +90,7 @@ class GoalConstraint(Constraint):
             return None
         if self.owing:
             return self._owed(remaining)
-        if self.said and len(self.said) + len(self._missing()) >= self.max_goals:
+        if self.said and len(self.said) + len(self._missing()) + len(self._unplaced()) >= self.max_goals:
             return self._choose({}, {"end": "\n"})  # the rest of the room is the owed lines'
         options: dict[str, Node] = {}
         if not self.said and (self.allow_refusal or self.must_refuse) and self.refusal_len <= remaining:
@@ -99,7 +109,7 @@ class GoalConstraint(Constraint):
             self.said.extend(said)
             self.owed.extend(said if kind == "owed" else ())
         elif kind == "end":
-            self.ended = self.owing or not self._missing()
+            self.ended = self.owing or not (self._missing() or self._unplaced())
             self.owing = not self.ended
 
     def _missing(self) -> list[str]:
@@ -107,8 +117,31 @@ class GoalConstraint(Constraint):
         said = {c.state for c in self.said}
         return [state for state in self.asked if state not in said]
 
+    def _unplaced(self) -> list[tuple[str, list[str]]]:
+        """The placements asked for that no condition said so far makes: (holder, the things one of which goes
+        there), one for each thing named and not yet in it, or one where none is named and nothing is in it."""
+        inside: dict[str, set[str]] = {}
+        for c in self.said:
+            if c.state is None:
+                inside.setdefault(c.subject, set()).add(c.item or "")
+        owed = []
+        emptied = {c.subject for c in self.said if c.state == EMPTY}
+        for holder, named in self.placed.items():
+            if holder in emptied:  # said to hold nothing: a line putting a thing in it would contradict that
+                continue
+            if named:
+                owed += [(holder, [kind]) for kind in named if kind not in inside.get(holder, ())]
+            elif not inside.get(holder):
+                owed.append((holder, [k for k in self.vocabulary.types if holder in self.vocabulary.holders.get(k, ())
+                                      and len(self._holders_of(k)) < MAX_HOLDERS]))
+        return owed
+
+    def _holders_of(self, kind: str) -> set[str]:
+        return {c.subject for c in self.said if c.state is None and c.item == kind}
+
     def _owed(self, remaining: int) -> Choose | None:
-        """A line of a state asked for and left out (where one still fits), else the blank line that ends."""
+        """A line of a state or a placement asked for and left out (where one still fits), else the blank line
+        that ends."""
         closed = self._closed_states()
         lines = []
         for state in self._missing():
@@ -117,6 +150,10 @@ class GoalConstraint(Constraint):
             names = [name for kind in kinds for name in self.names[kind]]
             if names:
                 lines.append(seq(alt(*names), f" {STATE_WORDS[state]}\n"))
+        for holder, kinds in self._unplaced():
+            names = [name for kind in kinds for name in self.names[kind]]
+            if names:
+                lines.append(seq(alt(*names), CONTAINMENT, alt(*self.names[holder]), "\n"))
         options: dict[str, Node] = {"end": "\n"}
         if lines and longest(alt(*lines), {}) + 1 <= remaining:
             options = {"owed": alt(*lines)}
@@ -153,6 +190,8 @@ class GoalConstraint(Constraint):
                 self._asked_of_others(kind) - self.withheld
             holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set()) - emptied \
                 if len(said_in.get(kind, ())) < MAX_HOLDERS else frozenset()
+            asked_into = {holder for holder, named in self.placed.items() if kind in named}
+            holders = holders & asked_into if asked_into else holders  # "throw the cloth away": only the bin
             if states or holders:
                 groups.setdefault((frozenset(states), frozenset(holders)), []).append(kind)
         rules: dict[str, Node] = {}

@@ -22,6 +22,7 @@ from ...robots import Robot
 from ...scene import SceneObjects
 from ...scoring import Condition, condition_holds, containment
 from ...skills import SkillSet
+from ...world.object_types import base_type
 
 #: One step of a function: its robot_list slot (None: the whole list), skill and objects.
 Call = tuple[int | None, str, tuple[str, ...]]
@@ -107,3 +108,10 @@ class WorldCheck:
         slot, skill, objects = call
         self.tries += 1
         return self.run.apply(list(robots) if slot is None else [robots[slot]], skill, objects).success
+
+
+def held(objects: Sequence[Mapping[str, Any]]) -> set[tuple[str, str]]:
+    """(thing's type, its direct holder's type) for every thing in a holder, a slice counted as its whole."""
+    by_id = {o["objectId"]: o for o in objects}
+    return {(base_type(by_id[child]["objectType"]), o["objectType"])
+            for o in objects for child in o.get("receptacleObjectIds") or () if child in by_id}

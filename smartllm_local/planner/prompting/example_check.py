@@ -112,6 +112,7 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
         written = ex.statement.rstrip("\n") + ("\n" if ex.statement.startswith(REFUSAL_PREFIX) else "\n\n")
         vocabulary, owed = goal_vocabulary(scene), states_asked(ex.instruction, words.asked)
         withheld = set(words.only_where_asked) - set(states_asked(ex.instruction, words.only_where_asked))
+        placed = states_asked(ex.instruction, words.placements)
         if not accepts(GoalConstraint(vocabulary), written):
             problems.append(f"{where}: not in the goal grammar of {scene.floor_plan} (one `<Object> <state>` or "
                             "`<Object> in <Receptacle>` a line, naming the scene's objects in states the world can "
@@ -119,6 +120,9 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
         elif not accepts(GoalConstraint(vocabulary, asked={s: [] for s in owed}), written):
             problems.append(f"{where}: states no thing in a state its instruction asks for in so many words "
                             f"({', '.join(owed)}: {folder}/{ASKED_STATES}); an example shows the model what to state")
+        elif not accepts(GoalConstraint(vocabulary, placed={h: [] for h in placed}), written):
+            problems.append(f"{where}: puts nothing in {', '.join(placed)}, which its instruction asks things into in "
+                            f"so many words ([placements] of {folder}/{ASKED_STATES})")
         elif not accepts(GoalConstraint(vocabulary, withheld=withheld), written):
             problems.append(f"{where}: states {', '.join(sorted(withheld))}, which the goal stage offers only where "
                             f"the instruction asks for it ([only_where_asked] of {folder}/{ASKED_STATES}) and this "

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,6 +32,9 @@ GOAL_FOLDER = "goal"
 ASKED_STATES = "asked_states.toml"
 #: The table of ``asked_states.toml`` whose states are offered only where asked for, and never owed.
 ONLY_WHERE_ASKED = "only_where_asked"
+#: The table of ``asked_states.toml`` naming the holders an instruction asks things into in so many words.
+PLACEMENTS = "placements"
+_TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*")
 _CLAUSE = re.compile(r"[,.;:!?]")
 
 
@@ -66,35 +69,42 @@ class StateWords:
     """A domain's ``prompts/goal/asked_states.toml``, each state with its patterns (matched case-insensitively
     against an instruction): ``asked``, the states an instruction asks for in so many words (owed where the model
     leaves them out); ``only_where_asked``, its ``[only_where_asked]`` table, the states the goal grammar offers only
-    where the instruction asks for them (never owed)."""
+    where the instruction asks for them (never owed); ``placements``, its ``[placements]`` table, the holders an
+    instruction asks things into in so many words ("throw the cloth away": the GarbageCan), each thing the asking
+    words name owed a line that puts it there."""
 
     asked: dict[str, tuple[re.Pattern[str], ...]]
     only_where_asked: dict[str, tuple[re.Pattern[str], ...]]
+    placements: dict[str, tuple[re.Pattern[str], ...]]
 
 
 def load_state_words(prompts: Path) -> StateWords:
     """The domain's state words, read once (none where there is no such file): ``STATE = ['<regular expression>',
-    ...]`` a line, and the same lines under ``[only_where_asked]``."""
+    ...]`` a line, the same lines under ``[only_where_asked]``, and ``Holder = [...]`` lines under
+    ``[placements]``."""
     path = prompts / GOAL_FOLDER / ASKED_STATES
     if not path.is_file():
-        return StateWords({}, {})
+        return StateWords({}, {}, {})
     try:
         table = tomllib.loads(path.read_text(encoding="utf-8"))
-        only = table.pop(ONLY_WHERE_ASKED, {})
-        if not isinstance(only, dict):
-            raise ValueError(f"[{ONLY_WHERE_ASKED}] is not a table")
-        return StateWords(_patterns(table), _patterns(only))
+        only, placements = table.pop(ONLY_WHERE_ASKED, {}), table.pop(PLACEMENTS, {})
+        for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements)):
+            if not isinstance(part, dict):
+                raise ValueError(f"[{name}] is not a table")
+        return StateWords(_patterns(table), _patterns(only),
+                          _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"))
     except (OSError, ValueError, TypeError, re.error) as exc:
-        raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...], "
-                        "or remove the file") from exc
+        raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...] "
+                        "and each holder under [placements] as Holder = [...], or remove the file") from exc
 
 
-def _patterns(table: Mapping[str, Any]) -> dict[str, tuple[re.Pattern[str], ...]]:
+def _patterns(table: Mapping[str, Any], known: Callable[[str], object] = STATE_WORDS.__contains__,
+              what: str = f"a state ({', '.join(STATE_WORDS)})") -> dict[str, tuple[re.Pattern[str], ...]]:
     patterns = {}
-    for state, listed in table.items():
-        if state not in STATE_WORDS or not isinstance(listed, list):
-            raise ValueError(f"{state!r} is not a state with a list of patterns (the states: {', '.join(STATE_WORDS)})")
-        patterns[state] = tuple(re.compile(p, re.IGNORECASE) for p in listed)
+    for key, listed in table.items():
+        if not known(key) or not isinstance(listed, list):
+            raise ValueError(f"{key!r} is not {what} with a list of patterns")
+        patterns[key] = tuple(re.compile(p, re.IGNORECASE) for p in listed)
     return patterns
 
 

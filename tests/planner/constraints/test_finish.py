@@ -30,10 +30,11 @@ SLICE_BREAD = ["def subtask1_slice_bread():\n", "    GoToObject('Knife')\n", "  
 GOALS = [Condition("Bread", state="SLICED"), Condition("Fridge", item="Apple")]
 
 
-def _decomposer(floor_plan, goals, *, finish=True, team=None, asked=()) -> PlanConstraint:
+def _decomposer(floor_plan, goals, *, finish=True, team=None, asked=(), named_holders=()) -> PlanConstraint:
     world = WorldCheck(scene_objects(floor_plan), SKILLS, MAX_SUBTASKS)
     return PlanConstraint(scene_objects(floor_plan), SKILLS, world=world, summary=False, comments=False,
-                          repairer=Repairer(world, SKILLS), goals=goals, finish=finish, for_team=team, asked=asked)
+                          repairer=Repairer(world, SKILLS), goals=goals, finish=finish, for_team=team, asked=asked,
+                          named_holders=named_holders)
 
 
 def _final_state(text: str, floor_plan) -> tuple[DryRun, list[tuple[str, tuple[str, ...]]]]:
@@ -111,6 +112,28 @@ def test_a_place_goal_on_a_thing_the_model_acted_on_but_never_carried_is_met():
                        "    PutObject('Newspaper', 'Sofa')\n")
     text = run_constraint(carried, _scripted(lines), len, 3000)
     assert "PutObject('Newspaper', 'Sofa')" in text and carried.finish_made is None, text
+
+
+def test_a_thing_carried_only_where_the_instruction_names_no_holder_goes_where_the_goal_named_puts_it():
+    """"The book goes on the desk": the 0.5B carried the book to the floor and ended. The floor is named nowhere,
+    the desk is, so the statement has the book's place and the planner puts it there. Carried to a holder the
+    instruction names (the sofa, for "the newspaper, on the sofa or out"), the plan's idea of its place stands."""
+    goals = [Condition("GarbageCan", item="Newspaper")]
+    lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Floor')\n",
+                       "    PutObject('Newspaper', 'Floor')\n")
+    floor = _decomposer(203, goals, named_holders=["GarbageCan"])
+    text = run_constraint(floor, _scripted(lines), len, 3000)
+    assert "PutObject('Newspaper', 'Floor')" in text and floor.finish_made["goals"] == ["Newspaper in GarbageCan"]
+    dry, failed = _final_state(text, 203)
+    assert not failed and _met(dry, goals)
+    sofa = _decomposer(203, goals, named_holders=["GarbageCan", "Sofa"])
+    lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Sofa')\n",
+                       "    PutObject('Newspaper', 'Sofa')\n")
+    assert "meet_goals" not in run_constraint(sofa, _scripted(lines), len, 3000) and sofa.finish_made is None
+    unnamed = _decomposer(203, goals, named_holders=["Sofa"])  # the goal's holder named nowhere: the plan's stands
+    lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Floor')\n",
+                       "    PutObject('Newspaper', 'Floor')\n")
+    assert "meet_goals" not in run_constraint(unnamed, _scripted(lines), len, 3000)
 
 
 @pytest.mark.parametrize("kind, tasks", [("random", 3), pytest.param("longest", 8, marks=pytest.mark.heavy)])
