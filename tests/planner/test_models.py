@@ -32,7 +32,8 @@ def test_the_default_model_is_qwen_1_5b_unless_smartllm_model_names_another(monk
 def test_decompositions_start_with_the_summary_but_for_the_models_measured_better_without(monkeypatch):
     monkeypatch.delenv("SMARTLLM_MODEL", raising=False)
     assert not ModelOptions().config.prompts.summary, "the default model (1.5B) goes without the summary"
-    assert ModelOptions(model="qwen2.5-coder-0.5b").config.prompts.summary
+    assert not ModelOptions(model="qwen2.5-coder-0.5b").config.prompts.summary
+    assert ModelOptions(model="smollm2").config.prompts.summary
     assert ModelOptions(model="qwen2.5-coder-1.5b", summary=True).config.prompts.summary
     assert not ModelOptions(model="smollm2", summary=False).config.prompts.summary
     assert ModelOptions(backend="server", endpoint="http://127.0.0.1:1").config.prompts.summary
