@@ -144,9 +144,8 @@ class GoalPlanner:
             conditions = statement_of(task.goals).conditions
         else:
             conditions = parse_goal_statement(result.stage("goal").output, where="<goal output>").conditions
-        placed = self._placements(result) if self.reads_steps(task) else []
-        if placed:
-            placed = unsettled(placed, conditions, self._asked_into(result.instruction))
+        placed = unsettled(self._placements(result), conditions, self._asked_into(result.instruction)) \
+            if self.reads_steps(task) else []
         if placed:
             conditions = merge(conditions, placed)
         progress = self.planner.progress if self.planner is not None else SILENT

@@ -102,4 +102,3 @@ class Finish:
                 if (plan := meet([left[n] for n in chosen])) is not None:
                     return [left[n] for n in chosen], plan
         return next(([left[n]], plan) for n, plan in alone.items()) if alone else None
-
