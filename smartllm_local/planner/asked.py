@@ -162,7 +162,7 @@ def _informally(said: set[str], object_type: str, *, in_full: bool = False) -> b
     kind = base_type(object_type)
     names = informal_names(kind)
     if in_full:
-        names = [n for n in names if INFORMAL_NAMES[n] == (kind,) and n not in _type_words(kind)]
+        names = tuple(n for n in names if INFORMAL_NAMES[n] == (kind,) and n not in _type_words(kind))
     return bool(said.intersection(names))
 
 

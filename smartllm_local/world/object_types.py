@@ -156,6 +156,11 @@ INFORMAL_NAMES: Final[dict[str, tuple[str, ...]]] = {
 }
 
 
-def informal_names(object_type: str) -> list[str]:
+_INFORMALLY: Final[dict[str, tuple[str, ...]]] = {
+    kind: tuple(name for name, types in INFORMAL_NAMES.items() if kind in types)
+    for kind in {kind for types in INFORMAL_NAMES.values() for kind in types}}
+
+
+def informal_names(object_type: str) -> tuple[str, ...]:
     """The informal names of :data:`INFORMAL_NAMES` that may mean the type."""
-    return [name for name, types in INFORMAL_NAMES.items() if object_type in types]
+    return _INFORMALLY.get(object_type, ())

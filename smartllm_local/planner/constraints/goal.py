@@ -120,24 +120,29 @@ class GoalConstraint(Constraint):
     def _unplaced(self) -> list[tuple[str, list[str]]]:
         """The placements asked for that no condition said so far makes: (holder, the things one of which goes
         there), one for each thing named and not yet in it, or one where none is named and nothing is in it."""
-        inside: dict[str, set[str]] = {}
-        for c in self.said:
-            if c.state is None:
-                inside.setdefault(c.subject, set()).add(c.item or "")
+        said_in, emptied = self._said_in(), self._emptied()
         owed = []
-        emptied = {c.subject for c in self.said if c.state == EMPTY}
         for holder, named in self.placed.items():
             if holder in emptied:  # said to hold nothing: a line putting a thing in it would contradict that
                 continue
             if named:
-                owed += [(holder, [kind]) for kind in named if kind not in inside.get(holder, ())]
-            elif not inside.get(holder):
+                owed += [(holder, [kind]) for kind in named if holder not in said_in.get(kind, ())]
+            elif not any(holder in holders for holders in said_in.values()):
                 owed.append((holder, [k for k in self.vocabulary.types if holder in self.vocabulary.holders.get(k, ())
-                                      and len(self._holders_of(k)) < MAX_HOLDERS]))
+                                      and len(said_in.get(k, ())) < MAX_HOLDERS]))
         return owed
 
-    def _holders_of(self, kind: str) -> set[str]:
-        return {c.subject for c in self.said if c.state is None and c.item == kind}
+    def _said_in(self) -> dict[str, set[str]]:
+        """Each thing said to be in holders, with those holders."""
+        said_in: dict[str, set[str]] = {}
+        for c in self.said:
+            if c.state is None:
+                said_in.setdefault(c.item or "", set()).add(c.subject)
+        return said_in
+
+    def _emptied(self) -> set[str]:
+        """The holders said to be empty: nothing may be said to be in them."""
+        return {c.subject for c in self.said if c.state == EMPTY}
 
     def _owed(self, remaining: int) -> Choose | None:
         """A line of a state or a placement asked for and left out (where one still fits), else the blank line
@@ -178,12 +183,7 @@ class GoalConstraint(Constraint):
     def _conditions(self) -> tuple[Node | None, dict[str, Node]]:
         """A condition line of those still to be said (None: none), and the rules it refers to. Types that
         may be followed by the same things share a rule."""
-        said_states = self._closed_states()
-        said_in: dict[str, set[str]] = {}
-        for c in self.said:
-            if c.state is None:
-                said_in.setdefault(c.item or "", set()).add(c.subject)
-        emptied = {c.subject for c in self.said if c.state == EMPTY}  # nothing may be said to be in them
+        said_states, said_in, emptied = self._closed_states(), self._said_in(), self._emptied()
         groups: dict[tuple[frozenset[str], frozenset[str]], list[str]] = {}
         for kind in self.vocabulary.types:
             states = self.vocabulary.states.get(kind, frozenset()) - said_states.get(kind, set()) - \
