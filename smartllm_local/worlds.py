@@ -38,7 +38,8 @@ from .scene import AFFORDANCE_NAMES, Demand, GoalTerms, GoalVocabulary, SceneObj
 from .scoring import SITE_STATES, STATES, Goal
 from .skills import SkillSet, has_affordance
 from .world.controller import open_controller
-from .world.object_types import RECEPTACLE_ONLY_ACCEPTS, SLICE_RESULTS, TYPE_PROPERTIES
+from .world.object_types import SLICE_RESULTS, TYPE_PROPERTIES
+from .world.rules import refuses
 from .world.scenes import VALID_RANGE_TEXT, floor_plan_name, load_scene
 
 #: The commands' options about the world, which a world takes or refuses (:attr:`World.options`):
@@ -266,23 +267,20 @@ HOUSEHOLD_COALITION_RULES = """\
 
 @cache  # a floor plan's objects never change; a benchmark asks for the same few again and again
 def _floor_plan_vocabulary(floor_plan: str) -> GoalVocabulary:
-    flags: dict[str, dict[str, bool]] = {}
+    of_type: dict[str, list[dict[str, Any]]] = {}
     for obj in load_scene(floor_plan):
-        seen = flags.setdefault(obj["objectType"], {})
-        for name, value in obj.items():
-            if isinstance(value, bool) and value:
-                seen[name] = True
-    for whole in [t for t in flags if t in SLICE_RESULTS]:
+        of_type.setdefault(obj["objectType"], []).append(obj)
+    for whole in [t for t in of_type if t in SLICE_RESULTS]:
         piece = SLICE_RESULTS[whole][0]
-        flags.setdefault(piece, {p: True for p in TYPE_PROPERTIES[piece]})
-    states = {t: object_states(f, t) for t, f in flags.items()}
-    receptacles = [t for t, f in flags.items() if f.get("receptacle")]
+        of_type.setdefault(piece, [{"objectType": piece, **{p: True for p in TYPE_PROPERTIES[piece]}}])
+    flags = {t: {name for obj in objs for name, value in obj.items() if value is True} for t, objs in of_type.items()}
+    states = {t: object_states(dict.fromkeys(f, True), t) for t, f in flags.items()}
+    receptacles = [t for t, f in flags.items() if "receptacle" in f]
 
-    def can_hold(receptacle: str, item: str) -> bool:
-        only = RECEPTACLE_ONLY_ACCEPTS.get(receptacle)
-        return receptacle != item and (only is None or item in only)
+    def can_hold(receptacle: str, item: str) -> bool:  # as the world lets some one of them hold some other
+        return receptacle != item and any(refuses(o, r) is None for o in of_type[item] for r in of_type[receptacle])
 
-    holders = {t: frozenset(r for r in receptacles if can_hold(r, t)) for t, f in flags.items() if f.get("pickupable")}
+    holders = {t: frozenset(r for r in receptacles if can_hold(r, t)) for t, f in flags.items() if "pickupable" in f}
     return GoalVocabulary(states, holders)
 
 

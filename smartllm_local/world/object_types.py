@@ -91,8 +91,9 @@ SLICE_RESULTS: Final = {
 #: Derived type -> the type it was cut from (a slice of X counts as X in goals).
 SLICE_PARENT: Final = {derived: parent for parent, (derived, _) in SLICE_RESULTS.items()}
 
-#: Receptacles that accept only some types, as AI2-THOR restricts them.
+#: Receptacles that accept only some types, as AI2-THOR restricts them (a burner takes cookware only).
 RECEPTACLE_ONLY_ACCEPTS: Final = {
+    "StoveBurner": frozenset({"Kettle", "Pan", "Pot"}),
     "Toaster": frozenset({"BreadSliced"}),
     "CoffeeMachine": frozenset({"Mug"}),
     "ToiletPaperHanger": frozenset({"ToiletPaper"}),

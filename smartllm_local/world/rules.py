@@ -10,6 +10,9 @@ those of AI2-THOR's object-type documentation:
   while on, which also fills a Mug in it with coffee. Heated cookable objects
   become cooked.
 - A Fridge cools what it holds.
+- A receptacle holds what it accepts (:func:`refuses`): some only certain types (a
+  StoveBurner a Kettle, Pan or Pot), and one that is itself carried (a bowl, a box)
+  nothing bigger than itself.
 - A running Faucet rinses the sink (or bathtub) and basin under it, that is
   within 1.2 m: dirty objects in them become clean, objects that hold liquid
   fill with water.
@@ -24,12 +27,39 @@ import math
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from .object_types import COLD_SOURCES, HEAT_SOURCES, SLICE_RESULTS, TYPE_PROPERTIES, WATER_BASINS
+from .object_types import (
+    COLD_SOURCES,
+    HEAT_SOURCES,
+    RECEPTACLE_ONLY_ACCEPTS,
+    SLICE_RESULTS,
+    TYPE_PROPERTIES,
+    WATER_BASINS,
+)
 
 Objects = dict[str, dict[str, Any]]
 Touch = Callable[[str], None]
 
 _FAUCET_REACH = 1.2  # metres from a faucet to the basin it runs into
+
+
+def refuses(obj: dict[str, Any], receptacle: dict[str, Any]) -> str | None:
+    """Why ``receptacle`` cannot hold ``obj``, or None if it can: it accepts only other types, or it is carried
+    itself (a bowl, a box; not the floor) and smaller than the thing (by bounding-box volume, where both have one)."""
+    allowed = RECEPTACLE_ONLY_ACCEPTS.get(receptacle["objectType"])
+    if allowed is not None and obj["objectType"] not in allowed:
+        return f"a {receptacle['objectType']} only accepts {', '.join(sorted(allowed))}"
+    if receptacle["objectType"] == "Floor" or not receptacle.get("pickupable"):
+        return None
+    size, room = volume(obj), volume(receptacle)
+    if size is not None and room is not None and size > room:
+        return f"{obj['objectType']} is too big for {receptacle['objectType']}"
+    return None
+
+
+def volume(obj: dict[str, Any]) -> float | None:
+    """The volume of the object's axis-aligned bounding box, or None where it has none (a slice yet to be cut)."""
+    size = (obj.get("axisAlignedBoundingBox") or {}).get("size")
+    return size["x"] * size["y"] * size["z"] if size else None
 
 
 def contents(objects: Objects, receptacle_id: str) -> Iterator[dict[str, Any]]:

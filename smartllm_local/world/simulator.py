@@ -20,7 +20,7 @@ from typing import Any
 
 from . import rules
 from .navigation import Box, ReachableGrid
-from .object_types import OPEN_TOPPED, RECEPTACLE_ONLY_ACCEPTS, SLICE_RESULTS
+from .object_types import OPEN_TOPPED, SLICE_RESULTS
 from .scenes import floor_plan_name, load_scene
 
 DEFAULT_VISIBILITY_DISTANCE = 1.5
@@ -400,17 +400,8 @@ class Simulator:
         return ActionResult()
 
     def fits(self, obj: dict[str, Any], receptacle: dict[str, Any]) -> str | None:
-        """Why ``obj`` cannot go into ``receptacle``, or None if it can."""
-        allowed = RECEPTACLE_ONLY_ACCEPTS.get(receptacle["objectType"])
-        if allowed is not None and obj["objectType"] not in allowed:
-            return f"a {receptacle['objectType']} only accepts {', '.join(sorted(allowed))}"
-        if receptacle["objectType"] == "Floor" or not receptacle.get("pickupable"):
-            return None
-        size = (obj.get("axisAlignedBoundingBox") or {}).get("size")
-        room = (receptacle.get("axisAlignedBoundingBox") or {}).get("size")
-        if size and room and size["x"] * size["y"] * size["z"] > room["x"] * room["y"] * room["z"]:
-            return f"{obj['objectType']} is too big for {receptacle['objectType']}"
-        return None
+        """Why ``obj`` cannot go into ``receptacle``, or None if it can (:func:`.rules.refuses`)."""
+        return rules.refuses(obj, receptacle)
 
     def _put(self, agent_id: int, action: dict[str, Any]) -> ActionResult:
         held = self._held(agent_id, "PutObject")

@@ -120,6 +120,10 @@ def test_the_world_decides_which_states_and_receptacles_a_type_is_offered():
     assert kitchen.states["StoveBurner"] >= {"ON", "OFF"}  # switched through its knob
     assert "Toaster" in kitchen.holders["BreadSliced"] and "Toaster" not in kitchen.holders["Apple"]
     assert "Mug" not in kitchen.holders["Mug"] and "CoffeeMachine" in kitchen.holders["Mug"]
+    # a burner takes cookware only (the 1.5B boiled water in the wine bottle); nothing carried holds a bigger thing
+    assert "StoveBurner" in kitchen.holders["Pot"] and "StoveBurner" not in kitchen.holders["WineBottle"]
+    assert "Cup" in kitchen.holders["Spoon"] and "Cup" not in kitchen.holders["Pot"]
+    assert "Fridge" in kitchen.holders["Pot"] and "Bowl" not in kitchen.holders["Bread"]
     assert "Television" not in kitchen.types
     site = goal_vocabulary(world_of(load_domain("patrol")).scene(""))
     assert site.states["Orchard"] == {"COVERED"} and site.states["WeatherMast"] == {"PHOTOGRAPHED"}

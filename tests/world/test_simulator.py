@@ -297,3 +297,10 @@ def test_too_big_objects_do_not_fit_small_receptacles(sim):
     carry(sim, "Pot")
     result = act(sim, "PutObject", objectId=oid(sim, "Mug"))
     assert not result.success and "too big" in result.error_message
+
+
+def test_a_stove_burner_takes_cookware_only(sim):
+    burner = oid(sim, "StoveBurner")
+    carry(sim, "Bread")
+    result = act(sim, "PutObject", objectId=burner)
+    assert not result.success and "only accepts Kettle, Pan, Pot" in result.error_message
