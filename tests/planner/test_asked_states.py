@@ -25,12 +25,13 @@ from smartllm_local.planner.goal_stage import (
     _without_placed,
     _without_unasked,
     asked_of,
+    holders_asked,
     placed_now,
 )
 from smartllm_local.planner.prompting.goal_prompt import load_state_words, states_asked
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.scoring import Condition
-from smartllm_local.worlds import scene_objects
+from smartllm_local.worlds import scene_objects, world_of
 
 from .test_goal_stage import TASKS, _check_statement
 from .writers import WRITERS, TokenAdversary, writer
@@ -50,6 +51,8 @@ SKILLS = load_domain("household").catalogue.skills
     ("Could you heat up a potato and chop the tomato?",  # a clause ends at punctuation
      {"SLICED": "the tomato", "HOT": "up a potato and chop the tomato"}),
     ("Switch the TV on.", {"ON": "the TV on"}),  # the verb names nothing: not the LightSwitch
+    ("Make me a cup of coffee.", {"FILLED": "me a cup of coffee"}),  # coffee is made in a mug, filled
+    ("Put the coffee mug in the sink.", {}),
 ])
 def test_the_states_an_instruction_asks_for_and_the_words_that_name_their_thing(instruction, asked):
     assert states_asked(instruction, PATTERNS) == asked
@@ -60,9 +63,18 @@ def test_a_statement_ended_without_a_state_asked_for_goes_on_with_a_line_of_it()
     assert not accepts(GoalConstraint(KITCHEN, asked=asked), "Potato in Pan\n\n")
     assert accepts(GoalConstraint(KITCHEN, asked=asked), "Potato in Pan\n\nPotato cooked\n\n")
     assert accepts(GoalConstraint(KITCHEN, asked=asked), "Potato cooked\nPotato in Pan\n\n")  # said: nothing owed
-    # the thing the asking words name, where they name one that can be cooked; any that can, where they do not
+    # the thing the asking words name, where they name one that can be cooked; where they do not, one the statement
+    # speaks of ("make me a coffee": the mug put in the machine is filled, not the cup), else any that can
     assert not accepts(GoalConstraint(KITCHEN, asked=asked), "Potato in Pan\n\nEggCracked cooked\n\n")
-    assert accepts(GoalConstraint(KITCHEN, asked={"COOKED": []}), "Potato in Pan\n\nEggCracked cooked\n\n")
+    assert not accepts(GoalConstraint(KITCHEN, asked={"COOKED": []}), "Potato in Pan\n\nEggCracked cooked\n\n")
+    assert accepts(GoalConstraint(KITCHEN, asked={"COOKED": []}), "Potato in Pan\n\nPotato cooked\n\n")
+    assert accepts(GoalConstraint(KITCHEN, asked={"COOKED": []}), "Apple in Fridge\n\nEggCracked cooked\n\n")
+    coffee = GoalConstraint(KITCHEN, asked={"FILLED": []}, placed={"CoffeeMachine": []})
+    assert not accepts(coffee, "Apple in Fridge\n\nCup filled\n\n")  # the placement owed first, then the state
+    assert accepts(GoalConstraint(KITCHEN, asked={"FILLED": []}, placed={"CoffeeMachine": []}),
+                   "Apple in Fridge\n\nMug in CoffeeMachine\nMug filled\n\n")
+    assert not accepts(GoalConstraint(KITCHEN, asked={"FILLED": []}, placed={"CoffeeMachine": []}),
+                       "Apple in Fridge\n\nMug in CoffeeMachine\nCup filled\n\n")
     # a state nothing of the scene can be in asks for nothing
     assert accepts(GoalConstraint(goal_vocabulary(scene_objects(301)), asked={"COOKED": []}), "Laptop in Bed\n\n")
     assert accepts(GoalConstraint(KITCHEN, asked=asked), "# INFEASIBLE: no stove here\n")  # a refusal owes nothing
@@ -262,9 +274,20 @@ def test_a_thing_goes_in_two_holders_at_most_and_the_lines_owed_have_room_at_the
     ("Throw the ball onto the bed.", {}),  # thrown somewhere else: not into the bin
     ("Take the cloth out of the bathtub.", {}),
     ("Throw the towel out of the window.", {}),  # out of a place, not out
+    ("Make me a coffee; my mug is in the sink.", {"CoffeeMachine": "me a coffee"}),  # made in the machine
+    ("Brew some coffee.", {"CoffeeMachine": "some coffee"}),
+    ("Put the coffee mug in the sink.", {}),
 ])
 def test_the_holders_an_instruction_asks_things_into_and_the_words_that_name_them(instruction, asked):
     assert states_asked(instruction, WORDS.placements) == asked
+
+
+def test_the_holders_asked_for_are_those_of_the_scene_and_its_world():
+    """What the planner's last sub-task counts as a holder the instruction names, beside those it names by name."""
+    assert holders_asked("Tidy up: close the laptop and throw out the newspaper.", scene_objects(203)) == \
+        ["GarbageCan"]
+    assert holders_asked("Put the newspaper on the sofa.", scene_objects(203)) == []
+    assert holders_asked("Throw out the newspaper.", world_of(load_domain("patrol")).scene("")) == []
 
 
 def test_a_thing_asked_into_a_holder_goes_there_only_and_a_statement_without_it_is_owed_the_line():

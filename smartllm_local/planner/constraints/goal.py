@@ -1,32 +1,33 @@
 """The goal stage's constraint: conditions over the scene's own objects, in states the world can give them.
 
-Each line is a condition (see :mod:`smartllm_local.goal_language`): ``<Type> <state>`` offers only the
-states the world can give that type in this scene (a LightSwitch on or off, never sliced), and ``<Item>
-in <Receptacle>`` (or ``on``) only receptacles that can hold the item (a Toaster only bread slices, nothing
-in itself). A type may be named by its name or by one of its aliases (a word of its name no other type of the
-scene has: ``Phone``), so that where the model starts the name it means, the grammar does not make it finish
-another (``P`` of "Phone" finished as ``Pen``). A condition already stated, or one that contradicts it (``on``
-after ``off``; ``Desk empty`` and ``Pen in Desk``, in either order), is not offered again, so a statement
-never repeats or contradicts itself. A thing may be said to be in two holders, since holders nest (a ball in
-the Bed is in the Floor too), but in no more (the 1.5B once listed the remote control in eight holders and
-never ended). A blank line ends the statement after at least one condition; the first line may instead be a refusal.
-At most :data:`MAX_GOALS` conditions, the lines owed among them.
+Each line is a condition (see :mod:`smartllm_local.goal_language`): ``<Type> <state>`` offers only the states the
+world can give that type in this scene (a LightSwitch on or off, never sliced), and ``<Item> in <Receptacle>`` (or
+``on``) only receptacles the world lets hold the item (a Toaster only bread slices, a StoveBurner only cookware, a
+cup nothing bigger than itself, nothing in itself). A type may be named by its name or by one of its aliases (a word
+of its name no other type of the scene has: ``Phone``), so that where the model starts the name it means, the
+grammar does not make it finish another (``P`` of "Phone" finished as ``Pen``). A condition already stated, or one
+that contradicts it (``on`` after ``off``; ``Desk empty`` and ``Pen in Desk``, in either order), is not offered
+again, so a statement never repeats or contradicts itself. A thing may be said to be in two holders, since holders
+nest (a ball in the Bed is in the Floor too), but in no more (the 1.5B once listed the remote control in eight
+holders and never ended). A blank line ends the statement after at least one condition; the first line may instead
+be a refusal. At most :data:`MAX_GOALS` conditions, the lines owed among them.
 
 A state the instruction asks for in so many words (``asked``: "fry the potato", COOKED) that the model ends its
 statement without is owed: after the blank line comes a line of that state, then a blank line again. Its thing is
-the model's choice among those the asking words name ("the potato") that the world can give the state, or where
-they name none ("boil some water"), among all the scene's that it can. A small model states where the potato goes
-and forgets that it must be cooked; the plan is then made for the goals stated. The goal stage puts the owed lines
-first in the statement it keeps: where no plan meets every goal, the planner meets the first it can. Where the
-asking words name some things, the state is not offered of any other thing in the model's own lines either (asked
-to warm the potato, the 0.5B stated the tomato hot). A state the domain offers only where asked for (``withheld``
-otherwise: household's empty, which no goal example states and the small models stated of the fridge they were to
-put the apple in) is not offered at all.
+the model's choice among those the asking words name ("the potato") that the world can give the state, or where they
+name none ("boil some water"), among those the statement speaks of that it can, else all the scene's. A small model
+states where the potato goes and forgets that it must be cooked; the plan is then made for the goals stated. The
+goal stage puts the owed lines first in the statement it keeps: where no plan meets every goal, the planner meets
+the first it can. Where the asking words name some things, the state is not offered of any other thing in the
+model's own lines either (asked to warm the potato, the 0.5B stated the tomato hot). A state the domain offers only
+where asked for (``withheld`` otherwise: household's empty, which no goal example states and the small models stated
+of the fridge they were to put the apple in) is not offered at all.
 
 A holder the instruction asks things into in so many words (``placed``: "throw the cloth away", the GarbageCan) is
 owed the same way: a line puts each thing the asking words name there (where they name none, "throw it away", one
-thing of the model's choice), and a thing so named is offered in no other holder (asked to throw the cloth away,
-the 0.5B stated it in the sink).
+thing of the model's choice), and a thing so named is offered in no other holder (asked to throw the cloth away, the
+0.5B stated it in the sink). Owed placements come before owed states, so that a state owed of nothing named goes to
+the thing just placed ("make me a coffee": the Mug in the CoffeeMachine is filled, not the Cup).
 """
 
 from __future__ import annotations
@@ -145,20 +146,25 @@ class GoalConstraint(Constraint):
         return {c.subject for c in self.said if c.state == EMPTY}
 
     def _owed(self, remaining: int) -> Choose | None:
-        """A line of a state or a placement asked for and left out (where one still fits), else the blank line
-        that ends."""
-        closed = self._closed_states()
+        """A line of a placement asked for and left out, once none is left a state's (where one still fits), else
+        the blank line that ends. A state's thing is one the asking words name, else one the statement speaks of
+        ("make me a coffee": the Mug put in the coffee machine is filled, not the cup), else any."""
         lines = []
-        for state in self._missing():
-            kinds = [kind for kind in self.vocabulary.types if state in self.vocabulary.states.get(kind, ())
-                     and state not in closed.get(kind, ()) and kind in (self.asked[state] or self.vocabulary.types)]
-            names = [name for kind in kinds for name in self.names[kind]]
-            if names:
-                lines.append(seq(alt(*names), f" {STATE_WORDS[state]}\n"))
         for holder, kinds in self._unplaced():
             names = [name for kind in kinds for name in self.names[kind]]
             if names:
                 lines.append(seq(alt(*names), CONTAINMENT, alt(*self.names[holder]), "\n"))
+        closed = self._closed_states()
+        for state in [] if lines else self._missing():
+            able = [kind for kind in self.vocabulary.types if state in self.vocabulary.states.get(kind, ())
+                    and state not in closed.get(kind, ())]
+            spoken = {kind for c in self.said for kind in (c.subject, c.item)}
+            named = self.asked[state]
+            kinds = [kind for kind in able if kind in named] if named else \
+                [kind for kind in able if kind in spoken] or able
+            names = [name for kind in kinds for name in self.names[kind]]
+            if names:
+                lines.append(seq(alt(*names), f" {STATE_WORDS[state]}\n"))
         options: dict[str, Node] = {"end": "\n"}
         if lines and longest(alt(*lines), {}) + 1 <= remaining:
             options = {"owed": alt(*lines)}
