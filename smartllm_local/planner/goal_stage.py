@@ -189,6 +189,13 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords) ->
     return Asked(states, withheld, placements_asked(instruction, vocabulary, words))
 
 
+def holders_asked(instruction: str, scene: SceneObjects) -> list[str]:
+    """The scene's holders the instruction asks things into in so many words ("throw the newspaper out": the
+    GarbageCan), in its world's ``[placements]``."""
+    words = load_state_words(scene.world.examples_dir())
+    return list(placements_asked(instruction, goal_vocabulary(scene), words))
+
+
 def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> dict[str, list[str]]:
     """The holders of the scene the instruction asks things into in so many words (the domain's ``[placements]``),
     each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth)."""

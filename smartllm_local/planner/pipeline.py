@@ -45,7 +45,7 @@ from .decoding.sampling import Sampling
 from .errands import drop_errands
 from .executable import WORLD_CHECK, for_team
 from .finish_fold import fold_finish
-from .goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
+from .goal_stage import GOAL_CHECK, StatedGoals, holders_asked, state_goals, stated_conditions
 from .idle_steps import drop_idle_steps
 from .in_turn import free_blocks
 from .progress import SILENT, StageProgress
@@ -219,7 +219,8 @@ class Planner:
         repairer = Repairer(world, skills) if world is not None and (config.repair or config.finish_goals) \
             and Repairer.fits(world) else None
         asked = [c for c in goals if names(result.instruction, c.item or c.subject)]
-        named_holders = [t for t in scene.types_for("receptacle") if names(result.instruction, t)]
+        asked_into = holders_asked(result.instruction, scene) if config.finish_goals else []
+        named_holders = [t for t in scene.types_for("receptacle") if names(result.instruction, t) or t in asked_into]
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
                                     for_team=team, goals=goals, asked=asked, named_holders=named_holders,
                                     repairer=repairer,

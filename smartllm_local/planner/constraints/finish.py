@@ -2,9 +2,10 @@
 
 With the goal stage run first and a world check, once the model has written its sub-tasks and launched them, the
 stated goals that do not hold in the dry run and that the plan left open go to the planner (the repair's,
-:mod:`.repair`): a thing's place where none of its calls carried the thing, a state where none acted on it (goals it
-forgot: the newspaper pushed, never thrown out; where it carried the thing, or acted on the one whose state is
-stated, the plan has its own idea of it, and a statement that contradicts the plan is as likely wrong as the plan).
+:mod:`.repair`): a thing's place where none of its calls put the thing anywhere, a state where none acted on it
+(goals it forgot: the newspaper pushed, never thrown out; the credit card for the box let fall on the desk; where it
+put the thing somewhere, or acted on the one whose state is stated, the plan has its own idea of it, and a statement
+that contradicts the plan is as likely wrong as the plan).
 For a robot no sub-task has used, its shortest plan that meets them all and ends with empty hands is written as one
 more sub-task, called after the model's orchestration, so it starts from the state the model's sub-tasks leave (the
 state it was planned from), every step succeeding in the dry run. Where no plan meets them all in the steps and
@@ -50,12 +51,12 @@ class Finish:
         self.named_holders = frozenset(named_holders)  # the holders it names
         self.made: dict[str, Any] | None = None
 
-    def text(self, world: WorldCheck, k: int, room: int, acted: set[str], carried: set[str]) -> str | None:
+    def text(self, world: WorldCheck, k: int, room: int, acted: set[str], put: set[str]) -> str | None:
         """Sub-task ``k`` (its definition and its call) within ``room`` characters, or None: no goal left
-        unmet that the plan left open (a thing's place where none of the types ``carried`` was it, or where it
-        was carried only to holders the instruction does not name while the goal's holder is named; a state
+        unmet that the plan left open (a thing's place where none of the types ``put`` somewhere was it, or where
+        it was put only in holders the instruction does not name while the goal's holder is named; a state
         where none ``acted`` on was it), no robot left for it, or no plan that meets any."""
-        left = [c for c in self.goals if not world.met([c]) and (self._left_open(world, c, carried) if c.item
+        left = [c for c in self.goals if not world.met([c]) and (self._left_open(world, c, put) if c.item
                                                                  else base_type(c.subject) not in acted)]
         if not left or k > len(world.run.team):
             return None
@@ -72,11 +73,12 @@ class Finish:
         self.made = {"goals": said, "lines": lines, "seconds": found.seconds}
         return text
 
-    def _left_open(self, world: WorldCheck, goal: Condition, carried: set[str]) -> bool:
-        """Whether the plan left a thing's place open: it never carried the thing, or it set it down only where
-        the instruction names no holder (the book for the desk put on the floor) while it names the goal's."""
+    def _left_open(self, world: WorldCheck, goal: Condition, put: set[str]) -> bool:
+        """Whether the plan left a thing's place open: it never put the thing anywhere (it let it fall, or never
+        carried it), or it put it only where the instruction names no holder (the book for the desk put on the
+        floor) while it names the goal's."""
         thing = base_type(goal.item or "")
-        if thing not in carried:
+        if thing not in put:
             return True
         holders = {holder for kind, holder in held(world.objects()) if kind == thing}
         return goal.subject in self.named_holders and not holders & self.named_holders

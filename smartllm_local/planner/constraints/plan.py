@@ -352,8 +352,8 @@ class PlanConstraint(Orchestration, Constraint):
         calls = [(self.skill_actions.get(skill), base_type(objects[0])) for fn in self.functions
                  for _, skill, objects in fn.calls]
         acted = {thing for action, thing in calls if action}
-        carried = {thing for action, thing in calls if action == "PickupObject"}
-        text = finish.text(self.world, len(self.functions) + 1, remaining - 1, acted, carried)
+        put = {thing for action, thing in calls if action == "PutObject"}
+        text = finish.text(self.world, len(self.functions) + 1, remaining - 1, acted, put)
         if text is None:
             return None
         self.finish_made, self.finish_text, self.phase = finish.made, text, "finish"

@@ -114,6 +114,19 @@ def test_a_place_goal_on_a_thing_the_model_acted_on_but_never_carried_is_met():
     assert "PutObject('Newspaper', 'Sofa')" in text and carried.finish_made is None, text
 
 
+@pytest.mark.parametrize("let_go", ["DropHandObject", "ThrowObject"])
+def test_a_place_goal_on_a_thing_the_model_let_fall_is_met(let_go):
+    """The model carries the newspaper it was asked to throw out and lets it fall (asked to drop the credit card
+    into the box, the 0.5B dropped it on the desk): it put the thing nowhere, so its place is still the goal's."""
+    goals = [Condition("GarbageCan", item="Newspaper")]
+    dropped = _decomposer(203, goals)
+    lines = _newspaper("    PickupObject('Newspaper')\n", f"    {let_go}('Newspaper')\n")
+    text = run_constraint(dropped, _scripted(lines), len, 3000)
+    assert f"{let_go}('Newspaper')" in text and dropped.finish_made["goals"] == ["Newspaper in GarbageCan"], text
+    dry, failed = _final_state(text, 203)
+    assert not failed and _met(dry, goals)
+
+
 def test_a_thing_carried_only_where_the_instruction_names_no_holder_goes_where_the_goal_named_puts_it():
     """"The book goes on the desk": the 0.5B carried the book to the floor and ended. The floor is named nowhere,
     the desk is, so the statement has the book's place and the planner puts it there. Carried to a holder the
