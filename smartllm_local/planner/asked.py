@@ -7,9 +7,9 @@ words name only as part of another thing's name (:func:`outnamed`).
 The goal stage states goals from the instruction and the scene; a small model also states goals nobody asked
 for (an object the instruction never names). Refusing a feasible task for one of those is refusing it for the
 model's invention. So a goal out of reach that nobody asked for (no object of it named by the instruction, none in
-a goal that is) is dropped, not refused, where the statement keeps a goal within reach that was asked for (there
-is still something asked to plan for); where a goal out of reach was asked for, or nothing asked for is left, the
-task is refused as before.
+a goal that is; or a named thing's place that the instruction does not ask for) is dropped, not refused, where the
+statement keeps a goal within reach that was asked for (there is still something asked to plan for); where a goal
+out of reach was asked for, or nothing asked for is left, the task is refused as before.
 
 Naming is read generously, since a goal wrongly taken as named is refused as before (the cost of the old rule)
 while one wrongly taken as invented is dropped: an object type is named where a word of its name (``DeskLamp``:
@@ -20,11 +20,11 @@ Television, "keys" the KeyChain). A goal on two objects (``Apple in Fridge``) is
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Collection, Iterable, Sequence
 
 from ..goal_language import name_words
 from ..scoring import Condition, Goal
-from ..world.object_types import INFORMAL_NAMES, base_type, informal_names
+from ..world.object_types import COLD_SOURCES, HEAT_SOURCES, INFORMAL_NAMES, base_type, informal_names
 
 #: How many first letters a word of the instruction and a word of a type's name must share.
 PREFIX = 3
@@ -53,16 +53,26 @@ def asks_for(instruction: str, condition: Condition) -> bool:
     return names(instruction, condition.subject) or (condition.item is not None and names(instruction, condition.item))
 
 
-def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequence[Condition]) -> list[Condition]:
+def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequence[Condition],
+             asked_into: Collection[str] = ()) -> list[Condition]:
     """The goals out of reach to drop rather than refuse for: all of them where none is asked for and some goal
     within reach is; otherwise none (the task is refused). A goal is asked for where the instruction names one of
     its objects, or where one of them is in a goal asked for ("make me a coffee": ``Mug in CoffeeMachine`` is
-    named, so ``Mug filled`` is asked for too)."""
+    named, so ``Mug filled`` is asked for too); but a named thing's place is the model's choice where the instruction
+    neither names the holder nor asks for it in so many words (``asked_into``), and the holder is no heat or cold
+    source (which would give the thing a state: "chill the apple", the fridge): asked to slice the apple, the 1.5B
+    also put the slices in a bowl, for a team that cannot put anything down."""
     asked = _asked(instruction, stated)
-    if not out_of_reach or any(c in asked for c in out_of_reach):
+    if not out_of_reach or any(c in asked and not _placed_by_model(instruction, c, asked_into) for c in out_of_reach):
         return []
     left = [c for c in stated if c not in out_of_reach]
     return list(out_of_reach) if any(c in asked for c in left) else []
+
+
+def _placed_by_model(instruction: str, condition: Condition, asked_into: Collection[str]) -> bool:
+    holder = condition.subject
+    return condition.item is not None and holder not in asked_into and holder not in HEAT_SOURCES | COLD_SOURCES \
+        and not names(instruction, holder)
 
 
 def unasked(instruction: str, stated: Sequence[Condition]) -> list[Condition]:

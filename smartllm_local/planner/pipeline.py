@@ -439,7 +439,8 @@ class Planner:
         team = self.catalogue.team(result.robots)
         problems = {c: self.world.unattainable([as_goal(c)], team, self.catalogue.skills, scene.floor_plan)
                     for c in conditions} if stated.statement else {}
-        dropped = invented(result.instruction, [c for c, why in problems.items() if why], conditions)
+        dropped = invented(result.instruction, [c for c, why in problems.items() if why], conditions,
+                           holders_asked(result.instruction, scene))
         if dropped:
             record.dropped_goals = [condition_line(c) for c in dropped]
             record.output = "".join(line for line in record.output.splitlines(keepends=True)

@@ -63,6 +63,20 @@ def test_only_goals_out_of_reach_that_nobody_asked_for_are_dropped():
     assert invented("Tidy up.", [APPLE_IN], [APPLE_IN]) == []
 
 
+def test_a_place_the_model_chose_for_a_named_thing_is_dropped_not_refused_for():
+    """Asked to slice the apple, the 1.5B also put the slices in a bowl, for a team that cannot put anything down:
+    the instruction asks for no holder, so the task is not refused for it where the slicing is left to plan."""
+    sliced, in_bowl = Condition("Apple", state="SLICED"), Condition("Bowl", item="AppleSliced")
+    assert invented("Slice the apple.", [in_bowl], [sliced, in_bowl]) == [in_bowl]
+    assert invented("Slice the apple into the bowl.", [in_bowl], [sliced, in_bowl]) == []  # named: refused
+    assert invented("Slice the apple.", [in_bowl], [in_bowl]) == []  # nothing else asked for is left: refused
+    thrown = Condition("GarbageCan", item="AppleSliced")
+    assert invented("Slice the apple and throw it away.", [thrown], [sliced, thrown], asked_into=["GarbageCan"]) == []
+    assert invented("Slice the apple and throw it away.", [thrown], [sliced, thrown]) == [thrown]
+    # a heat or cold source gives the thing a state the instruction may ask for: "chill" is the fridge
+    assert invented("Make me a coffee and chill the apple.", [APPLE_IN], [MUG_IN, MUG_FILLED, APPLE_IN]) == []
+
+
 def test_a_goal_nobody_asked_for_is_one_on_things_not_named_beside_one_that_is():
     stated = [Condition("Sofa", item="Laptop"), Condition("LightSwitch", state="ON")]
     assert unasked("Move the laptop from the coffee table to the sofa.", stated) == [stated[1]]
@@ -120,6 +134,16 @@ def test_the_goal_check_drops_a_goal_nobody_asked_for_and_refuses_one_asked_for(
     result, record = _checked(monkeypatch, "Make me a coffee and put the apple in the fridge.", statement)
     assert record.refused_by == GOAL_CHECK and "Fridge contains Apple" in record.refusal
     assert not record.dropped_goals
+
+
+def test_the_goal_check_drops_a_place_nobody_asked_for_and_refuses_one_asked_for_in_so_many_words(monkeypatch):
+    """Robot 13 opens nothing: a mug in a closed cabinet is out of its reach. Asked to make a coffee, the cabinet is
+    the model's invention; asked to put the mug in a cabinet, it is not."""
+    statement = "Mug in CoffeeMachine\nMug filled\nMug in Cabinet\n\n"
+    result, record = _checked(monkeypatch, "Make me a coffee in my mug.", statement)
+    assert record.refusal is None and record.dropped_goals == ["Mug in Cabinet"]
+    result, record = _checked(monkeypatch, "Make me a coffee, then put the mug in a cabinet.", statement)
+    assert record.refused_by == GOAL_CHECK and "Cabinet contains Mug" in record.refusal
 
 
 class _Refuses(FakeBackend):
