@@ -273,8 +273,9 @@ def _floor_plan_vocabulary(floor_plan: str) -> GoalVocabulary:
     for whole in [t for t in of_type if t in SLICE_RESULTS]:
         piece = SLICE_RESULTS[whole][0]
         of_type.setdefault(piece, [{"objectType": piece, **{p: True for p in TYPE_PROPERTIES[piece]}}])
-    flags = {t: {name for obj in objs for name, value in obj.items() if value is True} for t, objs in of_type.items()}
-    states = {t: object_states(dict.fromkeys(f, True), t) for t, f in flags.items()}
+    flags = {t: {name: True for obj in objs for name, value in obj.items() if value is True}
+             for t, objs in of_type.items()}
+    states = {t: object_states(f, t) for t, f in flags.items()}
     receptacles = [t for t, f in flags.items() if "receptacle" in f]
 
     def can_hold(receptacle: str, item: str) -> bool:  # as the world lets some one of them hold some other

@@ -22,9 +22,9 @@ from ..plan_language import Plan, parse_plan
 from ..planner.baselines import allocate_by, random_chooser, rule_chooser
 from ..planner.constraints.feasibility import function_needs
 from ..planner.constraints.goal import goal_vocabulary
+from ..planner.goal_stage import holders_asked
 from ..planner.pipeline import Planner
 from ..planner.progress import SILENT
-from ..planner.prompting.goal_prompt import load_state_words, states_asked
 from ..planner.readings import may_place, merge, placements, unsettled
 from ..planner.result import PlanResult, StageRecord
 from ..planner.steps import Step
@@ -144,7 +144,8 @@ class GoalPlanner:
             conditions = statement_of(task.goals).conditions
         else:
             conditions = parse_goal_statement(result.stage("goal").output, where="<goal output>").conditions
-        placed = unsettled(self._placements(result), conditions, self._asked_into(result.instruction)) \
+        placed = unsettled(self._placements(result), conditions,
+                           holders_asked(result.instruction, self.world.scene(result.floor_plan))) \
             if self.reads_steps(task) else []
         if placed:
             conditions = merge(conditions, placed)
@@ -159,10 +160,6 @@ class GoalPlanner:
             result.refusal = record.refusal
         elif record.error:
             result.error = record.error
-
-    def _asked_into(self, instruction: str) -> set[str]:
-        """The holders the instruction asks things into in so many words (the goal stage owes their lines)."""
-        return set(states_asked(instruction, load_state_words(self.world.examples_dir()).placements))
 
     def _placements(self, result: PlanResult) -> list[Condition]:
         """Where the task's decomposition (if one was written) puts the things its instruction names."""

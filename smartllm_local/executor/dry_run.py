@@ -30,6 +30,7 @@ from ai2thor.server import Event, MetadataWrapper, MultiAgentEvent
 from ..robots import Robot
 from ..skills import DEFAULT_SKILL_SET, SkillSet
 from ..world.metadata import AGENT_FIELDS, MetadataEncoder, agent_view
+from ..world.rules import refuses
 from ..world.scenes import floor_plan_name
 from ..world.simulator import ActionResult, Simulator
 from .team_actions import Outcome, TeamWorld
@@ -195,7 +196,7 @@ class DryRun:
 
     def fits(self, obj: dict[str, Any], receptacle: dict[str, Any]) -> str | None:
         """Why the world would not let ``obj`` go into ``receptacle``, or None if it would."""
-        return self._thor.sim.fits(obj, receptacle)
+        return refuses(obj, receptacle)
 
     def succeeds(self, members: Sequence[int], skill_name: str, objects: Sequence[str]) -> Outcome:
         """What the call would do from the current state, which it leaves as it was."""

@@ -399,10 +399,6 @@ class Simulator:
         self._carry(agent_id)
         return ActionResult()
 
-    def fits(self, obj: dict[str, Any], receptacle: dict[str, Any]) -> str | None:
-        """Why ``obj`` cannot go into ``receptacle``, or None if it can (:func:`.rules.refuses`)."""
-        return rules.refuses(obj, receptacle)
-
     def _put(self, agent_id: int, action: dict[str, Any]) -> ActionResult:
         held = self._held(agent_id, "PutObject")
         receptacle = self._target(agent_id, action)
@@ -411,7 +407,7 @@ class Simulator:
         self._require(receptacle, "receptacle", "a receptacle")
         if receptacle.get("openable") and not receptacle.get("isOpen"):
             raise ActionFailed(f"{receptacle['objectId']} is closed; open it before putting anything in")
-        reason = self.fits(held, receptacle)
+        reason = rules.refuses(held, receptacle)
         if reason:
             raise ActionFailed(f"No valid positions to place object found: {reason}")
         self._release(agent_id, held)
@@ -437,7 +433,7 @@ class Simulator:
                 if r.get("receptacle") and r["objectType"] != "Floor" and r["objectId"] not in excluded
                 and not r.get("isPickedUp") and not (r.get("isSliced") and r["objectType"] in SLICE_RESULTS)
                 and not (r.get("openable") and not r.get("isOpen")) and Box.of(r).covers(x, z, 0.0)
-                and self.fits(obj, r) is None and not self.is_enclosed(r)
+                and rules.refuses(obj, r) is None and not self.is_enclosed(r)
             ]
             if candidates:
                 top = max(candidates, key=lambda r: (Box.of(r).y1, r["objectId"]))
