@@ -24,12 +24,23 @@ from collections.abc import Collection, Iterable, Sequence
 
 from ..goal_language import name_words
 from ..scoring import Condition, Goal
-from ..world.object_types import COLD_SOURCES, HEAT_SOURCES, INFORMAL_NAMES, base_type, informal_names
+from ..world.object_types import (
+    COLD_SOURCES,
+    HEAT_SOURCES,
+    INFORMAL_NAMES,
+    RECEPTACLE_ONLY_ACCEPTS,
+    WATER_BASINS,
+    base_type,
+    informal_names,
+)
 
 #: How many first letters a word of the instruction and a word of a type's name must share.
 PREFIX = 3
 _WORD = re.compile(r"[a-z]+")
 #: Words after which an instruction names where a thing is now, not where it must be ("from the coffee table").
+#: Holders that give what they hold a state (heat, cold, a pan's frying, a basin's rinsing): where a thing goes in
+#: one of them is no mere place ("chill the apple": the fridge; "fry an egg": the pan on the burner).
+STATE_GIVING = HEAT_SOURCES | COLD_SOURCES | RECEPTACLE_ONLY_ACCEPTS["StoveBurner"] | WATER_BASINS
 ORIGIN = re.compile(r"\b(?:from|out of)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?([a-z]+(?:\s+[a-z]+)?)")
 
 
@@ -59,10 +70,10 @@ def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequen
     within reach is; otherwise none (the task is refused). A goal is asked for where the instruction names one of
     its objects, or where one of them is in a goal asked for ("make me a coffee": ``Mug in CoffeeMachine`` is
     named, so ``Mug filled`` is asked for too); but a named thing's place is the model's choice where the instruction
-    neither names the holder nor asks for it in so many words (``asked_into``), and the holder is no heat or cold
-    source (which would give the thing a state: "chill the apple", the fridge): asked to slice the apple, the 1.5B
+    neither names the holder nor asks for it in so many words (``asked_into``), and the holder gives what it holds
+    no state (:data:`STATE_GIVING`): asked to slice the apple, the 1.5B
     also put the slices in a bowl, for a team that cannot put anything down."""
-    asked = _asked(instruction, stated)
+    asked = _asked(instruction, stated, asked_into)
     if not out_of_reach or any(c in asked and not _placed_by_model(instruction, c, asked_into) for c in out_of_reach):
         return []
     left = [c for c in stated if c not in out_of_reach]
@@ -71,14 +82,14 @@ def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequen
 
 def _placed_by_model(instruction: str, condition: Condition, asked_into: Collection[str]) -> bool:
     holder = condition.subject
-    return condition.item is not None and holder not in asked_into and holder not in HEAT_SOURCES | COLD_SOURCES \
+    return condition.item is not None and holder not in asked_into and holder not in STATE_GIVING \
         and not names(instruction, holder)
 
 
-def unasked(instruction: str, stated: Sequence[Condition]) -> list[Condition]:
+def unasked(instruction: str, stated: Sequence[Condition], asked_into: Collection[str] = ()) -> list[Condition]:
     """The stated goals nobody asked for (:func:`invented`'s reading: no object of them named, none in a goal that
     is), where some stated goal was asked for; none where none was."""
-    asked = _asked(instruction, stated)
+    asked = _asked(instruction, stated, asked_into)
     return [c for c in stated if c not in asked] if asked else []
 
 
@@ -141,16 +152,19 @@ def as_goal(condition: Condition) -> Goal:
     return Goal(condition.subject, contains=(condition.item or "",))
 
 
-def _asked(instruction: str, stated: Sequence[Condition]) -> list[Condition]:
-    """The stated goals asked for: named by the instruction, or sharing an object with one asked for."""
-    asked = [c for c in stated if asks_for(instruction, c)]
-    objects = {base_type(t) for c in asked for t in _objects(c)}
-    while True:
-        more = [c for c in stated if c not in asked and objects & {base_type(t) for t in _objects(c)}]
-        if not more:
-            return asked
+def _asked(instruction: str, stated: Sequence[Condition], asked_into: Collection[str]) -> list[Condition]:
+    """The stated goals asked for: named by the instruction, or sharing an object with one asked for, where a
+    holder the model chose (:func:`_placed_by_model`) is shared by nothing: asked to slice the bread, the 0.5B put
+    it in a cabinet and a spoon in the cabinet too."""
+    asked: list[Condition] = []
+    more = [c for c in stated if asks_for(instruction, c)]
+    objects: set[str] = set()
+    while more:
         asked += more
-        objects |= {base_type(t) for c in more for t in _objects(c)}
+        objects |= {base_type(t) for c in more for t in _objects(c)
+                    if not (t == c.subject and _placed_by_model(instruction, c, asked_into))}
+        more = [c for c in stated if c not in asked and objects & {base_type(t) for t in _objects(c)}]
+    return asked
 
 
 def _objects(condition: Condition) -> list[str]:

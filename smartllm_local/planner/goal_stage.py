@@ -139,7 +139,7 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
     statement = stated.statement
     if statement is None or statement.refusal is not None:
         return stated
-    out = {c for c in unasked(instruction, statement.conditions)
+    out = {c for c in unasked(instruction, statement.conditions, asked.placements)
            if c.state not in asked.states and c.subject not in asked.placements}
     return _leave_out(stated, out, "unasked")
 

@@ -85,6 +85,17 @@ def test_a_goal_nobody_asked_for_is_one_on_things_not_named_beside_one_that_is()
     assert unasked("Movie night: get the living room nice and dark.", stated) == []  # none asked for: none left out
 
 
+def test_a_holder_the_model_chose_for_a_named_thing_asks_for_nothing_else_in_it():
+    """Asked to slice the bread, the 0.5B put it in a cabinet, and a spoon in the cabinet too."""
+    bread = [Condition("Bread", state="SLICED"), Condition("Cabinet", item="Bread"), Condition("Cabinet", item="Spoon")]
+    assert unasked("Cut the loaf of bread into slices.", bread) == [bread[2]]
+    assert unasked("Put the bread and a spoon in a cabinet.", bread) == []  # the cabinet named
+    assert unasked("Tidy the bread away.", bread, asked_into=["Cabinet"]) == []  # asked into in so many words
+    chill = [Condition("WineBottle", state="COLD"), Condition("Fridge", item="WineBottle"),
+             Condition("Fridge", item="Apple")]
+    assert unasked("Chill the wine.", chill) == []  # a cold source gives what is in it a state
+
+
 @pytest.mark.parametrize("tasks", ["benchmark", "held-out"])
 def test_every_household_goal_condition_is_one_the_instruction_asks_for(tasks):
     """So the lines the goal stage leaves out as nobody's asking are never among a task's goals (the goals read

@@ -166,6 +166,15 @@ def test_a_domain_without_the_file_asks_for_nothing_and_a_bad_file_is_a_clear_er
         load_state_words(tmp_path)
 
 
+def test_state_words_are_parsed_once_per_text_of_their_file(tmp_path: Path):
+    (tmp_path / "goal").mkdir()
+    (tmp_path / "goal" / "asked_states.toml").write_text("COOKED = ['fry']\n")
+    first = load_state_words(tmp_path)
+    assert load_state_words(tmp_path) is first  # every statement and check reads it: parsed once
+    (tmp_path / "goal" / "asked_states.toml").write_text("COOKED = ['fry', 'sear']\n")
+    assert [p.pattern for p in load_state_words(tmp_path).asked["COOKED"]] == ["fry", "sear"]  # edited: read again
+
+
 def test_domain_check_reports_a_goal_example_that_leaves_out_a_state_its_instruction_asks_for(tmp_path: Path):
     from smartllm_local.planner.prompting.example_check import check_goal_examples
 

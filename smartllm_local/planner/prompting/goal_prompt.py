@@ -10,6 +10,7 @@ pick from a scene what the instruction is about rather than to name every object
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 from collections.abc import Callable, Mapping, Sequence
@@ -79,23 +80,28 @@ class StateWords:
 
 
 def load_state_words(prompts: Path) -> StateWords:
-    """The domain's state words, read once (none where there is no such file): ``STATE = ['<regular expression>',
-    ...]`` a line, the same lines under ``[only_where_asked]``, and ``Holder = [...]`` lines under
-    ``[placements]``."""
+    """The domain's state words (none where there is no such file): ``STATE = ['<regular expression>', ...]`` a
+    line, the same lines under ``[only_where_asked]``, and ``Holder = [...]`` lines under ``[placements]``. Parsed
+    once per text of the file: every goal statement and goal check reads them."""
     path = prompts / GOAL_FOLDER / ASKED_STATES
     if not path.is_file():
         return StateWords({}, {}, {})
     try:
-        table = tomllib.loads(path.read_text(encoding="utf-8"))
-        only, placements = table.pop(ONLY_WHERE_ASKED, {}), table.pop(PLACEMENTS, {})
-        for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements)):
-            if not isinstance(part, dict):
-                raise ValueError(f"[{name}] is not a table")
-        return StateWords(_patterns(table), _patterns(only),
-                          _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"))
+        return _parse_state_words(path.read_text(encoding="utf-8"))
     except (OSError, ValueError, TypeError, re.error) as exc:
         raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...] "
                         "and each holder under [placements] as Holder = [...], or remove the file") from exc
+
+
+@functools.lru_cache(maxsize=16)
+def _parse_state_words(text: str) -> StateWords:
+    table = tomllib.loads(text)
+    only, placements = table.pop(ONLY_WHERE_ASKED, {}), table.pop(PLACEMENTS, {})
+    for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements)):
+        if not isinstance(part, dict):
+            raise ValueError(f"[{name}] is not a table")
+    return StateWords(_patterns(table), _patterns(only),
+                      _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"))
 
 
 def _patterns(table: Mapping[str, Any], known: Callable[[str], object] = STATE_WORDS.__contains__,
