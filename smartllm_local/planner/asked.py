@@ -132,6 +132,35 @@ def named_as_phrase(instruction: str, object_type: str) -> bool:
     return re.search(rf"\b(?:{phrase})\b", instruction.lower()) is not None
 
 
+def things_named(words: str, types: Sequence[str]) -> list[str]:
+    """The types ``words`` name as things to move: as a phrase ("the spray bottle") or by an informal name that
+    means the type alone ("the remote"), not where they name where a thing comes from ("from the bowl"); a slice
+    type only where its whole is not among them, and no type whose name is part of another's named ("the wine bottle"
+    is no Bottle). "The soap" names neither the bar nor the bottle so."""
+    text = ORIGIN.sub(" ", words.lower())
+    said = _forms(_WORD.findall(text))
+    named = [t for t in types if named_as_phrase(text, t) or
+             any(INFORMAL_NAMES.get(word) == (base_type(t),) for word in said)]
+    named = [t for t in named if not any(set(_type_words(t)) < set(_type_words(n)) for n in named)]  # a wine bottle
+    return [t for t in named if base_type(t) == t or base_type(t) not in named]
+
+
+def holder_named(words: str, holders: Collection[str]) -> str | None:
+    """The one holder of ``holders`` that ``words`` name ("the dining table", "the couch"), or None where they name
+    none or several: the type named as a phrase with the most words, else the one an informal name means; none
+    where another holder's name holds the one named ("the sink" may be its SinkBasin) or an informal name means
+    several ("the table" beside a coffee table and a side table)."""
+    phrased = [h for h in holders if named_as_phrase(words, h)]
+    if phrased:
+        most = max(len(_type_words(h)) for h in phrased)
+        named = {h for h in phrased if len(_type_words(h)) == most}
+        named |= {h for h in holders for n in named if set(_type_words(n)) < set(_type_words(h))}
+    else:
+        said = _forms(_WORD.findall(words.lower()))
+        named = {h for h in holders if _informally(said, h)}
+    return next(iter(named)) if len(named) == 1 else None
+
+
 def coverage(named: Sequence[str], stated: Sequence[Condition]) -> float:
     """The share of the named types (:func:`named_in_full`) that some stated condition is about (1 where none)."""
     about = {base_type(t).lower() for c in stated for t in _objects(c)}

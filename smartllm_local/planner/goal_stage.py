@@ -9,6 +9,7 @@ does not run it.
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -18,9 +19,17 @@ from ..errors import PlanError
 from ..goal_language import GoalStatement, condition_line, parse_goal_statement
 from ..scene import GoalVocabulary, SceneObjects
 from ..scoring import Condition, condition_holds, containment
-from ..skills import SkillSet
 from ..world.object_types import base_type
-from .asked import coverage, named_in_full, names_a_word, outnamed, present_yet_refused, unasked
+from .asked import (
+    coverage,
+    holder_named,
+    named_in_full,
+    names_a_word,
+    outnamed,
+    present_yet_refused,
+    things_named,
+    unasked,
+)
 from .backends.base import Backend
 from .candidates import mean_logprob, write_all
 from .constraints.goal import GoalConstraint, goal_vocabulary
@@ -31,7 +40,9 @@ from .prompting.goal_prompt import (
     goal_prompt,
     load_goal_examples,
     load_state_words,
+    puts,
     states_asked,
+    without_asking_verbs,
 )
 from .result import PlanResult, StageRecord
 from .stages import Fitted, fit_prompt, run_stage
@@ -106,8 +117,9 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), goal_examples(planner), planner.backend,
                         GOAL_BUDGET, planner.chat)
     count = planner.config.goal_candidates
-    asked = asked_of(instruction, vocabulary, load_state_words(planner.world.examples_dir()))
-    there = placed_now(scene, vocabulary, planner.catalogue.skills) if planner.config.grammar else frozenset()
+    objects = scene.world.dry_run(scene.floor_plan, planner.catalogue.skills).objects
+    there = placed_now(objects, vocabulary) if planner.config.grammar else frozenset()
+    asked = asked_of(instruction, vocabulary, load_state_words(planner.world.examples_dir()), standing(objects))
 
     def write(backend: Backend, k: int) -> StatedGoals:
         return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, asked, refusals=refusals)
@@ -122,24 +134,32 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     return _without_unasked(chosen, instruction, asked) if planner.config.grammar else chosen
 
 
-def placed_now(scene: SceneObjects, vocabulary: GoalVocabulary, skills: SkillSet) -> frozenset[Condition]:
-    """The ``<Item> in <Receptacle>`` conditions ``vocabulary`` can say that hold in ``scene`` as it begins (its
-    world's dry run, before any call): where each thing is."""
-    objects = scene.world.dry_run(scene.floor_plan, skills).objects
+def placed_now(objects: Sequence[Mapping[str, Any]], vocabulary: GoalVocabulary) -> frozenset[Condition]:
+    """The ``<Item> in <Receptacle>`` conditions ``vocabulary`` can say that hold among ``objects`` (a scene's, as
+    its world's dry run begins, before any call): where each thing is."""
     inside = containment(objects)
     sayable = [Condition(holder, item=kind) for kind, holders in vocabulary.holders.items() for holder in holders]
     return frozenset(c for c in sayable if condition_holds(c, objects, inside))
 
 
+def standing(objects: Sequence[Mapping[str, Any]]) -> frozenset[tuple[str, str]]:
+    """Each (holder type, thing type) of a thing in or on a holder among ``objects``, movable or not (the desk lamp
+    on the side table)."""
+    kind = {o["objectId"]: o["objectType"] for o in objects}
+    return frozenset((kind[holder], kind[thing]) for holder, things in containment(objects).items()
+                     for thing in things if holder in kind and thing in kind)
+
+
 def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> StatedGoals:
     """The statement less its lines nobody asked for (:func:`.asked.unasked`: no thing of them named, none in a
     line that is), where a line asked for is left; a state or a holder asked for in so many words stays ("boil
-    some water": ``Pot hot``). Every goal condition of the household benchmark, held-out tasks included, is asked
-    for so; the small models add a light switched on to moving a laptop, a tomato warmed to boiling water."""
+    some water": ``Pot hot``). A switch's verb names nothing (``Asked.naming``: "switch off the lamp" names no
+    LightSwitch). Every goal condition of the household benchmark, held-out tasks included, is asked for so; the
+    small models add a light switched on to moving a laptop, a tomato warmed to boiling water."""
     statement = stated.statement
     if statement is None or statement.refusal is not None:
         return stated
-    out = {c for c in unasked(instruction, statement.conditions, asked.placements)
+    out = {c for c in unasked(asked.naming or instruction, statement.conditions, asked.placements)
            if c.state not in asked.states and c.subject not in asked.placements}
     return _leave_out(stated, out, "unasked")
 
@@ -170,37 +190,77 @@ def _leave_out(stated: StatedGoals, out: Collection[Condition], field: str) -> S
     return StatedGoals(stated.record, statement)
 
 
+#: The states a switch's verb asks for ("switch", "turn", "power" name nothing).
+SWITCHED = ("ON", "OFF")
+#: Words that place a thing where it is ("the lamp on the side table").
+LOCATED = re.compile(r"\b(?:on|in|inside)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?"
+                     r"(?P<holder>[a-z]+(?:\s+[a-z]+)?)", re.IGNORECASE)
+
+
 @dataclass(frozen=True)
 class Asked:
     """What the instruction asks for in so many words: ``states``, each with the things its words name that can be
     in it, and ``placements``, each holder with the things to go in it (both owed where the model leaves them
-    out); ``withheld``, the states offered only where asked for, and not asked for."""
+    out); ``withheld``, the states offered only where asked for, and not asked for; ``naming``, the instruction less
+    the verbs of the switches it asks for, whose words name no thing ("switch off the lamp"; None: all of it)."""
 
     states: Mapping[str, Sequence[str]]
     withheld: Collection[str]
     placements: Mapping[str, Sequence[str]]
+    naming: str | None = None
 
 
-def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> Asked:
-    """What the instruction asks for in so many words, in the domain's ``words``, of the vocabulary's things."""
-    states = {state: _named(said, lambda t, s=state: s in vocabulary.states.get(t, ()), vocabulary)
+def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
+             there: Collection[tuple[str, str]] = ()) -> Asked:
+    """What the instruction asks for in so many words, in the domain's ``words``, of the vocabulary's things; of
+    several things its words name for a state, those it places where the scene has them (``there``: the scene's
+    :func:`standing`)."""
+    holders = {holder for holder, _ in there}
+    states = {state: _located(said, _named(said, lambda t, s=state: s in vocabulary.states.get(t, ()), vocabulary),
+                              holders, there)
               for state, said in states_asked(instruction, words.asked).items()}
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
-    return Asked(states, withheld, placements_asked(instruction, vocabulary, words))
+    switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
+    return Asked(states, withheld, placements_asked(instruction, vocabulary, words),
+                 without_asking_verbs(instruction, switches))
 
 
 def holders_asked(instruction: str, scene: SceneObjects) -> list[str]:
     """The scene's holders the instruction asks things into in so many words ("throw the newspaper out": the
-    GarbageCan), in its world's ``[placements]``."""
+    GarbageCan), in its world's ``[placements]`` and ``[put]``."""
     words = load_state_words(scene.world.examples_dir())
     return list(placements_asked(instruction, goal_vocabulary(scene), words))
 
 
 def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> dict[str, list[str]]:
     """The holders of the scene the instruction asks things into in so many words (the domain's ``[placements]``),
-    each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth)."""
-    return {holder: _named(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
-            for holder, said in states_asked(instruction, words.placements).items() if holder in vocabulary.types}
+    each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth), and
+    those it puts things in by name (``[put]``: "put the potato in the pot", Pot, Potato), where the words name
+    one holder and, in full, some thing that can go in it (not "put it in the drawer", nor "the soap", which may be
+    the bar or the bottle, nor "on the table" beside three)."""
+    placed = {holder: _named(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
+              for holder, said in states_asked(instruction, words.placements).items() if holder in vocabulary.types}
+    holders = {h for hs in vocabulary.holders.values() for h in hs}
+    for things, where in puts(instruction, words.put):
+        holder = holder_named(where, holders)
+        able = [t for t in vocabulary.types if holder in vocabulary.holders.get(t, ())]
+        named = things_named(things, able) if holder else []
+        if holder and named:
+            placed[holder] = list(dict.fromkeys([*placed.get(holder, []), *named]))
+    return placed
+
+
+def _located(words: str, named: list[str], holders: Collection[str], there: Collection[tuple[str, str]]) -> list[str]:
+    """Of several things named, those in the first holder the words place them in that holds any of them as the
+    scene begins ("the lamp on the side table": the DeskLamp standing there, not the FloorLamp); else all."""
+    if len(named) < 2:
+        return named
+    for where in LOCATED.finditer(words):
+        holder = holder_named(where["holder"], holders)
+        here = [t for t in named if (holder, t) in there] if holder else []
+        if here:
+            return here
+    return named
 
 
 def _named(words: str, able: Callable[[str], bool], vocabulary: GoalVocabulary) -> list[str]:

@@ -19,9 +19,11 @@ from smartllm_local.planner.asked import (
     present_yet_refused,
     unasked,
 )
+from smartllm_local.planner.constraints.goal import goal_vocabulary
 from smartllm_local.planner.decoding.sampling import Generated
-from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, state_goals, stated_conditions
+from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, asked_of, state_goals, stated_conditions
 from smartllm_local.planner.pipeline import Planner, PlannerConfig
+from smartllm_local.planner.prompting.goal_prompt import load_state_words
 from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
@@ -104,8 +106,13 @@ def test_every_household_goal_condition_is_one_the_instruction_asks_for(tasks):
     chosen = load_tasks(household.task_files(), domain=household) if tasks == "benchmark" else \
         load_tasks([household.folder / "heldout" / "tasks.jsonl"], domain=household)
     assert len(chosen) >= 27
+    words = load_state_words(household.prompts_dir())
     for task in chosen:
-        assert unasked(task.instruction, [c for g in task.goals for c in g.conditions()]) == [], task.id
+        truth = [c for g in task.goals for c in g.conditions()]
+        assert unasked(task.instruction, truth) == [], task.id
+        vocabulary = goal_vocabulary(scene_objects(task.floor_plan))
+        asked = asked_of(task.instruction, vocabulary, words)
+        assert unasked(asked.naming, truth, asked.placements) == [], task.id  # as the goal stage reads it
 
 
 def test_every_infeasible_benchmark_task_is_still_refused_for_its_own_goals():

@@ -27,6 +27,7 @@ from smartllm_local.planner.goal_stage import (
     asked_of,
     holders_asked,
     placed_now,
+    standing,
 )
 from smartllm_local.planner.prompting.goal_prompt import load_state_words, states_asked
 from smartllm_local.planner.result import StageRecord
@@ -195,7 +196,12 @@ def test_domain_check_reports_a_goal_example_that_leaves_out_a_thing_its_instruc
     # "Chop up the lettuce and the potato, and throw the old apple away."
     (copy / "prompts" / "goal" / "chop_and_bin.txt").write_text("Lettuce sliced\nPotato sliced\nApple in Fridge\n")
     problems = check_goal_examples(load_domain(str(copy)))[1]
-    assert len(problems) == 1 and "chop_and_bin.txt: puts nothing in GarbageCan" in problems[0]
+    assert len(problems) == 1 and "chop_and_bin.txt: does not put in GarbageCan" in problems[0]
+    # "Turn on both lamps and leave the remote on the coffee table."
+    (copy / "prompts" / "goal" / "chop_and_bin.txt").write_text("Lettuce sliced\nPotato sliced\nApple in GarbageCan\n")
+    (copy / "prompts" / "goal" / "lamps_and_remote.txt").write_text("DeskLamp on\nFloorLamp on\n")
+    problems = check_goal_examples(load_domain(str(copy)))[1]
+    assert len(problems) == 1 and "lamps_and_remote.txt: does not put in CoffeeTable" in problems[0]
 
 
 def test_domain_check_reports_a_goal_example_that_states_empty_where_its_instruction_does_not_ask(tmp_path: Path):
@@ -215,7 +221,7 @@ def test_the_statement_kept_leaves_out_a_thing_said_to_be_where_it_is_as_the_sce
     statement with nothing else is kept as written."""
     scene = scene_objects(next(t for t in TASKS if t.id == "bathroom-06").floor_plan)
     vocabulary = goal_vocabulary(scene)
-    placed = placed_now(scene, vocabulary, SKILLS)
+    placed = placed_now(scene.world.dry_run(scene.floor_plan, SKILLS).objects, vocabulary)
     assert Condition("BathtubBasin", item="Cloth") in placed and all(c.state is None for c in placed)
 
     def kept(text: str) -> tuple[str, list[str]]:
@@ -262,7 +268,7 @@ def test_no_household_goal_puts_a_thing_where_its_scene_has_it_already(tasks):
     assert len(chosen) >= 27
     for task in chosen:
         scene = scene_objects(task.floor_plan)
-        placed = placed_now(scene, goal_vocabulary(scene), SKILLS)
+        placed = placed_now(scene.world.dry_run(scene.floor_plan, SKILLS).objects, goal_vocabulary(scene))
         assert not [c for g in task.goals for c in g.conditions() if c in placed], task.id
 
 
@@ -295,7 +301,8 @@ def test_the_holders_asked_for_are_those_of_the_scene_and_its_world():
     """What the planner's last sub-task counts as a holder the instruction names, beside those it names by name."""
     assert holders_asked("Tidy up: close the laptop and throw out the newspaper.", scene_objects(203)) == \
         ["GarbageCan"]
-    assert holders_asked("Put the newspaper on the sofa.", scene_objects(203)) == []
+    assert holders_asked("Put the newspaper on the sofa.", scene_objects(203)) == ["Sofa"]  # put there by name
+    assert holders_asked("Put it on the sofa.", scene_objects(203)) == []  # no thing named: nothing owed
     assert holders_asked("Throw out the newspaper.", world_of(load_domain("patrol")).scene("")) == []
 
 
@@ -343,6 +350,56 @@ def test_every_household_goal_of_a_thing_asked_into_a_holder_puts_it_there_and_t
             assert accepts(GoalConstraint(vocabulary, asked=asked.states, withheld=asked.withheld,
                                           placed=asked.placements), text + "\n"), (task.id, text)
     assert asking >= 3
+
+
+@pytest.mark.parametrize("instruction, placed", [
+    ("Put the potato in the pot.", {"Pot": ["Potato"]}),
+    ("Move the mug from the shelf onto the counter.", {"CounterTop": ["Mug"]}),
+    ("Take the apple out of the bowl and leave it in the fridge.", {"Fridge": ["Apple"]}),  # not the bowl
+    ("Put the bread and the wine bottle in the fridge.", {"Fridge": ["Bread", "WineBottle"]}),
+    ("Put the salt in a cabinet.", {"Cabinet": ["SaltShaker"]}),  # an informal name of it alone
+    ("Put the soap in the cabinet.", {}),  # no soap in this kitchen's vocabulary; none named in full
+    ("Put the apple in the sink.", {}),  # the sink or its basin: no one holder named
+    ("Put the apple on the table.", {}),  # no table of this scene is "the table" alone
+    ("Put it in the fridge.", {}),  # nothing named
+    ("Put the telly on, the match is about to start.", {}),
+    ("Slice the apple and keep the slices in the fridge.", {}),  # "keep" puts nothing that is not there
+])
+def test_the_things_an_instruction_puts_in_a_holder_it_names_are_owed_there(instruction, placed):
+    vocabulary = goal_vocabulary(scene_objects(1))
+    assert asked_of(instruction, vocabulary.less(outnamed(instruction, vocabulary.types)), WORDS).placements == placed
+
+
+def test_of_several_things_named_for_a_state_those_where_the_words_place_them_are_asked():
+    """Asked to switch off the lamp on the side table, the 0.5B switched off the floor lamp."""
+    scene = scene_objects(201)
+    vocabulary = goal_vocabulary(scene)
+    there = standing(scene.world.dry_run(scene.floor_plan, SKILLS).objects)
+    assert ("SideTable", "DeskLamp") in there and ("SideTable", "FloorLamp") not in there
+    lamp = "Switch off the lamp on the side table."
+    assert asked_of(lamp, vocabulary, WORDS).states == {"OFF": ["DeskLamp", "FloorLamp"]}  # where, not said
+    assert asked_of(lamp, vocabulary, WORDS, there).states == {"OFF": ["DeskLamp"]}
+    assert asked_of("Switch off the lamp on the sofa.", vocabulary, WORDS, there).states == \
+        {"OFF": ["DeskLamp", "FloorLamp"]}  # no lamp there: both
+
+
+def test_a_switch_s_verb_names_no_light_switch():
+    """Asked to switch off the lamp, the 0.5B also stated the light switched on."""
+    vocabulary = goal_vocabulary(scene_objects(201))
+    asked = asked_of("Switch off the lamp.", vocabulary, WORDS)
+    statement = parse_goal_statement("DeskLamp off\nLightSwitch on\n\n", types=vocabulary.types)
+    stated = _without_unasked(StatedGoals(StageRecord("goal", output=statement.text()), statement), "", asked)
+    assert stated.statement.text() == "DeskLamp off\n" and stated.record.unasked == ["LightSwitch on"]
+    lights = asked_of("Switch off the lamp and the light switch.", vocabulary, WORDS)
+    stated = _without_unasked(StatedGoals(StageRecord("goal", output=statement.text()), statement), "", lights)
+    assert stated.record.unasked == []  # the light switch named as a thing
+
+
+def test_a_put_pattern_without_its_two_groups_is_a_clear_error(tmp_path: Path):
+    (tmp_path / "goal").mkdir()
+    (tmp_path / "goal" / "asked_states.toml").write_text("[put]\ninto = ['\\\\bput\\\\b(?P<things>.+)']\n")
+    with pytest.raises(UserError, match=r"a \(\?P<things>...\) group and a \(\?P<holder>...\) group"):
+        load_state_words(tmp_path)
 
 
 def test_a_placements_part_that_names_no_holder_is_a_clear_error(tmp_path: Path):

@@ -13,6 +13,7 @@ from ...errors import SmartLLMError
 from ...plan_language import parse_plan
 from ...scoring import parse_goals, score_execution
 from ...worlds import world_of
+from ..asked import outnamed
 from ..constraints.coalition import CoalitionConstraint
 from ..constraints.feasibility import function_needs
 from ..constraints.goal import GoalConstraint, goal_vocabulary
@@ -21,6 +22,7 @@ from ..constraints.restated import RestatedAllocation, restated_bodies
 from ..constraints.world_check import WorldCheck
 from ..decoding.protocol import REFUSAL_PREFIX
 from ..decoding.writer import accepts
+from ..goal_stage import placements_asked
 from .goal_prompt import (
     ASKED_STATES,
     GOAL_FOLDER,
@@ -112,7 +114,7 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
         written = ex.statement.rstrip("\n") + ("\n" if ex.statement.startswith(REFUSAL_PREFIX) else "\n\n")
         vocabulary, owed = goal_vocabulary(scene), states_asked(ex.instruction, words.asked)
         withheld = set(words.only_where_asked) - set(states_asked(ex.instruction, words.only_where_asked))
-        placed = states_asked(ex.instruction, words.placements)
+        placed = placements_asked(ex.instruction, vocabulary.less(outnamed(ex.instruction, vocabulary.types)), words)
         if not accepts(GoalConstraint(vocabulary), written):
             problems.append(f"{where}: not in the goal grammar of {scene.floor_plan} (one `<Object> <state>` or "
                             "`<Object> in <Receptacle>` a line, naming the scene's objects in states the world can "
@@ -120,9 +122,9 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
         elif not accepts(GoalConstraint(vocabulary, asked={s: [] for s in owed}), written):
             problems.append(f"{where}: states no thing in a state its instruction asks for in so many words "
                             f"({', '.join(owed)}: {folder}/{ASKED_STATES}); an example shows the model what to state")
-        elif not accepts(GoalConstraint(vocabulary, placed={h: [] for h in placed}), written):
-            problems.append(f"{where}: puts nothing in {', '.join(placed)}, which its instruction asks things into in "
-                            f"so many words ([placements] of {folder}/{ASKED_STATES})")
+        elif not accepts(GoalConstraint(vocabulary, placed=placed), written):
+            problems.append(f"{where}: does not put in {', '.join(placed)} what its instruction asks into it in so "
+                            f"many words ([placements] and [put] of {folder}/{ASKED_STATES})")
         elif not accepts(GoalConstraint(vocabulary, withheld=withheld), written):
             problems.append(f"{where}: states {', '.join(sorted(withheld))}, which the goal stage offers only where "
                             f"the instruction asks for it ([only_where_asked] of {folder}/{ASKED_STATES}) and this "

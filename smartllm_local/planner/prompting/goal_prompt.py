@@ -35,6 +35,9 @@ ASKED_STATES = "asked_states.toml"
 ONLY_WHERE_ASKED = "only_where_asked"
 #: The table of ``asked_states.toml`` naming the holders an instruction asks things into in so many words.
 PLACEMENTS = "placements"
+#: The table of ``asked_states.toml`` whose patterns find a thing put in a holder the instruction names: its
+#: ``into`` patterns, each with a ``things`` group and a ``holder`` group.
+PUT, PUT_INTO, PUT_GROUPS = "put", "into", frozenset({"things", "holder"})
 _TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*")
 _CLAUSE = re.compile(r"[,.;:!?]")
 
@@ -72,11 +75,13 @@ class StateWords:
     leaves them out); ``only_where_asked``, its ``[only_where_asked]`` table, the states the goal grammar offers only
     where the instruction asks for them (never owed); ``placements``, its ``[placements]`` table, the holders an
     instruction asks things into in so many words ("throw the cloth away": the GarbageCan), each thing the asking
-    words name owed a line that puts it there."""
+    words name owed a line that puts it there; ``put``, its ``[put]`` table's ``into`` patterns, which find the
+    things put in a holder the instruction names ("put the potato in the pot"), owed the same way."""
 
     asked: dict[str, tuple[re.Pattern[str], ...]]
     only_where_asked: dict[str, tuple[re.Pattern[str], ...]]
     placements: dict[str, tuple[re.Pattern[str], ...]]
+    put: tuple[re.Pattern[str], ...] = ()
 
 
 def load_state_words(prompts: Path) -> StateWords:
@@ -96,12 +101,15 @@ def load_state_words(prompts: Path) -> StateWords:
 @functools.lru_cache(maxsize=16)
 def _parse_state_words(text: str) -> StateWords:
     table = tomllib.loads(text)
-    only, placements = table.pop(ONLY_WHERE_ASKED, {}), table.pop(PLACEMENTS, {})
-    for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements)):
+    only, placements, put = table.pop(ONLY_WHERE_ASKED, {}), table.pop(PLACEMENTS, {}), table.pop(PUT, {})
+    for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements), (PUT, put)):
         if not isinstance(part, dict):
             raise ValueError(f"[{name}] is not a table")
+    into = _patterns(put, PUT_INTO.__eq__, f"'{PUT_INTO}'").get(PUT_INTO, ())
+    if any(set(p.groupindex) != PUT_GROUPS for p in into):
+        raise ValueError(f"each [{PUT}] pattern needs a (?P<things>...) group and a (?P<holder>...) group")
     return StateWords(_patterns(table), _patterns(only),
-                      _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"))
+                      _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"), into)
 
 
 def _patterns(table: Mapping[str, Any], known: Callable[[str], object] = STATE_WORDS.__contains__,
@@ -125,6 +133,23 @@ def states_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[st
             asked[state] = " ".join(_after_verb(instruction[m.start():m.end()]) +
                                     _CLAUSE.split(instruction[m.end():], 1)[0] for m in found).strip()
     return asked
+
+
+def without_asking_verbs(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> str:
+    """The instruction with the verb of each state it asks for blanked out: the verb names nothing ("switch off the
+    lamp" names no LightSwitch)."""
+    spans = sorted({(m.start(), m.start() + len(m[0].split(maxsplit=1)[0]))
+                    for listed in patterns.values() for p in listed for m in p.finditer(instruction) if m[0].strip()})
+    text = instruction
+    for start, end in reversed(spans):
+        text = text[:start] + " " * (end - start) + text[end:]
+    return text
+
+
+def puts(instruction: str, patterns: Sequence[re.Pattern[str]]) -> list[tuple[str, str]]:
+    """The things put somewhere the instruction names, as (the words naming the things, the words naming where),
+    one pair for each match of ``patterns`` ("put the potato in the pot": "the potato", "pot")."""
+    return [(m["things"], m["holder"]) for p in patterns for m in p.finditer(instruction)]
 
 
 def _after_verb(words: str) -> str:
