@@ -22,7 +22,7 @@ from ..plan_language import Plan, parse_plan
 from ..planner.baselines import allocate_by, random_chooser, rule_chooser
 from ..planner.constraints.feasibility import function_needs
 from ..planner.constraints.goal import goal_vocabulary
-from ..planner.goal_stage import holders_asked
+from ..planner.goal_stage import checked_against_team, holders_asked
 from ..planner.pipeline import Planner
 from ..planner.progress import SILENT
 from ..planner.readings import may_place, merge, placements, unsettled
@@ -140,10 +140,15 @@ class GoalPlanner:
     def allocate(self, task: Task, result: PlanResult) -> None:
         from ..planner.classical.planning import plan_to_goal  # Unified Planning loads only for this method
 
+        team = self.catalogue.team(task.robots)
         if self.oracle:
             conditions = statement_of(task.goals).conditions
-        else:
-            conditions = parse_goal_statement(result.stage("goal").output, where="<goal output>").conditions
+        else:  # less goals out of reach that nobody asked for, as SMART-LLM's goal check leaves them
+            goal = result.stage("goal")
+            stated = parse_goal_statement(goal.output, where="<goal output>").conditions
+            kept = checked_against_team(goal, result.instruction, self.world.scene(result.floor_plan), stated, team,
+                                        self.catalogue.skills)
+            conditions = [c for c in stated if c in kept]
         placed = unsettled(self._placements(result), conditions,
                            holders_asked(result.instruction, self.world.scene(result.floor_plan))) \
             if self.reads_steps(task) else []
@@ -151,7 +156,7 @@ class GoalPlanner:
             conditions = merge(conditions, placed)
         progress = self.planner.progress if self.planner is not None else SILENT
         progress.stage_started("allocation", 0)  # a search, which a plan's display shows as a stage too
-        record = plan_to_goal(conditions, task.floor_plan, self.catalogue.team(task.robots), self.catalogue.skills,
+        record = plan_to_goal(conditions, task.floor_plan, team, self.catalogue.skills,
                               time_limit=self.time_limit, name=task.id, world=self.world)
         record.placements = [condition_line(c) for c in placed]
         progress.stage_ended(record)

@@ -17,12 +17,16 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import PlanError
 from ..goal_language import GoalStatement, condition_line, parse_goal_statement
+from ..robots import Robot
 from ..scene import GoalVocabulary, SceneObjects
 from ..scoring import Condition, condition_holds, containment
+from ..skills import SkillSet
 from ..world.object_types import base_type
 from .asked import (
+    as_goal,
     coverage,
     holder_named,
+    invented,
     named_in_full,
     names_a_word,
     outnamed,
@@ -223,6 +227,21 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
     return Asked(states, withheld, placements_asked(instruction, vocabulary, words),
                  without_asking_verbs(instruction, switches))
+
+
+def checked_against_team(record: StageRecord, instruction: str, scene: SceneObjects, conditions: Sequence[Condition],
+                         team: Sequence[Robot], skills: SkillSet) -> dict[Condition, list[str]]:
+    """Each stated condition with why no plan of ``team`` can meet it (empty where one can), less those out of
+    reach that nobody asked for (:func:`.asked.invented`), which leave the record's output for its
+    ``dropped_goals``: a task is refused for what it asks, not for the model's invention."""
+    problems = {c: scene.world.unattainable([as_goal(c)], team, skills, scene.floor_plan) for c in conditions}
+    dropped = invented(instruction, [c for c, why in problems.items() if why], conditions,
+                       holders_asked(instruction, scene))
+    if dropped:
+        record.dropped_goals = [condition_line(c) for c in dropped]
+        record.output = "".join(line for line in record.output.splitlines(keepends=True)
+                                if line.rstrip("\n") not in record.dropped_goals)
+    return {c: why for c, why in problems.items() if c not in dropped}
 
 
 def holders_asked(instruction: str, scene: SceneObjects) -> list[str]:

@@ -23,13 +23,12 @@ import numpy as np
 
 from ..errors import PlanError, UserError
 from ..files import json_text, write_atomic
-from ..goal_language import condition_line
 from ..plan_language import Plan, parse_plan
 from ..robots import Catalogue, Robot
 from ..scene import SceneObjects
 from ..skills import SkillSet
 from ..worlds import Ai2ThorWorld, World
-from .asked import as_goal, invented, names
+from .asked import names
 from .backends.base import Backend
 from .candidates import Candidates, mean_logprob, write_all
 from .constraints.coalition import LINE as COALITION_LINE
@@ -45,7 +44,7 @@ from .decoding.sampling import Sampling
 from .errands import drop_errands
 from .executable import WORLD_CHECK, for_team
 from .finish_fold import fold_finish
-from .goal_stage import GOAL_CHECK, StatedGoals, holders_asked, state_goals, stated_conditions
+from .goal_stage import GOAL_CHECK, StatedGoals, checked_against_team, holders_asked, state_goals, stated_conditions
 from .idle_steps import drop_idle_steps
 from .in_turn import free_blocks
 from .progress import SILENT, StageProgress
@@ -437,15 +436,9 @@ class Planner:
         record = stated.record
         conditions = stated_conditions(result, scene, record)
         team = self.catalogue.team(result.robots)
-        problems = {c: self.world.unattainable([as_goal(c)], team, self.catalogue.skills, scene.floor_plan)
-                    for c in conditions} if stated.statement else {}
-        dropped = invented(result.instruction, [c for c, why in problems.items() if why], conditions,
-                           holders_asked(result.instruction, scene))
-        if dropped:
-            record.dropped_goals = [condition_line(c) for c in dropped]
-            record.output = "".join(line for line in record.output.splitlines(keepends=True)
-                                    if line.rstrip("\n") not in record.dropped_goals)
-        elif any(problems.values()):
+        problems = checked_against_team(record, result.instruction, scene, conditions, team, self.catalogue.skills) \
+            if stated.statement else {}
+        if any(problems.values()):
             record.refusal, record.refused_by = "; ".join(p for why in problems.values() for p in why), GOAL_CHECK
         if record.refusal is not None:
             result.refusal = record.refusal

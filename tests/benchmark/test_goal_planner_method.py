@@ -12,10 +12,11 @@ import pytest
 from smartllm_local.benchmark.methods import GoalPlanner, make_method
 from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain, starter_domain
-from smartllm_local.goal_language import condition_line
+from smartllm_local.goal_language import condition_line, parse_goal_statement
 from smartllm_local.plan_language import parse_plan
+from smartllm_local.planner.goal_stage import holders_asked
 from smartllm_local.planner.pipeline import Planner
-from smartllm_local.planner.readings import placements
+from smartllm_local.planner.readings import placements, unsettled
 from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.planner.steps import run_steps
 from smartllm_local.worlds import scene_objects, world_of
@@ -103,6 +104,24 @@ def test_a_stated_goal_the_scene_cannot_meet_is_the_planner_s_refusal():
     assert result.refusal is not None and result.refused_by == "planner"
 
 
+def test_a_goal_out_of_reach_that_nobody_asked_for_is_dropped_not_refused_for():
+    """Asked to put the potato in the pot, the 0.5B also stated the pot in a cabinet, which this team cannot open."""
+    task = TASKS["kitchen-17"]
+
+    def planned(instruction: str) -> PlanResult:
+        result = PlanResult(instruction, task.floor_plan, list(task.robots))
+        result.add(StageRecord("goal", output="Pot in Cabinet\nPotato in Pot\n"))
+        GoalPlanner(None, CATALOGUE, time_limit=300, read_steps=False).allocate(task, result)
+        return result
+
+    result = planned(task.instruction)
+    assert result.refusal is None and result.stage("goal").dropped_goals == ["Pot in Cabinet"]
+    assert result.stage("goal").output == "Potato in Pot\n"
+    assert "PutObject" in result.stage("allocation").output and "'Cabinet" not in result.stage("allocation").output
+    asked = planned("Put the potato in the pot and the pot in a cabinet.")  # the cabinet asked for: refused
+    assert asked.refusal is not None and asked.refused_by == "planner" and asked.stage("goal").dropped_goals == []
+
+
 def test_the_oracle_s_plans_run_in_the_executor_with_sr_1(tmp_path):
     # a light and a lettuce (two parts in parallel); a laptop two light robots lift together
     out = tmp_path / "oracle"
@@ -147,8 +166,11 @@ def test_the_goal_stage_on_smollm2_then_the_planner(tmp_path, smollm2, read_step
             record = result.stage("allocation")
             assert record.plan is not None or record.refused_by == "planner" or "holds already" in record.error
             decomposition = result.stages.get("decomposition")
-            placed = placements(decomposition.plan, scene_objects(task.floor_plan), CATALOGUE.skills,
-                                task.instruction) if read_steps and not decomposition.refusal else []
+            scene = scene_objects(task.floor_plan)
+            placed = placements(decomposition.plan, scene, CATALOGUE.skills, task.instruction) \
+                if read_steps and not decomposition.refusal else []
+            stated_conditions = parse_goal_statement(stated.output).conditions
+            placed = unsettled(placed, stated_conditions, holders_asked(task.instruction, scene))  # "to the sofa"
             assert record.placements == [condition_line(c) for c in placed]
 
 
