@@ -124,11 +124,12 @@ def outnamed(instruction: str, types: Sequence[str]) -> set[str]:
 
 def named_as_phrase(instruction: str, object_type: str) -> bool:
     """Whether the instruction says the type's name as a phrase: its words in order ("the desk lamp", "coffee
-    tables"), or a two-word name's last word, "of", then its first ("a bar of soap")."""
+    tables"), a two-word name's words as one ("the basketball", "an armchair"), or its last word, "of", then its
+    first ("a bar of soap")."""
     words = [re.escape(w) for w in _type_words(object_type)]
     phrase = r"\s+".join(f"{w}(?:e?s)?" for w in words)
     if len(words) == 2:
-        phrase += rf"|{words[1]}s?\s+of\s+(?:the\s+|a\s+)?{words[0]}s?"
+        phrase += rf"|{words[0]}{words[1]}s?|{words[1]}s?\s+of\s+(?:the\s+|a\s+)?{words[0]}s?"
     return re.search(rf"\b(?:{phrase})\b", instruction.lower()) is not None
 
 

@@ -194,6 +194,8 @@ def _leave_out(stated: StatedGoals, out: Collection[Condition], field: str) -> S
     return StatedGoals(stated.record, statement)
 
 
+#: Pronouns for the one thing, or all the things, the sentence named before ("put it away", "put them on the bed").
+_IT, _THEM = re.compile(r"\bit\b", re.IGNORECASE), re.compile(r"\b(?:them|both)\b", re.IGNORECASE)
 #: The states a switch's verb asks for ("switch", "turn", "power" name nothing).
 SWITCHED = ("ON", "OFF")
 #: Words that place a thing where it is ("the lamp on the side table").
@@ -255,15 +257,19 @@ def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateW
     """The holders of the scene the instruction asks things into in so many words (the domain's ``[placements]``),
     each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth), and
     those it puts things in by name (``[put]``: "put the potato in the pot", Pot, Potato), where the words name
-    one holder and, in full, some thing that can go in it (not "put it in the drawer", nor "the soap", which may be
-    the bar or the bottle, nor "on the table" beside three)."""
+    one holder and some thing that can go in it, by name or by a pronoun for the one thing (or all the things) the
+    sentence named before ("close the laptop and put it away in the drawer"); not "the soap", which may be the bar
+    or the bottle, nor "on the table" beside three."""
     placed = {holder: _named(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
               for holder, said in states_asked(instruction, words.placements).items() if holder in vocabulary.types}
     holders = {h for hs in vocabulary.holders.values() for h in hs}
-    for things, where in puts(instruction, words.put):
+    for things, where, before in puts(instruction, words.put):
         holder = holder_named(where, holders)
         able = [t for t in vocabulary.types if holder in vocabulary.holders.get(t, ())]
         named = things_named(things, able) if holder else []
+        if holder and not named and (_IT.search(things) or _THEM.search(things)):
+            earlier = things_named(before, able)  # "close the laptop and put it away in the drawer"
+            named = earlier if len(earlier) == 1 or _THEM.search(things) else []
         if holder and named:
             placed[holder] = list(dict.fromkeys([*placed.get(holder, []), *named]))
     return placed

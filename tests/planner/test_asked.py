@@ -13,6 +13,7 @@ from smartllm_local.planner.asked import (
     as_goal,
     coverage,
     invented,
+    named_as_phrase,
     named_in_full,
     names,
     outnamed,
@@ -218,6 +219,15 @@ def test_coverage_is_the_share_of_named_types_some_condition_is_about():
     assert coverage(["SoapBar", "Cloth"], parse_goal_statement("SoapBar in SinkBasin\n").conditions) == 0.5
     assert coverage([], stated) == 1.0
     assert coverage(["Potato"], parse_goal_statement("PotatoSliced in Pan\n").conditions) == 1.0  # a slice of it
+
+
+@pytest.mark.parametrize("instruction, object_type, said", [
+    ("Put the desk lamp on.", "DeskLamp", True), ("a bar of soap", "SoapBar", True),
+    ("the basketball", "BasketBall", True), ("two armchairs", "ArmChair", True),  # a two-word name as one word
+    ("the lamp on the desk", "DeskLamp", False), ("a basket of balls", "BasketBall", False),
+])
+def test_a_type_s_name_is_said_as_a_phrase(instruction, object_type, said):
+    assert named_as_phrase(instruction, object_type) is said
 
 
 @pytest.mark.parametrize("instruction, types, out", [

@@ -362,6 +362,10 @@ def test_every_household_goal_of_a_thing_asked_into_a_holder_puts_it_there_and_t
     ("Put the apple in the sink.", {}),  # the sink or its basin: no one holder named
     ("Put the apple on the table.", {}),  # no table of this scene is "the table" alone
     ("Put it in the fridge.", {}),  # nothing named
+    ("Pick up the apple and put it in the fridge.", {"Fridge": ["Apple"]}),  # the one thing named before
+    ("Take the apple and the egg and put them in the fridge.", {"Fridge": ["Apple", "Egg"]}),
+    ("Wash the apple and the egg and put it in the fridge.", {}),  # which one?
+    ("Slice the apple. Put it in the fridge.", {}),  # another sentence
     ("Put the telly on, the match is about to start.", {}),
     ("Slice the apple and keep the slices in the fridge.", {}),  # "keep" puts nothing that is not there
 ])

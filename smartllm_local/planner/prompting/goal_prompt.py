@@ -40,6 +40,7 @@ PLACEMENTS = "placements"
 PUT, PUT_INTO, PUT_GROUPS = "put", "into", frozenset({"things", "holder"})
 _TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*")
 _CLAUSE = re.compile(r"[,.;:!?]")
+_SENTENCE = re.compile(r"[.;:!?]")
 
 
 @dataclass(frozen=True)
@@ -146,10 +147,12 @@ def without_asking_verbs(instruction: str, patterns: Mapping[str, Sequence[re.Pa
     return text
 
 
-def puts(instruction: str, patterns: Sequence[re.Pattern[str]]) -> list[tuple[str, str]]:
-    """The things put somewhere the instruction names, as (the words naming the things, the words naming where),
-    one pair for each match of ``patterns`` ("put the potato in the pot": "the potato", "pot")."""
-    return [(m["things"], m["holder"]) for p in patterns for m in p.finditer(instruction)]
+def puts(instruction: str, patterns: Sequence[re.Pattern[str]]) -> list[tuple[str, str, str]]:
+    """The things put somewhere the instruction names, as (the words naming the things, the words naming where,
+    the words of the sentence before them), one for each match of ``patterns`` ("close the laptop and put it in
+    the drawer": "it", "drawer", "close the laptop and")."""
+    return [(m["things"], m["holder"], _SENTENCE.split(instruction[:m.start()])[-1])
+            for p in patterns for m in p.finditer(instruction)]
 
 
 def _after_verb(words: str) -> str:
