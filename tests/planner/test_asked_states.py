@@ -100,11 +100,17 @@ def test_a_state_asked_of_named_things_is_said_of_no_other_and_a_withheld_state_
     assert accepts(GoalConstraint(KITCHEN), "Fridge empty\n\n")
 
 
-def test_household_offers_empty_only_where_an_instruction_asks_for_it_and_never_owes_it():
+def test_household_offers_empty_opened_and_closed_only_where_an_instruction_asks_for_them_and_never_owes_empty():
     only = load_state_words(load_domain("household").prompts_dir()).only_where_asked
-    assert set(only) == {"EMPTY"} and "EMPTY" not in PATTERNS
+    assert set(only) == {"EMPTY", "OPENED", "CLOSED"}
+    assert "EMPTY" not in PATTERNS and {"OPENED", "CLOSED"} <= set(PATTERNS)  # those two owed where asked
     assert states_asked("Clear the bed: the book goes on the desk.", only) == {"EMPTY": "the bed"}
     assert states_asked("Put the apple in the fridge.", only) == {}
+    assert states_asked("Close the laptop and put it away in the drawer.", only) == \
+        {"CLOSED": "the laptop and put it away in the drawer"}
+    # asked to put the apple in the fridge, the 0.5B stated the fridge closed; asked to close it, it is owed
+    assert not accepts(GoalConstraint(KITCHEN, withheld={"OPENED", "CLOSED"}), "Apple in Fridge\nFridge closed\n\n")
+    assert accepts(GoalConstraint(KITCHEN, asked={"CLOSED": ["Fridge"]}), "Apple in Fridge\n\nFridge closed\n\n")
 
 
 def test_an_only_where_asked_part_that_is_not_a_table_is_a_clear_error(tmp_path: Path):

@@ -126,7 +126,8 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
             problems.append(f"{where}: does not put in {', '.join(placed)} what its instruction asks into it in so "
                             f"many words ([placements] and [put] of {folder}/{ASKED_STATES})")
         elif not accepts(GoalConstraint(vocabulary, withheld=withheld), written):
-            problems.append(f"{where}: states {', '.join(sorted(withheld))}, which the goal stage offers only where "
+            said = sorted(withheld & {line.split()[-1].upper() for line in written.splitlines() if line.strip()})
+            problems.append(f"{where}: states {', '.join(said)}, which the goal stage offers only where "
                             f"the instruction asks for it ([only_where_asked] of {folder}/{ASKED_STATES}) and this "
                             "one does not")
     return len(examples), problems
