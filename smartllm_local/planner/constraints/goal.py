@@ -44,6 +44,7 @@ from .format import refusal_line
 
 MAX_GOALS = 8
 MAX_HOLDERS = 2  # holders one thing may be said to be in
+PICKED = "PICKED"
 EMPTY = "EMPTY"
 
 
@@ -130,7 +131,7 @@ class GoalConstraint(Constraint):
                 owed += [(holder, [kind]) for kind in named if holder not in said_in.get(kind, ())]
             elif not any(holder in holders for holders in said_in.values()):
                 owed.append((holder, [k for k in self.vocabulary.types if holder in self.vocabulary.holders.get(k, ())
-                                      and len(said_in.get(k, ())) < MAX_HOLDERS]))
+                                      and len(said_in.get(k, ())) < MAX_HOLDERS and k not in self._held()]))
         return owed
 
     def _said_in(self) -> dict[str, set[str]]:
@@ -171,15 +172,20 @@ class GoalConstraint(Constraint):
         return self._choose({}, options)
 
     def _closed_states(self) -> dict[str, set[str]]:
-        """Each type's states no longer offered: those said of it and their opposites, and empty for a holder
-        said to hold a thing."""
-        closed: dict[str, set[str]] = {}
+        """Each type's states no longer offered: those said of it and their opposites, empty for a holder said to
+        hold a thing, and picked (held by a robot, so in no holder) for a thing said or owed to be in one."""
+        closed: dict[str, set[str]] = {kind: {PICKED} for named in self.placed.values() for kind in named}
         for c in self.said:
             if c.state is not None:
                 closed.setdefault(c.subject, set()).update({c.state, OPPOSITES.get(c.state, c.state)})
             else:
                 closed.setdefault(c.subject, set()).add(EMPTY)  # a holder with a thing in it is not empty
+                closed.setdefault(c.item or "", set()).add(PICKED)
         return closed
+
+    def _held(self) -> set[str]:
+        """The things said to be picked: held by a robot at the end, so in no holder."""
+        return {c.subject for c in self.said if c.state == PICKED}
 
     def _asked_of_others(self, kind: str) -> set[str]:
         """The states asked for of things the asking words name, where ``kind`` is not one of them ("warm the
@@ -189,13 +195,13 @@ class GoalConstraint(Constraint):
     def _conditions(self) -> tuple[Node | None, dict[str, Node]]:
         """A condition line of those still to be said (None: none), and the rules it refers to. Types that
         may be followed by the same things share a rule."""
-        said_states, said_in, emptied = self._closed_states(), self._said_in(), self._emptied()
+        said_states, said_in, emptied, held = self._closed_states(), self._said_in(), self._emptied(), self._held()
         groups: dict[tuple[frozenset[str], frozenset[str]], list[str]] = {}
         for kind in self.vocabulary.types:
             states = self.vocabulary.states.get(kind, frozenset()) - said_states.get(kind, set()) - \
                 self._asked_of_others(kind) - self.withheld
             holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set()) - emptied \
-                if len(said_in.get(kind, ())) < MAX_HOLDERS else frozenset()
+                if len(said_in.get(kind, ())) < MAX_HOLDERS and kind not in held else frozenset()
             asked_into = {holder for holder, named in self.placed.items() if kind in named}
             holders = holders & asked_into if asked_into else holders  # "throw the cloth away": only the bin
             if states or holders:
