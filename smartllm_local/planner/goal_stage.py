@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Callable, Collection, Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -21,33 +21,29 @@ from ..robots import Robot
 from ..scene import GoalVocabulary, SceneObjects
 from ..scoring import Condition, condition_holds, containment
 from ..skills import SkillSet
-from ..world.object_types import base_type
 from .asked import (
     as_goal,
     coverage,
     holder_named,
     invented,
     named_in_full,
-    names_a_word,
     outnamed,
     present_yet_refused,
-    things_named,
     unasked,
 )
 from .backends.base import Backend
 from .candidates import mean_logprob, write_all
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .progress import SILENT
-from .prompting.goal_prompt import (
-    GoalExample,
+from .prompting.asked_words import (
     StateWords,
-    goal_prompt,
-    load_goal_examples,
     load_state_words,
-    puts,
+    named_for,
+    placements_asked,
     states_asked,
     without_asking_verbs,
 )
+from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
 from .result import PlanResult, StageRecord
 from .stages import Fitted, fit_prompt, run_stage
 
@@ -194,8 +190,6 @@ def _leave_out(stated: StatedGoals, out: Collection[Condition], field: str) -> S
     return StatedGoals(stated.record, statement)
 
 
-#: Pronouns for the one thing, or all the things, the sentence named before ("put it away", "put them on the bed").
-_IT, _THEM = re.compile(r"\bit\b", re.IGNORECASE), re.compile(r"\b(?:them|both)\b", re.IGNORECASE)
 #: The states a switch's verb asks for ("switch", "turn", "power" name nothing).
 SWITCHED = ("ON", "OFF")
 #: Words that place a thing where it is ("the lamp on the side table").
@@ -222,7 +216,7 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
     several things its words name for a state, those it places where the scene has them (``there``: the scene's
     :func:`standing`)."""
     holders = {holder for holder, _ in there}
-    states = {state: _located(said, _named(said, lambda t, s=state: s in vocabulary.states.get(t, ()), vocabulary),
+    states = {state: _located(said, named_for(said, lambda t, s=state: s in vocabulary.states.get(t, ()), vocabulary),
                               holders, there)
               for state, said in states_asked(instruction, words.asked).items()}
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
@@ -253,28 +247,6 @@ def holders_asked(instruction: str, scene: SceneObjects) -> list[str]:
     return list(placements_asked(instruction, goal_vocabulary(scene), words))
 
 
-def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> dict[str, list[str]]:
-    """The holders of the scene the instruction asks things into in so many words (the domain's ``[placements]``),
-    each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth), and
-    those it puts things in by name (``[put]``: "put the potato in the pot", Pot, Potato), where the words name
-    one holder and some thing that can go in it, by name or by a pronoun for the one thing (or all the things) the
-    sentence named before ("close the laptop and put it away in the drawer"); not "the soap", which may be the bar
-    or the bottle, nor "on the table" beside three."""
-    placed = {holder: _named(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
-              for holder, said in states_asked(instruction, words.placements).items() if holder in vocabulary.types}
-    holders = {h for hs in vocabulary.holders.values() for h in hs}
-    for things, where, before in puts(instruction, words.put):
-        holder = holder_named(where, holders)
-        able = [t for t in vocabulary.types if holder in vocabulary.holders.get(t, ())]
-        named = things_named(things, able) if holder else []
-        if holder and not named and (_IT.search(things) or _THEM.search(things)):
-            earlier = things_named(before, able)  # "close the laptop and put it away in the drawer"
-            named = earlier if len(earlier) == 1 or _THEM.search(things) else []
-        if holder and named:
-            placed[holder] = list(dict.fromkeys([*placed.get(holder, []), *named]))
-    return placed
-
-
 def _located(words: str, named: list[str], holders: Collection[str], there: Collection[tuple[str, str]]) -> list[str]:
     """Of several things named, those in the first holder the words place them in that holds any of them as the
     scene begins ("the lamp on the side table": the DeskLamp standing there, not the FloorLamp); else all."""
@@ -286,14 +258,6 @@ def _located(words: str, named: list[str], holders: Collection[str], there: Coll
         if here:
             return here
     return named
-
-
-def _named(words: str, able: Callable[[str], bool], vocabulary: GoalVocabulary) -> list[str]:
-    """The types a word of the words names (:func:`.asked.names_a_word`) that are ``able`` (can be in the state,
-    or go in the holder, asked for); a slice type only where its whole is not among them ("the potato" is the
-    Potato, not its slices)."""
-    named = [t for t in vocabulary.types if able(t) and names_a_word(words, t)]
-    return [t for t in named if base_type(t) == t or base_type(t) not in named]
 
 
 def _candidate(planner: Planner, backend: Backend, k: int, prompt: Fitted, scene: SceneObjects,

@@ -24,7 +24,7 @@ from smartllm_local.planner.constraints.goal import goal_vocabulary
 from smartllm_local.planner.decoding.sampling import Generated
 from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, asked_of, state_goals, stated_conditions
 from smartllm_local.planner.pipeline import Planner, PlannerConfig
-from smartllm_local.planner.prompting.goal_prompt import load_state_words
+from smartllm_local.planner.prompting.asked_words import load_state_words
 from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects

@@ -29,7 +29,7 @@ from smartllm_local.planner.goal_stage import (
     placed_now,
     standing,
 )
-from smartllm_local.planner.prompting.goal_prompt import load_state_words, states_asked
+from smartllm_local.planner.prompting.asked_words import load_state_words, states_asked
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects, world_of

@@ -22,14 +22,8 @@ from ..constraints.restated import RestatedAllocation, restated_bodies
 from ..constraints.world_check import WorldCheck
 from ..decoding.protocol import REFUSAL_PREFIX
 from ..decoding.writer import accepts
-from ..goal_stage import placements_asked
-from .goal_prompt import (
-    ASKED_STATES,
-    GOAL_FOLDER,
-    load_goal_examples,
-    load_state_words,
-    states_asked,
-)
+from .asked_words import ASKED_STATES, load_state_words, placements_asked, states_asked
+from .goal_prompt import GOAL_FOLDER, load_goal_examples
 from .prompts import STAGES, load_examples
 
 

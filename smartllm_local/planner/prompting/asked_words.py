@@ -1,0 +1,162 @@
+"""What an instruction asks for in so many words, in its domain's ``prompts/goal/asked_states.toml``: the states
+it asks for, those offered only where asked, the holders it asks things into, and the things it puts in a holder it
+names. Read by the goal stage (owed lines, lines left out) and by ``domain check`` (the goal examples)."""
+
+from __future__ import annotations
+
+import functools
+import re
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+from ...errors import UserError
+from ...goal_language import STATE_WORDS
+from ...scene import GoalVocabulary
+from ...world.object_types import base_type
+from ..asked import holder_named, names_a_word, things_named
+from .goal_prompt import GOAL_FOLDER
+
+ASKED_STATES = "asked_states.toml"
+#: The table of ``asked_states.toml`` whose states are offered only where asked for, and never owed.
+ONLY_WHERE_ASKED = "only_where_asked"
+#: The table of ``asked_states.toml`` naming the holders an instruction asks things into in so many words.
+PLACEMENTS = "placements"
+#: The table of ``asked_states.toml`` whose patterns find a thing put in a holder the instruction names: its
+#: ``into`` patterns, each with a ``things`` group and a ``holder`` group.
+PUT, PUT_INTO, PUT_GROUPS = "put", "into", frozenset({"things", "holder"})
+_TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*")
+_CLAUSE = re.compile(r"[,.;:!?]")
+_SENTENCE = re.compile(r"[.;:!?]")
+#: Pronouns for the one thing, or all the things, the sentence named before ("put it away", "put them on the bed").
+_IT, _THEM = re.compile(r"\bit\b", re.IGNORECASE), re.compile(r"\b(?:them|both)\b", re.IGNORECASE)
+
+
+@dataclass(frozen=True)
+class StateWords:
+    """A domain's ``prompts/goal/asked_states.toml``, each state with its patterns (matched case-insensitively
+    against an instruction): ``asked``, the states an instruction asks for in so many words (owed where the model
+    leaves them out); ``only_where_asked``, its ``[only_where_asked]`` table, the states the goal grammar offers only
+    where the instruction asks for them (never owed); ``placements``, its ``[placements]`` table, the holders an
+    instruction asks things into in so many words ("throw the cloth away": the GarbageCan), each thing the asking
+    words name owed a line that puts it there; ``put``, its ``[put]`` table's ``into`` patterns, which find the
+    things put in a holder the instruction names ("put the potato in the pot"), owed the same way."""
+
+    asked: dict[str, tuple[re.Pattern[str], ...]]
+    only_where_asked: dict[str, tuple[re.Pattern[str], ...]]
+    placements: dict[str, tuple[re.Pattern[str], ...]]
+    put: tuple[re.Pattern[str], ...] = ()
+
+
+def load_state_words(prompts: Path) -> StateWords:
+    """The domain's state words (none where there is no such file): ``STATE = ['<regular expression>', ...]`` a
+    line, the same lines under ``[only_where_asked]``, and ``Holder = [...]`` lines under ``[placements]``. Parsed
+    once per text of the file: every goal statement and goal check reads them."""
+    path = prompts / GOAL_FOLDER / ASKED_STATES
+    if not path.is_file():
+        return StateWords({}, {}, {})
+    try:
+        return _parse_state_words(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, TypeError, re.error) as exc:
+        raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...] "
+                        "and each holder under [placements] as Holder = [...], or remove the file") from exc
+
+
+@functools.lru_cache(maxsize=16)
+def _parse_state_words(text: str) -> StateWords:
+    table = tomllib.loads(text)
+    only, placements, put = table.pop(ONLY_WHERE_ASKED, {}), table.pop(PLACEMENTS, {}), table.pop(PUT, {})
+    for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements), (PUT, put)):
+        if not isinstance(part, dict):
+            raise ValueError(f"[{name}] is not a table")
+    into = _patterns(put, PUT_INTO.__eq__, f"'{PUT_INTO}'").get(PUT_INTO, ())
+    if any(set(p.groupindex) != PUT_GROUPS for p in into):
+        raise ValueError(f"each [{PUT}] pattern needs a (?P<things>...) group and a (?P<holder>...) group")
+    return StateWords(_patterns(table), _patterns(only),
+                      _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"), into)
+
+
+def _patterns(table: Mapping[str, Any], known: Callable[[str], object] = STATE_WORDS.__contains__,
+              what: str = f"a state ({', '.join(STATE_WORDS)})") -> dict[str, tuple[re.Pattern[str], ...]]:
+    patterns = {}
+    for key, listed in table.items():
+        if not known(key) or not isinstance(listed, list):
+            raise ValueError(f"{key!r} is not {what} with a list of patterns")
+        patterns[key] = tuple(re.compile(p, re.IGNORECASE) for p in listed)
+    return patterns
+
+
+def states_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> dict[str, str]:
+    """The states the instruction asks for in so many words, each with the words after the asking verb to the end
+    of their clause, which name what is to be in it ("fry the potato in a pan, and ...": COOKED, "the potato in a
+    pan"); the verb names nothing ("switch the TV on" does not ask for the LightSwitch on)."""
+    asked = {}
+    for state, listed in patterns.items():
+        found = [m for p in listed for m in p.finditer(instruction)]
+        if found:
+            asked[state] = " ".join(_after_verb(instruction[m.start():m.end()]) +
+                                    _CLAUSE.split(instruction[m.end():], 1)[0] for m in found).strip()
+    return asked
+
+
+def without_asking_verbs(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> str:
+    """The instruction with the verb of each state it asks for blanked out: the verb names nothing ("switch off the
+    lamp" names no LightSwitch)."""
+    spans = sorted({(m.start(), m.start() + len(m[0].split(maxsplit=1)[0]))
+                    for listed in patterns.values() for p in listed for m in p.finditer(instruction) if m[0].strip()})
+    text = instruction
+    for start, end in reversed(spans):
+        text = text[:start] + " " * (end - start) + text[end:]
+    return text
+
+
+def puts(instruction: str, patterns: Sequence[re.Pattern[str]]) -> list[tuple[str, str, str]]:
+    """The things put somewhere the instruction names, as (the words naming the things, the words naming where,
+    the words of the sentence before them), one for each match of ``patterns`` ("close the laptop and put it in
+    the drawer": "it", "drawer", "close the laptop and")."""
+    return [(m["things"], m["holder"], _SENTENCE.split(instruction[:m.start()])[-1])
+            for p in patterns for m in p.finditer(instruction)]
+
+
+def _after_verb(words: str) -> str:
+    return words.split(maxsplit=1)[1] if " " in words.strip() else ""
+
+
+
+
+def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> dict[str, list[str]]:
+    """The holders of the scene the instruction asks things into in so many words (the domain's ``[placements]``),
+    each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth), and
+    those it puts things in by name (``[put]``: "put the potato in the pot", Pot, Potato), where the words name
+    one holder and some thing that can go in it, by name or by a pronoun for the one thing (or all the things) the
+    sentence named before ("close the laptop and put it away in the drawer"); not "the soap", which may be the bar
+    or the bottle, nor "on the table" beside three."""
+    placed = {holder: named_for(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
+              for holder, said in states_asked(instruction, words.placements).items() if holder in vocabulary.types}
+    holders = {h for hs in vocabulary.holders.values() for h in hs}
+    for things, where, before in puts(instruction, words.put):
+        holder = holder_named(where, holders)
+        able = [t for t in vocabulary.types if holder in vocabulary.holders.get(t, ())]
+        named = things_named(things, able) if holder else []
+        if holder and not named and (_IT.search(things) or _THEM.search(things)):
+            earlier = things_named(before, able)  # "close the laptop and put it away in the drawer"
+            named = earlier if len(earlier) == 1 or _THEM.search(things) else []
+        if holder and named:
+            placed[holder] = list(dict.fromkeys([*placed.get(holder, []), *named]))
+    return placed
+
+
+def named_for(words: str, able: Callable[[str], bool], vocabulary: GoalVocabulary) -> list[str]:
+    """The types a word of the words names (:func:`.asked.names_a_word`) that are ``able`` (can be in the state,
+    or go in the holder, asked for); a slice type only where its whole is not among them ("the potato" is the
+    Potato, not its slices)."""
+    named = [t for t in vocabulary.types if able(t) and names_a_word(words, t)]
+    return [t for t in named if base_type(t) == t or base_type(t) not in named]
+
+
