@@ -140,17 +140,15 @@ class GoalPlanner:
     def allocate(self, task: Task, result: PlanResult) -> None:
         from ..planner.classical.planning import plan_to_goal  # Unified Planning loads only for this method
 
-        team = self.catalogue.team(task.robots)
+        team, scene = self.catalogue.team(task.robots), self.world.scene(result.floor_plan)
         if self.oracle:
             conditions = statement_of(task.goals).conditions
         else:  # less goals out of reach that nobody asked for, as SMART-LLM's goal check leaves them
             goal = result.stage("goal")
             stated = parse_goal_statement(goal.output, where="<goal output>").conditions
-            kept = checked_against_team(goal, result.instruction, self.world.scene(result.floor_plan), stated, team,
-                                        self.catalogue.skills)
+            kept = checked_against_team(goal, result.instruction, scene, stated, team, self.catalogue.skills)
             conditions = [c for c in stated if c in kept]
-        placed = unsettled(self._placements(result), conditions,
-                           holders_asked(result.instruction, self.world.scene(result.floor_plan))) \
+        placed = unsettled(self._placements(result), conditions, holders_asked(result.instruction, scene)) \
             if self.reads_steps(task) else []
         if placed:
             conditions = merge(conditions, placed)

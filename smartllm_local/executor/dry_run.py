@@ -30,7 +30,6 @@ from ai2thor.server import Event, MetadataWrapper, MultiAgentEvent
 from ..robots import Robot
 from ..skills import DEFAULT_SKILL_SET, SkillSet
 from ..world.metadata import AGENT_FIELDS, MetadataEncoder, agent_view
-from ..world.rules import refuses
 from ..world.scenes import floor_plan_name
 from ..world.simulator import ActionResult, Simulator
 from .team_actions import Outcome, TeamWorld
@@ -193,10 +192,6 @@ class DryRun:
     def controller(self) -> Any:
         """This world with the Controller's face, for the executor to run a whole plan in process."""
         return self._thor
-
-    def fits(self, obj: dict[str, Any], receptacle: dict[str, Any]) -> str | None:
-        """Why the world would not let ``obj`` go into ``receptacle``, or None if it would."""
-        return refuses(obj, receptacle)
 
     def succeeds(self, members: Sequence[int], skill_name: str, objects: Sequence[str]) -> Outcome:
         """What the call would do from the current state, which it leaves as it was."""

@@ -37,10 +37,10 @@ from ..world.object_types import (
 #: How many first letters a word of the instruction and a word of a type's name must share.
 PREFIX = 3
 _WORD = re.compile(r"[a-z]+")
-#: Words after which an instruction names where a thing is now, not where it must be ("from the coffee table").
 #: Holders that give what they hold a state (heat, cold, a pan's frying, a basin's rinsing): where a thing goes in
 #: one of them is no mere place ("chill the apple": the fridge; "fry an egg": the pan on the burner).
 STATE_GIVING = HEAT_SOURCES | COLD_SOURCES | RECEPTACLE_ONLY_ACCEPTS["StoveBurner"] | WATER_BASINS
+#: Words after which an instruction names where a thing is now, not where it must be ("from the coffee table").
 ORIGIN = re.compile(r"\b(?:from|out of)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?([a-z]+(?:\s+[a-z]+)?)")
 
 
@@ -71,8 +71,8 @@ def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequen
     its objects, or where one of them is in a goal asked for ("make me a coffee": ``Mug in CoffeeMachine`` is
     named, so ``Mug filled`` is asked for too); but a named thing's place is the model's choice where the instruction
     neither names the holder nor asks for it in so many words (``asked_into``), and the holder gives what it holds
-    no state (:data:`STATE_GIVING`): asked to slice the apple, the 1.5B
-    also put the slices in a bowl, for a team that cannot put anything down."""
+    no state (:data:`STATE_GIVING`): asked to slice the apple, the 1.5B also put the slices in a bowl, for a team
+    that cannot put anything down."""
     asked = _asked(instruction, stated, asked_into)
     if not out_of_reach or any(c in asked and not _placed_by_model(instruction, c, asked_into) for c in out_of_reach):
         return []

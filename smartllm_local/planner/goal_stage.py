@@ -117,8 +117,8 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), goal_examples(planner), planner.backend,
                         GOAL_BUDGET, planner.chat)
     count = planner.config.goal_candidates
-    objects = scene.world.dry_run(scene.floor_plan, planner.catalogue.skills).objects
-    there = placed_now(objects, vocabulary) if planner.config.grammar else frozenset()
+    objects = scene.world.dry_run(scene.floor_plan, planner.catalogue.skills).objects if planner.config.grammar else []
+    there = placed_now(objects, vocabulary)
     asked = asked_of(instruction, vocabulary, load_state_words(planner.world.examples_dir()), standing(objects))
 
     def write(backend: Backend, k: int) -> StatedGoals:

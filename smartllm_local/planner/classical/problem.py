@@ -32,7 +32,7 @@ from ...world.object_types import (
     WATER_BASINS,
     base_type,
 )
-from ...world.rules import basins_of, is_heating, make_pieces
+from ...world.rules import basins_of, is_heating, make_pieces, refuses
 from .model import (
     AFFORDANCE_FLUENTS,
     FIXTURE,
@@ -231,7 +231,7 @@ def _initial_state(problem: Problem, v: Vocabulary, dry: DryRun, chosen: Sequenc
             true("piece_of", t, things[whole])
         if o.get("pickupable"):
             for rid, receptacle in by_id.items():
-                if receptacle.get("receptacle") and rid != oid and dry.fits(dict(o), dict(receptacle)) is None:
+                if receptacle.get("receptacle") and rid != oid and refuses(o, receptacle) is None:
                     true("fits", t, things[rid])
     _robots(problem, v, dry, by_id, things, team)
 

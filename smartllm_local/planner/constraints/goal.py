@@ -122,7 +122,7 @@ class GoalConstraint(Constraint):
     def _unplaced(self) -> list[tuple[str, list[str]]]:
         """The placements asked for that no condition said so far makes: (holder, the things one of which goes
         there), one for each thing named and not yet in it, or one where none is named and nothing is in it."""
-        said_in, emptied = self._said_in(), self._emptied()
+        said_in, emptied, held = self._said_in(), self._emptied(), self._held()
         owed = []
         for holder, named in self.placed.items():
             if holder in emptied:  # said to hold nothing: a line putting a thing in it would contradict that
@@ -131,7 +131,7 @@ class GoalConstraint(Constraint):
                 owed += [(holder, [kind]) for kind in named if holder not in said_in.get(kind, ())]
             elif not any(holder in holders for holders in said_in.values()):
                 owed.append((holder, [k for k in self.vocabulary.types if holder in self.vocabulary.holders.get(k, ())
-                                      and len(said_in.get(k, ())) < MAX_HOLDERS and k not in self._held()]))
+                                      and len(said_in.get(k, ())) < MAX_HOLDERS and k not in held]))
         return owed
 
     def _said_in(self) -> dict[str, set[str]]:

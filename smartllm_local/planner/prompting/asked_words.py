@@ -24,7 +24,8 @@ from ..asked import holder_named, names_a_word, things_named
 from .goal_prompt import GOAL_FOLDER
 
 ASKED_STATES = "asked_states.toml"
-#: The table of ``asked_states.toml`` whose states are offered only where asked for, and never owed.
+#: The table of ``asked_states.toml`` whose states are offered only where asked for (owed only where the file's
+#: first table has them too).
 ONLY_WHERE_ASKED = "only_where_asked"
 #: The table of ``asked_states.toml`` naming the holders an instruction asks things into in so many words.
 PLACEMENTS = "placements"
@@ -43,10 +44,11 @@ class StateWords:
     """A domain's ``prompts/goal/asked_states.toml``, each state with its patterns (matched case-insensitively
     against an instruction): ``asked``, the states an instruction asks for in so many words (owed where the model
     leaves them out); ``only_where_asked``, its ``[only_where_asked]`` table, the states the goal grammar offers only
-    where the instruction asks for them (never owed); ``placements``, its ``[placements]`` table, the holders an
-    instruction asks things into in so many words ("throw the cloth away": the GarbageCan), each thing the asking
-    words name owed a line that puts it there; ``put``, its ``[put]`` table's ``into`` patterns, which find the
-    things put in a holder the instruction names ("put the potato in the pot"), owed the same way."""
+    where the instruction asks for them (owed only where ``asked`` has them too); ``placements``, its
+    ``[placements]`` table, the holders an instruction asks things into in so many words ("throw the cloth away":
+    the GarbageCan), each thing the asking words name owed a line that puts it there; ``put``, its ``[put]`` table's
+    ``into`` patterns, which find the things put in a holder the instruction names ("put the potato in the pot"),
+    owed the same way."""
 
     asked: dict[str, tuple[re.Pattern[str], ...]]
     only_where_asked: dict[str, tuple[re.Pattern[str], ...]]
@@ -56,8 +58,9 @@ class StateWords:
 
 def load_state_words(prompts: Path) -> StateWords:
     """The domain's state words (none where there is no such file): ``STATE = ['<regular expression>', ...]`` a
-    line, the same lines under ``[only_where_asked]``, and ``Holder = [...]`` lines under ``[placements]``. Parsed
-    once per text of the file: every goal statement and goal check reads them."""
+    line, the same lines under ``[only_where_asked]``, ``Holder = [...]`` lines under ``[placements]``, and
+    ``into = [...]`` under ``[put]``. Parsed once per text of the file: every goal statement and goal check reads
+    them."""
     path = prompts / GOAL_FOLDER / ASKED_STATES
     if not path.is_file():
         return StateWords({}, {}, {})
@@ -65,7 +68,8 @@ def load_state_words(prompts: Path) -> StateWords:
         return _parse_state_words(path.read_text(encoding="utf-8"))
     except (OSError, ValueError, TypeError, re.error) as exc:
         raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...] "
-                        "and each holder under [placements] as Holder = [...], or remove the file") from exc
+                        "each holder under [placements] as Holder = [...] and the [put] patterns as into = [...], "
+                        "or remove the file") from exc
 
 
 @functools.lru_cache(maxsize=16)
@@ -128,8 +132,6 @@ def _after_verb(words: str) -> str:
     return words.split(maxsplit=1)[1] if " " in words.strip() else ""
 
 
-
-
 def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> dict[str, list[str]]:
     """The holders of the scene the instruction asks things into in so many words (the domain's ``[placements]``),
     each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth), and
@@ -158,5 +160,3 @@ def named_for(words: str, able: Callable[[str], bool], vocabulary: GoalVocabular
     Potato, not its slices)."""
     named = [t for t in vocabulary.types if able(t) and names_a_word(words, t)]
     return [t for t in named if base_type(t) == t or base_type(t) not in named]
-
-

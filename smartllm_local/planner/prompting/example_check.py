@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from ...domain import Domain
 from ...errors import SmartLLMError
+from ...goal_language import parse_goal_statement
 from ...plan_language import parse_plan
 from ...scoring import parse_goals, score_execution
 from ...worlds import world_of
@@ -120,7 +121,8 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
             problems.append(f"{where}: does not put in {', '.join(placed)} what its instruction asks into it in so "
                             f"many words ([placements] and [put] of {folder}/{ASKED_STATES})")
         elif not accepts(GoalConstraint(vocabulary, withheld=withheld), written):
-            said = sorted(withheld & {line.split()[-1].upper() for line in written.splitlines() if line.strip()})
+            stated = parse_goal_statement(written, types=vocabulary.types).conditions
+            said = sorted(withheld & {c.state for c in stated})
             problems.append(f"{where}: states {', '.join(said)}, which the goal stage offers only where "
                             f"the instruction asks for it ([only_where_asked] of {folder}/{ASKED_STATES}) and this "
                             "one does not")
