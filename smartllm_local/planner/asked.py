@@ -126,11 +126,27 @@ def named_as_phrase(instruction: str, object_type: str) -> bool:
     """Whether the instruction says the type's name as a phrase: its words in order ("the desk lamp", "coffee
     tables"), a two-word name's words as one ("the basketball", "an armchair"), or its last word, "of", then its
     first ("a bar of soap")."""
+    return _phrase(object_type).search(instruction.lower()) is not None
+
+
+def named_apart(instruction: str, object_type: str, types: Sequence[str]) -> bool:
+    """Whether the instruction names the type (:func:`names`) in words that are not part of the phrase of another
+    name among ``types`` not within its own ("switch off the desk lamp" names no Desk, "the coffee machine" no
+    CoffeeTable; "the sink" may be the SinkBasin)."""
+    words = set(_type_words(object_type))
+    text = instruction.lower()
+    for other in types:
+        if not set(_type_words(other)) <= words:
+            text = _phrase(other).sub(" ", text)
+    return names(text, object_type)
+
+
+def _phrase(object_type: str) -> re.Pattern[str]:
     words = [re.escape(w) for w in _type_words(object_type)]
     phrase = r"\s+".join(f"{w}(?:e?s)?" for w in words)
     if len(words) == 2:
         phrase += rf"|{words[0]}{words[1]}s?|{words[1]}s?\s+of\s+(?:the\s+|a\s+)?{words[0]}s?"
-    return re.search(rf"\b(?:{phrase})\b", instruction.lower()) is not None
+    return re.compile(rf"\b(?:{phrase})\b")
 
 
 def things_named(words: str, types: Sequence[str]) -> list[str]:

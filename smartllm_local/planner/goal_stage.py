@@ -21,18 +21,22 @@ from ..robots import Robot
 from ..scene import GoalVocabulary, SceneObjects
 from ..scoring import Condition, condition_holds, containment
 from ..skills import SkillSet
+from ..world.object_types import base_type
 from .asked import (
     as_goal,
     coverage,
     holder_named,
     invented,
+    named_apart,
     named_in_full,
+    names,
     outnamed,
     present_yet_refused,
     unasked,
 )
 from .backends.base import Backend
 from .candidates import mean_logprob, write_all
+from .constraints.finish import Said
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .progress import SILENT
 from .prompting.asked_words import (
@@ -245,6 +249,27 @@ def holders_asked(instruction: str, scene: SceneObjects) -> list[str]:
     GarbageCan), in its world's ``[placements]`` and ``[put]``."""
     words = load_state_words(scene.world.examples_dir())
     return list(placements_asked(instruction, goal_vocabulary(scene), words))
+
+
+def said_of(instruction: str, scene: SceneObjects, goals: Sequence[Condition]) -> Said:
+    """What the instruction says of the stated ``goals``, for the planner's last sub-task: those whose thing it
+    names; those its words ask for (a state asked, of a thing they name or, naming none, of any; a thing put in a
+    holder they name, where they name no thing or name it); the holders it names (not by a word of another thing's
+    name) or asks things into, each with the things asked into it."""
+    vocabulary = goal_vocabulary(scene)
+    asked = asked_of(instruction, vocabulary, load_state_words(scene.world.examples_dir()))
+    holders = {t: tuple(asked.placements.get(t, ())) for t in scene.types_for("receptacle")
+               if t in asked.placements or named_apart(instruction, t, vocabulary.types)}
+
+    def owed(c: Condition) -> bool:
+        if c.item is not None:
+            things = asked.placements.get(c.subject)
+            return things is not None and (not things or base_type(c.item) in things or c.item in things)
+        things = asked.states.get(c.state or "")
+        return things is not None and (not things or c.subject in things)
+
+    return Said(asked=tuple(c for c in goals if names(instruction, c.item or c.subject)),
+                owed=tuple(c for c in goals if owed(c)), holders=holders)
 
 
 def _located(words: str, named: list[str], holders: Collection[str], there: Collection[tuple[str, str]]) -> list[str]:

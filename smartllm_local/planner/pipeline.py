@@ -28,12 +28,12 @@ from ..robots import Catalogue, Robot
 from ..scene import SceneObjects
 from ..skills import SkillSet
 from ..worlds import Ai2ThorWorld, World
-from .asked import names
 from .backends.base import Backend
 from .candidates import Candidates, mean_logprob, write_all
 from .constraints.coalition import LINE as COALITION_LINE
 from .constraints.coalition import CoalitionConstraint
 from .constraints.feasibility import function_needs
+from .constraints.finish import Said
 from .constraints.format import MAX_SUBTASKS
 from .constraints.plan import PlanConstraint
 from .constraints.repair import Repairer
@@ -44,7 +44,7 @@ from .decoding.sampling import Sampling
 from .errands import drop_errands
 from .executable import WORLD_CHECK, for_team
 from .finish_fold import fold_finish
-from .goal_stage import GOAL_CHECK, StatedGoals, checked_against_team, holders_asked, state_goals, stated_conditions
+from .goal_stage import GOAL_CHECK, StatedGoals, checked_against_team, said_of, state_goals, stated_conditions
 from .idle_steps import drop_idle_steps
 from .in_turn import free_blocks
 from .progress import SILENT, StageProgress
@@ -217,12 +217,9 @@ class Planner:
         goals = stated_conditions(result, scene) if config.stop_at_goals or config.finish_goals else []
         repairer = Repairer(world, skills) if world is not None and (config.repair or config.finish_goals) \
             and Repairer.fits(world) else None
-        asked = [c for c in goals if names(result.instruction, c.item or c.subject)]
-        asked_into = holders_asked(result.instruction, scene) if config.finish_goals else []
-        named_holders = [t for t in scene.types_for("receptacle") if names(result.instruction, t) or t in asked_into]
+        said = said_of(result.instruction, scene, goals) if config.finish_goals else Said()
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
-                                    for_team=team, goals=goals, asked=asked, named_holders=named_holders,
-                                    repairer=repairer,
+                                    for_team=team, goals=goals, said=said, repairer=repairer,
                                     stop=config.stop_at_goals, repair=config.repair,
                                     finish=config.finish_goals) if config.grammar else None
         rng = self.stage_rng(result, record.stage if k == 0 else f"{record.stage} candidate {k}")

@@ -17,7 +17,7 @@ from ..scene import SceneObjects
 from ..scoring import Condition
 from ..skills import SkillSet
 from ..world.object_types import base_type
-from .asked import names
+from .asked import named_apart
 from .constraints.format import MAX_SUBTASKS
 from .constraints.world_check import WorldCheck, held
 from .verifier import run_subtasks
@@ -25,15 +25,17 @@ from .verifier import run_subtasks
 
 def placements(plan: Plan, scene: SceneObjects, skills: SkillSet, instruction: str) -> list[Condition]:
     """Where the decomposition's dry run (a robot per sub-task, in order) puts the things the instruction names,
-    in holders it names too: one ``Holder contains Thing`` per thing in a holder it was not in before (a slice
-    counts as its whole; a thing carried or let fall is in none). A holder the instruction never names is the
+    in holders it names too (not by a word of another thing's name: "the desk lamp" names no desk, "the potato" no
+    pot): one ``Holder contains Thing`` per thing in a holder it was not in before (a slice counts as its whole; a
+    thing carried or let fall is in none). A holder the instruction never names is the
     steps' means (a potato warmed in a mug because the microwave is out of reach), not what was asked."""
     world = WorldCheck(scene, skills, MAX_SUBTASKS)
     before = held(world.objects())
     run_subtasks(world, plan)
     after = held(world.objects())
+    types = scene.types
     return sorted({Condition(holder, item=item) for (item, holder) in after - before
-                   if names(instruction, item) and names(instruction, holder)},
+                   if named_apart(instruction, item, types) and named_apart(instruction, holder, types)},
                   key=lambda c: (c.item or "", c.subject))
 
 
@@ -41,7 +43,7 @@ def may_place(instruction: str, scene: SceneObjects) -> bool:
     """Whether :func:`placements` could find anything here: it reads only holders the instruction names, so an
     instruction that names none of the scene's receptacles (the only things that hold others) has no steps worth
     writing for it ("chop the lettuce and switch the light off")."""
-    return any(names(instruction, holder) for holder in scene.types_for("receptacle"))
+    return any(named_apart(instruction, holder, scene.types) for holder in scene.types_for("receptacle"))
 
 
 def merge(stated: Sequence[Condition], placed: Sequence[Condition]) -> list[Condition]:

@@ -13,6 +13,7 @@ from smartllm_local.planner.asked import (
     as_goal,
     coverage,
     invented,
+    named_apart,
     named_as_phrase,
     named_in_full,
     names,
@@ -22,7 +23,14 @@ from smartllm_local.planner.asked import (
 )
 from smartllm_local.planner.constraints.goal import goal_vocabulary
 from smartllm_local.planner.decoding.sampling import Generated
-from smartllm_local.planner.goal_stage import GOAL_CHECK, StatedGoals, asked_of, state_goals, stated_conditions
+from smartllm_local.planner.goal_stage import (
+    GOAL_CHECK,
+    StatedGoals,
+    asked_of,
+    said_of,
+    state_goals,
+    stated_conditions,
+)
 from smartllm_local.planner.pipeline import Planner, PlannerConfig
 from smartllm_local.planner.prompting.asked_words import load_state_words
 from smartllm_local.planner.result import PlanResult, StageRecord
@@ -243,6 +251,33 @@ def test_a_type_s_name_is_said_as_a_phrase(instruction, object_type, said):
 ])
 def test_a_type_a_word_of_whose_name_belongs_to_another_named_as_a_phrase_is_outnamed(instruction, types, out):
     assert outnamed(instruction, types) == out
+
+
+@pytest.mark.parametrize("instruction, object_type, named", [
+    ("Switch off the desk lamp.", "Desk", False),
+    ("Put the book on the desk and switch off the desk lamp.", "Desk", True),
+    ("Put the mug in the coffee machine.", "CoffeeTable", False), ("Put the mug on the table.", "DiningTable", True),
+    ("Put the pillow on the armchair.", "Chair", False), ("Put the laptop on the desk.", "Desk", True),
+])
+def test_a_type_is_named_apart_only_in_words_no_longer_name_said_as_a_phrase_holds(instruction, object_type, named):
+    types = ["Desk", "DeskLamp", "CoffeeMachine", "CoffeeTable", "DiningTable", "Chair", "ArmChair", "Mug"]
+    assert named_apart(instruction, object_type, types) is named
+
+
+def test_what_the_instruction_says_of_the_stated_goals_is_what_its_words_ask():
+    """Asked for a coffee and the apple in the fridge, both the mug's place and its filling are owed (the words ask
+    for a coffee, whatever mug holds it), the fridge is named for the apple only; a stated place the words do not
+    ask for is not owed. "Switch off the desk lamp" names no desk to put the laptop on."""
+    coffee = [Condition("Fridge", item="Apple"), Condition("CoffeeMachine", item="Mug"), Condition("Mug", "FILLED"),
+              Condition("CounterTop", item="Bread")]
+    said = said_of("Make me a coffee and put the apple in the fridge.", scene_objects(6), coffee)
+    assert said.owed == tuple(coffee[:3]) and said.asked == (coffee[0],)
+    assert said.holders["Fridge"] == ("Apple",) and said.holders["CoffeeMachine"] == ()
+    assert said.meant_for("Mug") == {"CoffeeMachine"} and "Fridge" in said.meant_for("Apple")
+    laptop = [Condition("Drawer", item="Laptop"), Condition("Laptop", "CLOSED"), Condition("DeskLamp", "OFF")]
+    said = said_of("Close the laptop and put it away in the nightstand drawer, and switch off the desk lamp.",
+                   scene_objects(310), laptop)
+    assert said.owed == tuple(laptop) and set(said.holders) == {"Drawer"}
 
 
 class _Prefers(FakeBackend):

@@ -5,21 +5,24 @@ stated goals that do not hold in the dry run and that the plan left open go to t
 :mod:`.repair`): a thing's place where none of its calls put the thing anywhere, a state where none acted on it
 (goals it forgot: the newspaper pushed, never thrown out; the credit card for the box let fall on the desk; where it
 put the thing somewhere, or acted on the one whose state is stated, the plan has its own idea of it, and a statement
-that contradicts the plan is as likely wrong as the plan).
+that contradicts the plan is as likely wrong as the plan), and every goal the instruction asks for in so many words,
+whatever the plan did (:class:`Said`: the words outrank both; asked to put three things on the bed, the 0.5B put the
+basketball on the floor it was asked to pick it up off, and ended).
 For a robot no sub-task has used, its shortest plan that meets them all and ends with empty hands is written as one
 more sub-task, called after the model's orchestration, so it starts from the state the model's sub-tasks leave (the
-state it was planned from), every step succeeding in the dry run. Where no plan meets them all in the steps and
-budget a sub-task has (a wrong goal stated beside a right one: "CounterTop empty" beside "Plunger in GarbageCan" for
-"throw the old plunger out"), the most of those whose thing the instruction names are met (each alone first, then
-the largest sets of those met alone, in the order stated), for at most :data:`MOST_SUBSETS` goals left (beyond that,
-all or nothing: each set is a search). A goal on a thing nobody named ("TennisRacket in Bed" for "the bed is a
-mess") is met only with every other goal left: a statement wrong enough to hold a goal no plan meets holds others as
-wrong.
+state it was planned from), every step succeeding in the dry run. Where no plan meets them all in twice the steps
+of a sub-task of the model's (:data:`LONGER`) and in the budget (a wrong goal stated beside a right one:
+"CounterTop empty" beside "Plunger in GarbageCan" for "throw the old plunger out"), the most of those whose thing
+the instruction names are met (each alone first, then the largest sets of those met alone, in the order stated), for
+at most :data:`MOST_SUBSETS` goals left (beyond that, all or nothing: each set is a search). A goal on a thing nobody
+named ("TennisRacket in Bed" for "the bed is a mess") is met only with every other goal left: a statement wrong
+enough to hold a goal no plan meets holds others as wrong.
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection, Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from itertools import combinations
 from typing import Any
 
@@ -37,30 +40,50 @@ from .world_check import WorldCheck, held
 NAME = "meet_goals"
 #: The most goals left for which smaller sets are sought when no plan meets them all.
 MOST_SUBSETS = 4
+#: How many times a model's sub-task's steps the planner's may take: its steps are Fast Downward's shortest plan,
+#: checked in the dry run as written, not a model's that may wander (frying the potato and putting the bread in
+#: the fridge, both left to it, take 14 steps).
+LONGER = 2
+
+
+@dataclass(frozen=True)
+class Said:
+    """What the instruction says of the stated goals, as the planner's last sub-task reads it: ``asked``, the goals
+    whose thing it names; ``owed``, those it asks for in so many words (a state, a thing put where it names), which no
+    plan's idea overrules; ``holders``, the holders it names (not by a word of another thing's name: the desk lamp's
+    desk is no desk), each with the things its words put there (none: any thing)."""
+
+    asked: tuple[Condition, ...] = ()
+    owed: tuple[Condition, ...] = ()
+    holders: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+
+    def meant_for(self, thing: str) -> set[str]:
+        """The holders named that the words may mean ``thing`` to go in: not one they put other things in only
+        ("put the apple in the fridge" names the fridge for the apple, not for the mug)."""
+        return {holder for holder, things in self.holders.items() if not things or thing in things}
 
 
 class Finish:
     """One decomposition's last sub-task, sought once its model has ended (``made``: what was written)."""
 
     def __init__(self, repairer: Repairer, candidates: Candidates, whole: WholeTeam | None,
-                 goals: Sequence[Condition], max_steps: int, skills: dict[str, Skill],
-                 asked: Sequence[Condition] = (), named_holders: Collection[str] = ()):
+                 goals: Sequence[Condition], max_steps: int, skills: dict[str, Skill], said: Said = Said()):
         self.repairer, self.candidates, self.whole, self.goals, self.max_steps, self.skills = \
-            repairer, candidates, whole, list(goals), max_steps, skills
-        self.asked = list(asked)  # the goals whose thing the instruction names
-        self.named_holders = frozenset(named_holders)  # the holders it names
+            repairer, candidates, whole, list(goals), max_steps * LONGER, skills
+        self.said = said
         self.made: dict[str, Any] | None = None
 
     def text(self, world: WorldCheck, k: int, room: int, acted: set[str], put: set[str]) -> str | None:
         """Sub-task ``k`` (its definition and its call) within ``room`` characters, or None: no goal left
-        unmet that the plan left open (a thing's place where none of the types ``put`` somewhere was it, or where
-        it was put only in holders the instruction does not name while the goal's holder is named; a state
-        where none ``acted`` on was it), no robot left for it, or no plan that meets any."""
-        left = [c for c in self.goals if not world.met([c]) and (self._left_open(world, c, put) if c.item
-                                                                 else base_type(c.subject) not in acted)]
+        unmet that the instruction owes or the plan left open (a thing's place where none of the types ``put``
+        somewhere was it, or where it was put only in holders the instruction does not name for it while the
+        goal's holder is named; a state where none ``acted`` on was it), no robot left for it, or no plan that
+        meets any."""
+        left = [c for c in self.goals if not world.met([c]) and (
+            c in self.said.owed or (self._left_open(world, c, put) if c.item else base_type(c.subject) not in acted))]
         if not left or k > len(world.run.team):
             return None
-        met = self._meet(k - 1, left)
+        met = self._meet(k - 1, left, [c for c in self.goals if world.met([c])])
         if met is None:
             return None
         unmet, found = met
@@ -75,30 +98,31 @@ class Finish:
 
     def _left_open(self, world: WorldCheck, goal: Condition, put: set[str]) -> bool:
         """Whether the plan left a thing's place open: it never put the thing anywhere (it let it fall, or never
-        carried it), or it put it only where the instruction names no holder (the book for the desk put on the
-        floor) while it names the goal's."""
+        carried it), or it put it only where the instruction names no holder for it (the book for the desk put on
+        the floor; the mug for the coffee machine in the fridge named for the apple) while it names the goal's."""
         thing = base_type(goal.item or "")
         if thing not in put:
             return True
         holders = {holder for kind, holder in held(world.objects()) if kind == thing}
-        return goal.subject in self.named_holders and not holders & self.named_holders
+        return goal.subject in self.said.holders and not holders & self.said.meant_for(thing)
 
-    def _meet(self, member: int, left: Sequence[Condition]) -> tuple[list[Condition], Repair] | None:
-        """The most goals of ``left`` one plan meets, and that plan: all of them; failing that (for a few), of
-        those whose thing the instruction names, each alone, then the largest sets of those met alone, in the order
-        stated."""
+    def _meet(self, member: int, left: Sequence[Condition],
+              holding: Sequence[Condition]) -> tuple[list[Condition], Repair] | None:
+        """The most goals of ``left`` one plan meets, and that plan: all of them, keeping the goals ``holding`` if
+        it can (the drawer closed again once the laptop is in it); failing that (for a few), of those whose thing
+        the instruction names, each alone, then the largest sets of those met alone, in the order stated."""
         whole = self.whole
 
         def meet(goals: Sequence[Condition]) -> Repair | None:
             return self.repairer.meet(member, goals, self.max_steps, allows=whole.can if whole else None,
                                       skills=whole.skills if whole else None)
 
-        every = meet(left)
+        every = (meet([*left, *holding]) if holding else None) or meet(left)
         if every is not None:
             return list(left), every
         if len(left) > MOST_SUBSETS:
             return None
-        alone = {n: plan for n, c in enumerate(left) if c in self.asked and (plan := meet([c])) is not None}
+        alone = {n: plan for n, c in enumerate(left) if c in self.said.asked and (plan := meet([c])) is not None}
         for size in range(len(alone) - (len(alone) == len(left)), 1, -1):
             for chosen in combinations(sorted(alone), size):
                 if (plan := meet([left[n] for n in chosen])) is not None:

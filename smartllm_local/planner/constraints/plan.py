@@ -32,7 +32,7 @@ decomposition's.
 from __future__ import annotations
 
 import re
-from collections.abc import Collection, Sequence
+from collections.abc import Sequence
 
 from ...robots import Robot
 from ...scene import SceneObjects
@@ -45,7 +45,7 @@ from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, Rewr
 from .budget import Budget
 from .candidates import Candidates
 from .feasibility import Step, WholeTeam
-from .finish import Finish
+from .finish import Finish, Said
 from .format import (
     COMMENT_LEN,
     INDENT,
@@ -103,7 +103,7 @@ class PlanConstraint(Orchestration, Constraint):
         world: WorldCheck | None = None,
         for_team: Sequence[Robot] | None = None,
         goals: Sequence[Condition] = (),
-        asked: Sequence[Condition] = (), named_holders: Collection[str] = (),
+        said: Said = Said(),
         repairer: Repairer | None = None,
         stop: bool = True,
         repair: bool = True,
@@ -116,11 +116,10 @@ class PlanConstraint(Orchestration, Constraint):
         ``stop``, once they all hold in the dry run, no further sub-task is begun. ``repairer`` (a decomposition's,
         with a world check): with ``repair``, a call that fails where the function stands is offered too, and
         written after the planner's steps that enable it (see :mod:`.repair`); with ``finish`` and goals, the goals
-        the plan leaves unmet are met by a last sub-task of the planner's (:mod:`.finish`, which reads ``asked``,
-        the goals whose thing the instruction names, and ``named_holders``). ``together`` (an allocation's): a
-        function that can join the block of threads being written joins it (no direct call, no start, where a
-        thread is offered), and a restated body brings in no robot it can do without, so the plan has as few
-        transitions as the order of its functions allows."""
+        the plan leaves unmet are met by a last sub-task of the planner's (:mod:`.finish`, which reads what the
+        instruction ``said`` of them). ``together`` (an allocation's): a function that can join the block of threads
+        being written joins it (no direct call, no start, where a thread is offered), and a restated body brings in
+        no robot it can do without, so the plan has as few transitions as the order of its functions allows."""
         super().__init__()
         if team is not None:
             team_size = len(team)
@@ -134,8 +133,7 @@ class PlanConstraint(Orchestration, Constraint):
         self.max_steps = max(2, max_steps)
         self.allow_refusal = allow_refusal
         self.scene, self.world = scene, world
-        self.goals, self.asked, self.named_holders = (list(goals), list(asked), frozenset(named_holders)) \
-            if world is not None else ([], [], frozenset())
+        self.goals, self.said = (list(goals), said) if world is not None else ([], Said())
         self.stop = stop
         self.joins = together and self.allocated
         self.ended_at_goals = False  # a sub-task was withheld: the goals held
@@ -195,7 +193,7 @@ class PlanConstraint(Orchestration, Constraint):
         if repairer is not None and repair:
             self.repairs = Repairs(repairer, self.candidates, self.whole, self.max_steps, self.by_name)
         self.finish = Finish(repairer, self.candidates, self.whole, self.goals, self.max_steps, self.by_name,
-                             self.asked, self.named_holders) \
+                             self.said) \
             if repairer is not None and finish and self.goals and not self.summary else None
         self.finish_text = ""  # the planner's last sub-task, once found
 
