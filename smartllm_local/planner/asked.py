@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Collection, Iterable, Sequence
+from functools import cache
 
 from ..goal_language import name_words
 from ..scoring import Condition, Goal
@@ -141,6 +142,7 @@ def named_apart(instruction: str, object_type: str, types: Sequence[str]) -> boo
     return names(text, object_type)
 
 
+@cache
 def _phrase(object_type: str) -> re.Pattern[str]:
     words = [re.escape(w) for w in _type_words(object_type)]
     phrase = r"\s+".join(f"{w}(?:e?s)?" for w in words)

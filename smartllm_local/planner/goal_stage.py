@@ -251,13 +251,15 @@ def holders_asked(instruction: str, scene: SceneObjects) -> list[str]:
     return list(placements_asked(instruction, goal_vocabulary(scene), words))
 
 
-def said_of(instruction: str, scene: SceneObjects, goals: Sequence[Condition]) -> Said:
+def said_of(instruction: str, scene: SceneObjects, goals: Sequence[Condition],
+            objects: Sequence[Mapping[str, Any]] = ()) -> Said:
     """What the instruction says of the stated ``goals``, for the planner's last sub-task: those whose thing it
-    names; those its words ask for (a state asked, of a thing they name or, naming none, of any; a thing put in a
-    holder they name, where they name no thing or name it); the holders it names (not by a word of another thing's
+    names; those its words ask for, read as the goal stage reads them (:func:`asked_of`, with where the scene's
+    ``objects`` stand as it begins): a state asked, of a thing they name or, naming none, of any; a thing put in a
+    holder they name, where they name no thing or name it; the holders it names (not by a word of another thing's
     name) or asks things into, each with the things asked into it."""
     vocabulary = goal_vocabulary(scene)
-    asked = asked_of(instruction, vocabulary, load_state_words(scene.world.examples_dir()))
+    asked = asked_of(instruction, vocabulary, load_state_words(scene.world.examples_dir()), standing(objects))
     holders = {t: tuple(asked.placements.get(t, ())) for t in scene.types_for("receptacle")
                if t in asked.placements or named_apart(instruction, t, vocabulary.types)}
 

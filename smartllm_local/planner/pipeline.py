@@ -217,7 +217,8 @@ class Planner:
         goals = stated_conditions(result, scene) if config.stop_at_goals or config.finish_goals else []
         repairer = Repairer(world, skills) if world is not None and (config.repair or config.finish_goals) \
             and Repairer.fits(world) else None
-        said = said_of(result.instruction, scene, goals) if config.finish_goals else Said()
+        said = said_of(result.instruction, scene, goals, world.objects() if world is not None else ()) \
+            if config.finish_goals else Said()
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
                                     for_team=team, goals=goals, said=said, repairer=repairer,
                                     stop=config.stop_at_goals, repair=config.repair,

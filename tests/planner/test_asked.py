@@ -267,7 +267,8 @@ def test_a_type_is_named_apart_only_in_words_no_longer_name_said_as_a_phrase_hol
 def test_what_the_instruction_says_of_the_stated_goals_is_what_its_words_ask():
     """Asked for a coffee and the apple in the fridge, both the mug's place and its filling are owed (the words ask
     for a coffee, whatever mug holds it), the fridge is named for the apple only; a stated place the words do not
-    ask for is not owed. "Switch off the desk lamp" names no desk to put the laptop on."""
+    ask for is not owed. "Switch off the desk lamp" names no desk to put the laptop on. Of two lamps, the one the words
+    place on the side table is owed where the scene's objects say which stands there, as the goal stage reads it."""
     coffee = [Condition("Fridge", item="Apple"), Condition("CoffeeMachine", item="Mug"), Condition("Mug", "FILLED"),
               Condition("CounterTop", item="Bread")]
     said = said_of("Make me a coffee and put the apple in the fridge.", scene_objects(6), coffee)
@@ -278,6 +279,10 @@ def test_what_the_instruction_says_of_the_stated_goals_is_what_its_words_ask():
     said = said_of("Close the laptop and put it away in the nightstand drawer, and switch off the desk lamp.",
                    scene_objects(310), laptop)
     assert said.owed == tuple(laptop) and set(said.holders) == {"Drawer"}
+    lamps, living = [Condition("FloorLamp", "OFF"), Condition("DeskLamp", "OFF")], scene_objects(201)
+    standing = living.world.dry_run(living.floor_plan, CATALOGUE.skills).objects  # as the goal stage reads it
+    assert said_of("Switch off the lamp on the side table.", living, lamps, standing).owed == (lamps[1],)
+    assert said_of("Switch off the lamp on the side table.", living, lamps).owed == tuple(lamps)  # nowhere stands
 
 
 class _Prefers(FakeBackend):

@@ -79,11 +79,12 @@ class Finish:
         somewhere was it, or where it was put only in holders the instruction does not name for it while the
         goal's holder is named; a state where none ``acted`` on was it), no robot left for it, or no plan that
         meets any."""
-        left = [c for c in self.goals if not world.met([c]) and (
+        holding = [c for c in self.goals if world.met([c])]
+        left = [c for c in self.goals if c not in holding and (
             c in self.said.owed or (self._left_open(world, c, put) if c.item else base_type(c.subject) not in acted))]
         if not left or k > len(world.run.team):
             return None
-        met = self._meet(k - 1, left, [c for c in self.goals if world.met([c])])
+        met = self._meet(k - 1, left, holding)
         if met is None:
             return None
         unmet, found = met
