@@ -75,13 +75,16 @@ def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequen
     no state (:data:`STATE_GIVING`): asked to slice the apple, the 1.5B also put the slices in a bowl, for a team
     that cannot put anything down."""
     asked = _asked(instruction, stated, asked_into)
-    if not out_of_reach or any(c in asked and not _placed_by_model(instruction, c, asked_into) for c in out_of_reach):
+    if not out_of_reach or any(c in asked and not placed_by_model(instruction, c, asked_into) for c in out_of_reach):
         return []
     left = [c for c in stated if c not in out_of_reach]
     return list(out_of_reach) if any(c in asked for c in left) else []
 
 
-def _placed_by_model(instruction: str, condition: Condition, asked_into: Collection[str]) -> bool:
+def placed_by_model(instruction: str, condition: Condition, asked_into: Collection[str]) -> bool:
+    """Whether the condition puts a thing in a holder the instruction neither names nor asks things into
+    (``asked_into``) and that gives what it holds no state (:data:`STATE_GIVING`): where the thing goes is the
+    model's choice."""
     holder = condition.subject
     return condition.item is not None and holder not in asked_into and holder not in STATE_GIVING \
         and not names(instruction, holder)
@@ -210,7 +213,7 @@ def _asked(instruction: str, stated: Sequence[Condition], asked_into: Collection
     while more:
         asked += more
         objects |= {base_type(t) for c in more for t in _objects(c)
-                    if not (t == c.subject and _placed_by_model(instruction, c, asked_into))}
+                    if not (t == c.subject and placed_by_model(instruction, c, asked_into))}
         more = [c for c in stated if c not in asked and objects & {base_type(t) for t in _objects(c)}]
     return asked
 

@@ -31,6 +31,7 @@ from .asked import (
     named_in_full,
     names,
     outnamed,
+    placed_by_model,
     present_yet_refused,
     unasked,
 )
@@ -159,12 +160,16 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
     line that is), where a line asked for is left; a state or a holder asked for in so many words stays ("boil
     some water": ``Pot hot``). A switch's verb names nothing (``Asked.naming``: "switch off the lamp" names no
     LightSwitch). Every goal condition of the household benchmark, held-out tasks included, is asked for so; the
-    small models add a light switched on to moving a laptop, a tomato warmed to boiling water."""
+    small models add a light switched on to moving a laptop, a tomato warmed to boiling water. Where the instruction
+    asks for nothing moved (``Asked.moves``), a thing put in a holder it neither names nor asks into, and that gives
+    the thing no state, is left out too (:func:`.asked.placed_by_model`)."""
     statement = stated.statement
     if statement is None or statement.refusal is not None:
         return stated
     out = {c for c in unasked(asked.naming or instruction, statement.conditions, asked.placements)
            if c.state not in asked.states and c.subject not in asked.placements}
+    if not asked.moves:  # nothing asked moved: a holder nobody named is the model's idea ("slice the apple")
+        out |= {c for c in statement.conditions if placed_by_model(instruction, c, asked.placements)}
     return _leave_out(stated, out, "unasked")
 
 
@@ -206,12 +211,14 @@ class Asked:
     """What the instruction asks for in so many words: ``states``, each with the things its words name that can be
     in it, and ``placements``, each holder with the things to go in it (both owed where the model leaves them
     out); ``withheld``, the states offered only where asked for, and not asked for; ``naming``, the instruction less
-    the verbs of the switches it asks for, whose words name no thing ("switch off the lamp"; None: all of it)."""
+    the verbs of the switches it asks for, whose words name no thing ("switch off the lamp"; None: all of it);
+    ``moves``, whether it asks for any thing moved at all (:meth:`StateWords.asks_to_move`)."""
 
     states: Mapping[str, Sequence[str]]
     withheld: Collection[str]
     placements: Mapping[str, Sequence[str]]
     naming: str | None = None
+    moves: bool = True
 
 
 def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
@@ -226,7 +233,7 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
     return Asked(states, withheld, placements_asked(instruction, vocabulary, words),
-                 without_asking_verbs(instruction, switches))
+                 without_asking_verbs(instruction, switches), words.asks_to_move(instruction))
 
 
 def checked_against_team(record: StageRecord, instruction: str, scene: SceneObjects, conditions: Sequence[Condition],

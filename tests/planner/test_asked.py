@@ -18,6 +18,7 @@ from smartllm_local.planner.asked import (
     named_in_full,
     names,
     outnamed,
+    placed_by_model,
     present_yet_refused,
     unasked,
 )
@@ -122,6 +123,9 @@ def test_every_household_goal_condition_is_one_the_instruction_asks_for(tasks):
         vocabulary = goal_vocabulary(scene_objects(task.floor_plan))
         asked = asked_of(task.instruction, vocabulary, words)
         assert unasked(asked.naming, truth, asked.placements) == [], task.id  # as the goal stage reads it
+        if not asked.moves:  # nothing asked moved: a holder nobody named gives the thing its state
+            assert not [c for c in truth if placed_by_model(task.instruction, c, asked.placements)], task.id
+        assert not {c.state for c in truth} & set(asked.withheld), task.id  # no state asked is withheld
 
 
 def test_every_infeasible_benchmark_task_is_still_refused_for_its_own_goals():

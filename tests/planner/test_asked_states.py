@@ -100,10 +100,10 @@ def test_a_state_asked_of_named_things_is_said_of_no_other_and_a_withheld_state_
     assert accepts(GoalConstraint(KITCHEN), "Fridge empty\n\n")
 
 
-def test_household_offers_empty_opened_and_closed_only_where_an_instruction_asks_for_them_and_never_owes_empty():
+def test_household_offers_some_states_only_where_an_instruction_asks_for_them_and_never_owes_empty_or_dirty():
     only = load_state_words(load_domain("household").prompts_dir()).only_where_asked
-    assert set(only) == {"EMPTY", "OPENED", "CLOSED"}
-    assert "EMPTY" not in PATTERNS and {"OPENED", "CLOSED"} <= set(PATTERNS)  # those two owed where asked
+    assert set(only) == {"EMPTY", "OPENED", "CLOSED", "HOT", "COLD", "BROKEN", "DIRTY"}
+    assert not {"EMPTY", "DIRTY"} & set(PATTERNS) and {"OPENED", "CLOSED", "HOT", "COLD", "BROKEN"} <= set(PATTERNS)
     assert states_asked("Clear the bed: the book goes on the desk.", only) == {"EMPTY": "the bed"}
     assert states_asked("Put the apple in the fridge.", only) == {}
     assert states_asked("Close the laptop and put it away in the drawer.", only) == \
@@ -241,6 +241,47 @@ def test_the_statement_kept_leaves_out_a_thing_said_to_be_where_it_is_as_the_sce
     assert kept("Cloth in BathtubBasin\n\n") == ("Cloth in BathtubBasin\n", [])  # nothing else: kept as written
     on = next(c for c in vocabulary.types if "ON" in vocabulary.states.get(c, ()))
     assert kept(f"{on} on\nCloth in CounterTop\n\n") == (f"{on} on\nCloth in CounterTop\n", [])
+
+
+@pytest.mark.parametrize(("instruction", "state", "offered"), [
+    ("Pick the basketball up off the floor and leave it on the bed.", "HOT", False),  # the 1.5B stated it hot
+    ("Turn the shower on and put the soap bar in the bathtub.", "BROKEN", False),  # ... the shower glass broken
+    ("The bed is a mess, please sort it out.", "DIRTY", False),  # ... and the bed dirty, as it was
+    ("Put the apple in the fridge.", "COLD", False),  # a fridge chills on the way: no goal of it
+    ("Warm the egg up in the microwave.", "HOT", True),
+    ("Chill the wine.", "COLD", True),
+    ("Crack an egg into the pan.", "BROKEN", True),
+    ("Wash the dirty mug.", "DIRTY", True),  # offered, never owed
+])
+def test_heat_cold_breaking_and_dirt_are_offered_only_where_the_instruction_asks_for_them(instruction, state,
+                                                                                         offered):
+    vocabulary = goal_vocabulary(scene_objects(1))
+    asked = asked_of(instruction, vocabulary, WORDS)
+    assert (state not in asked.withheld) == offered
+    able = next(t for t in vocabulary.types if state in vocabulary.states.get(t, ()))
+    assert accepts(GoalConstraint(vocabulary, withheld=asked.withheld), f"{able} {state.lower()}\n\n") == offered
+
+
+def test_where_nothing_is_asked_moved_a_thing_put_in_a_holder_nobody_named_is_left_out():
+    """Asked to cut the bread into slices, the 0.5B also put the bread in a cabinet; asked to slice the apple, the
+    1.5B put it in a bowl. A holder the words name, one they ask into, one that gives the thing its state, and any
+    holder where the instruction asks for things moved, stay."""
+    vocabulary = goal_vocabulary(scene_objects(1))
+
+    def left_out(instruction: str, text: str) -> list[str]:
+        statement = parse_goal_statement(text, types=vocabulary.types)
+        asked = asked_of(instruction, vocabulary, WORDS)
+        return _without_unasked(StatedGoals(StageRecord("goal", output=text), statement), instruction,
+                                asked).record.unasked
+
+    assert left_out("Cut the loaf of bread into slices.", "Bread sliced\nBread in Cabinet\n\n") == \
+        ["Bread in Cabinet"]
+    assert left_out("Slice the bread and put it away.", "Bread sliced\nBread in Cabinet\n\n") == []  # moved
+    assert left_out("Slice the bread in the cabinet.", "Bread sliced\nBread in Cabinet\n\n") == []  # named
+    assert left_out("Chill the wine.", "WineBottle cold\nWineBottle in Fridge\n\n") == []  # a fridge chills
+    assert left_out("Fry an egg.", "EggCracked cooked\nEggCracked in Pan\nPan in StoveBurner\n\n") == []
+    assert left_out("Throw out the apple.", "Apple in GarbageCan\n\n") == []  # asked into
+    assert left_out("Slice the bread.", "Bread in Cabinet\n\n") == []  # nothing else: kept as written
 
 
 def test_the_statement_kept_leaves_out_a_goal_nobody_asked_for_and_keeps_what_was_asked_in_so_many_words():
@@ -421,6 +462,19 @@ def test_a_put_pattern_without_its_two_groups_is_a_clear_error(tmp_path: Path):
     (tmp_path / "goal").mkdir()
     (tmp_path / "goal" / "asked_states.toml").write_text("[put]\ninto = ['\\\\bput\\\\b(?P<things>.+)']\n")
     with pytest.raises(UserError, match=r"a \(\?P<things>...\) group and a \(\?P<holder>...\) group"):
+        load_state_words(tmp_path)
+
+
+def test_a_domain_s_moving_words_are_read_and_an_unknown_put_pattern_is_a_clear_error(tmp_path: Path):
+    (tmp_path / "goal").mkdir()
+    path = tmp_path / "goal" / "asked_states.toml"
+    path.write_text("[put]\nmoves = ['\\bshift\\b']\n")
+    assert load_state_words(tmp_path).asks_to_move("Shift the box.")
+    assert not load_state_words(tmp_path).asks_to_move("Slice the apple.")
+    path.write_text("[put]\ninto = []\n")
+    assert load_state_words(tmp_path).asks_to_move("Slice the apple.")  # no moving words: any may move a thing
+    path.write_text("[put]\nshift = ['x']\n")
+    with pytest.raises(UserError, match=r"'shift' is not 'into' or 'moves'"):
         load_state_words(tmp_path)
 
 

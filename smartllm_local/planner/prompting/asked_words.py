@@ -30,8 +30,9 @@ ONLY_WHERE_ASKED = "only_where_asked"
 #: The table of ``asked_states.toml`` naming the holders an instruction asks things into in so many words.
 PLACEMENTS = "placements"
 #: The table of ``asked_states.toml`` whose patterns find a thing put in a holder the instruction names: its
-#: ``into`` patterns, each with a ``things`` group and a ``holder`` group.
-PUT, PUT_INTO, PUT_GROUPS = "put", "into", frozenset({"things", "holder"})
+#: ``into`` patterns, each with a ``things`` group and a ``holder`` group; and its ``moves`` patterns, the words that
+#: ask for a thing moved at all, a holder named or not ("put the cup away", "tidy the desk").
+PUT, PUT_INTO, PUT_GROUPS, PUT_MOVES = "put", "into", frozenset({"things", "holder"}), "moves"
 _TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*")
 _CLAUSE = re.compile(r"[,.;:!?]")
 _SENTENCE = re.compile(r"[.;:!?]")
@@ -48,19 +49,24 @@ class StateWords:
     ``[placements]`` table, the holders an instruction asks things into in so many words ("throw the cloth away":
     the GarbageCan), each thing the asking words name owed a line that puts it there; ``put``, its ``[put]`` table's
     ``into`` patterns, which find the things put in a holder the instruction names ("put the potato in the pot"),
-    owed the same way."""
+    owed the same way; ``moves``, its ``moves`` patterns (none: every instruction may ask for a thing moved)."""
 
     asked: dict[str, tuple[re.Pattern[str], ...]]
     only_where_asked: dict[str, tuple[re.Pattern[str], ...]]
     placements: dict[str, tuple[re.Pattern[str], ...]]
     put: tuple[re.Pattern[str], ...] = ()
+    moves: tuple[re.Pattern[str], ...] = ()
+
+    def asks_to_move(self, instruction: str) -> bool:
+        """Whether the instruction asks for any thing moved (always, where the domain has no ``moves`` words)."""
+        return not self.moves or any(p.search(instruction) for p in self.moves)
 
 
 def load_state_words(prompts: Path) -> StateWords:
     """The domain's state words (none where there is no such file): ``STATE = ['<regular expression>', ...]`` a
     line, the same lines under ``[only_where_asked]``, ``Holder = [...]`` lines under ``[placements]``, and
-    ``into = [...]`` under ``[put]``. Parsed once per text of the file: every goal statement and goal check reads
-    them."""
+    ``into = [...]`` and ``moves = [...]`` under ``[put]``. Parsed once per text of the file: every goal statement
+    and goal check reads them."""
     path = prompts / GOAL_FOLDER / ASKED_STATES
     if not path.is_file():
         return StateWords({}, {}, {})
@@ -68,7 +74,8 @@ def load_state_words(prompts: Path) -> StateWords:
         return _parse_state_words(path.read_text(encoding="utf-8"))
     except (OSError, ValueError, TypeError, re.error) as exc:
         raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...] "
-                        "each holder under [placements] as Holder = [...] and the [put] patterns as into = [...], "
+                        "each holder under [placements] as Holder = [...] and the [put] patterns as into = [...] and "
+                        "moves = [...], "
                         "or remove the file") from exc
 
 
@@ -79,11 +86,13 @@ def _parse_state_words(text: str) -> StateWords:
     for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements), (PUT, put)):
         if not isinstance(part, dict):
             raise ValueError(f"[{name}] is not a table")
-    into = _patterns(put, PUT_INTO.__eq__, f"'{PUT_INTO}'").get(PUT_INTO, ())
+    put_patterns = _patterns(put, {PUT_INTO, PUT_MOVES}.__contains__, f"'{PUT_INTO}' or '{PUT_MOVES}'")
+    into = put_patterns.get(PUT_INTO, ())
     if any(set(p.groupindex) != PUT_GROUPS for p in into):
-        raise ValueError(f"each [{PUT}] pattern needs a (?P<things>...) group and a (?P<holder>...) group")
+        raise ValueError(f"each [{PUT}] {PUT_INTO} pattern needs a (?P<things>...) group and a (?P<holder>...) group")
     return StateWords(_patterns(table), _patterns(only),
-                      _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"), into)
+                      _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"), into,
+                      put_patterns.get(PUT_MOVES, ()))
 
 
 def _patterns(table: Mapping[str, Any], known: Callable[[str], object] = STATE_WORDS.__contains__,
