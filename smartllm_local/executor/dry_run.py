@@ -158,6 +158,7 @@ class Snapshot:
     results: tuple[tuple[str, ActionResult], ...]  # each agent's last action, as its metadata reports it
     event: Event | MultiAgentEvent
     helping: dict[int, str]
+    meant: dict[tuple[int, str], str]
 
 
 class DryRun:
@@ -215,7 +216,8 @@ class DryRun:
                 thor.freeze(oid)
             thor.frozen_shared = True
             self._saved = Snapshot(thor.frozen, tuple(vars(a).copy() for a in sim.agents), sim.generation,
-                                   tuple(thor.encoder.last_results), thor.last_event, dict(self._world.helping))
+                                   tuple(thor.encoder.last_results), thor.last_event, dict(self._world.helping),
+                                   dict(self._world.meant))
         return self._saved
 
     def restore(self, snap: Snapshot) -> None:
@@ -241,4 +243,5 @@ class DryRun:
         thor.encoder.last_results = list(snap.results)
         thor.last_event = self._world.event = snap.event
         self._world.helping = dict(snap.helping)
+        self._world.meant = dict(snap.meant)
         self._saved = snap

@@ -72,6 +72,7 @@ class TeamWorld:
         self.cells = [(p["x"], p["z"]) for p in reply.metadata["actionReturn"] or []]
         self.cell_y = (reply.metadata["actionReturn"] or [{"y": 0.9}])[0]["y"]
         self.helping: dict[int, str] = {}  # member -> object it helps carry
+        self.meant: dict[tuple[int, str], str] = {}  # (member, fixture type) -> the instance it last meant
         # Target box -> the cells nearest first; the cells are fixed for a TeamWorld, so no ranking goes stale.
         self._ranked_cells: dict[tuple[float, float, float, float], list[tuple[float, float]]] = {}
         self.start = [self.position(m) for m in range(len(self.event.events))]
@@ -149,7 +150,9 @@ class TeamWorld:
         return held
 
     def resolve(self, name: str, affordance: str, near: int, members: Sequence[int]) -> dict[str, Any] | None:
-        """The instance a plan's object name means: nearest to ``near`` among usable matches."""
+        """The instance a plan's object name means: among usable matches, for a fixture (what is not picked up) the
+        one ``near`` last meant by its type, else the nearest to ``near``; "the stove burner" a robot switched on
+        is the one it comes back to put the pot on, though another is nearer the sink it comes from."""
         if "|" in name:
             return next((o for o in self.objects if o["objectId"] == name.strip()), None)
         wanted = name.strip().lower()
@@ -179,9 +182,13 @@ class TeamWorld:
         x, z = self.position(near)
         shut = self._shut_away()
         # Prefer instances the robots can get at (not in a closed fridge or drawer), then whole ones (a broken
-        # one can be neither picked up nor broken again), then the nearest.
-        return min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")),
-                                           round(Box.of(o).distance(x, z), 6), o["objectId"]))
+        # one can be neither picked up nor broken again), then the fixture meant before, then the nearest.
+        chosen = min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")),
+                                             o["objectId"] != self.meant.get((near, o["objectType"])),
+                                             round(Box.of(o).distance(x, z), 6), o["objectId"]))
+        if not chosen.get("pickupable"):
+            self.meant.update({(m, chosen["objectType"]): chosen["objectId"] for m in {near, *members}})
+        return chosen
 
     def _shut_away(self) -> set[str]:
         closed = {o["objectId"] for o in self.objects

@@ -13,8 +13,9 @@ out of reach was asked for, or nothing asked for is left, the task is refused as
 
 Naming is read generously, since a goal wrongly taken as named is refused as before (the cost of the old rule)
 while one wrongly taken as invented is dropped: an object type is named where a word of its name (``DeskLamp``:
-desk, lamp) is a word of the instruction or shares its first :data:`PREFIX` letters with one ("telly" names the
-Television, "keys" the KeyChain). A goal on two objects (``Apple in Fridge``) is named where either is.
+desk, lamp) is a word of the instruction or shares its first :data:`PREFIX` letters with one that names no type of
+its own ("telly" names the Television; "stove" names the StoveBurner, not the Stool). A goal on two objects
+(``Apple in Fridge``) is named where either is.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from ..world.object_types import (
     HEAT_SOURCES,
     INFORMAL_NAMES,
     RECEPTACLE_ONLY_ACCEPTS,
+    TYPE_PROPERTIES,
     WATER_BASINS,
     base_type,
     informal_names,
@@ -46,11 +48,19 @@ ORIGIN = re.compile(r"\b(?:from|out of)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?([
 
 
 def names(instruction: str, object_type: str) -> bool:
-    """Whether the instruction names the object type (or the type it is a slice of), by a word of its name or by
-    an informal name ("the TV": the Television)."""
+    """Whether the instruction names the object type (or the type it is a slice of), by a word of its name (a
+    plural's ending aside), an informal name ("the TV": the Television) or a word sharing the first letters of a word
+    of its name that names no type of its own ("the telly"; "the stove" names no Stool, "the pot" no Potato)."""
     said = set(_WORD.findall(instruction.lower()))
-    return any(word == w or (min(len(word), len(w)) >= PREFIX and word[:PREFIX] == w[:PREFIX])
+    return any(w in (forms := _forms([word])) or (min(len(word), len(w)) >= PREFIX and word[:PREFIX] == w[:PREFIX]
+                                                  and not forms & _own_words())
                for word in said for w in _type_words(object_type)) or _informally(said, object_type)
+
+
+@cache
+def _own_words() -> frozenset[str]:
+    """The words of every known type's name, and every informal name: each names its own types."""
+    return frozenset(w for t in TYPE_PROPERTIES for w in _type_words(t)) | frozenset(INFORMAL_NAMES)
 
 
 def names_a_word(instruction: str, object_type: str) -> bool:

@@ -225,11 +225,18 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
              there: Collection[tuple[str, str]] = ()) -> Asked:
     """What the instruction asks for in so many words, in the domain's ``words``, of the vocabulary's things; of
     several things its words name for a state, those it places where the scene has them (``there``: the scene's
-    :func:`standing`)."""
+    :func:`standing`); where they name a liquid, the things that hold it, owed filled too (:func:`_holding_liquid`)."""
     holders = {holder for holder, _ in there}
-    states = {state: _located(said, named_for(said, lambda t, s=state: s in vocabulary.states.get(t, ()), vocabulary),
-                              holders, there)
-              for state, said in states_asked(instruction, words.asked).items()}
+    states: dict[str, list[str]] = {}
+    for state, said in states_asked(instruction, words.asked).items():
+        filled = [s for s in words.filled_by(said) if s != state]
+        liquid = _holding_liquid(said, [state, *filled], vocabulary) if filled else {}
+        if liquid:  # "boil some water on the stove": a pot, filled and hot (and on the burner: the put's)
+            for given, things in liquid.items():
+                states[given] = [t for t in states.get(given, things) if t in things] or things
+        else:
+            states[state] = _located(said, named_for(said, lambda t, s=state: s in vocabulary.states.get(t, ()),
+                                                     vocabulary), holders, there)
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
     return Asked(states, withheld, placements_asked(instruction, vocabulary, words),
@@ -279,6 +286,24 @@ def said_of(instruction: str, scene: SceneObjects, goals: Sequence[Condition],
 
     return Said(asked=tuple(c for c in goals if names(instruction, c.item or c.subject)),
                 owed=tuple(c for c in goals if owed(c)), holders=holders)
+
+
+def _holding_liquid(words: str, states: Sequence[str], vocabulary: GoalVocabulary) -> dict[str, list[str]]:
+    """Each of ``states`` with the things that can be in all of them (and go in the holder the words first place
+    them in, where one is named) that the words name, or every such thing where they name none: the words name a
+    liquid, so they mean a thing holding it ("some water on the stove": a pot, not a wine bottle). A holder that can
+    be in them itself holds the liquid ("boil water in the pot": the pot)."""
+    all_holders = {h for hs in vocabulary.holders.values() for h in hs}
+    where = next((h for m in LOCATED.finditer(words) if (h := holder_named(m["holder"], all_holders))), None)
+
+    def able(kind: str) -> bool:
+        return set(states) <= set(vocabulary.states.get(kind, ())) and \
+            (where is None or where in vocabulary.holders.get(kind, ()))
+
+    if where is not None and set(states) <= set(vocabulary.states.get(where, ())):
+        return dict.fromkeys(states, [where])
+    things = named_for(words, able, vocabulary) or [t for t in vocabulary.types if able(t)]
+    return dict.fromkeys(states, things) if things else {}
 
 
 def _located(words: str, named: list[str], holders: Collection[str], there: Collection[tuple[str, str]]) -> list[str]:

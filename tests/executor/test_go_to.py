@@ -50,3 +50,24 @@ def test_a_name_means_a_whole_instance_before_a_broken_one_however_near():
     first, second = ex.trace[1].object_id, ex.trace[3].object_id
     assert first != second and ex.trace[2].object_id == second
     assert all(o["isBroken"] for o in ex.final_objects if o["objectType"] == "Statue")
+
+
+def test_a_fixture_a_robot_meant_before_is_the_one_its_type_names_again():
+    """Asked to boil water on the stove, the planner's steps switch "the StoveBurner" on beside the stove, fill the
+    pot at the sink, then go to "the StoveBurner" and put the pot on it: from the sink another burner is nearer, and
+    the pot stayed cold on it. A fixture a robot has meant by its type is the one the type names again for it, on the
+    real Controller."""
+    controller = open_controller(20, agent_count=1)
+    steps = ["GoToObject('StoveBurner')", "SwitchOn('StoveBurner')", "GoToObject('Pot')", "PickupObject('Pot')",
+             "GoToObject('Faucet')", "SwitchOn('Faucet')", "GoToObject('SinkBasin')", "PutObject('Pot', 'SinkBasin')",
+             "GoToObject('Pot')", "PickupObject('Pot')", "GoToObject('StoveBurner')", "PutObject('Pot', 'StoveBurner')"]
+    try:
+        ex = run("".join(f"{s[:s.index('(') + 1]}robots[0], {s[s.index('(') + 1:]}\n" for s in steps), [3],
+                 controller, 20)
+    finally:
+        controller.stop()
+    assert [e.success for e in ex.trace] == [True] * len(steps), [e.error for e in ex.trace]
+    burners = {e.object_id for e in ex.trace if e.objects[-1] == "StoveBurner" and e.skill != "SwitchOn"}
+    assert len(burners) == 1
+    pot = next(o for o in ex.final_objects if o["objectType"] == "Pot")
+    assert pot["temperature"] == "Hot" and pot["isFilledWithLiquid"] and pot["parentReceptacles"] == list(burners)

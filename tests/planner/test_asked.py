@@ -58,9 +58,17 @@ APPLE_IN = Condition("Fridge", item="Apple")
     ("That candle has burnt down; throw it in the bin.", "GarbageCan", True),
     ("Leave the book on the couch.", "Sofa", True),
     ("Leave the book on the couch.", "Television", False),
+    ("Put the apples in the fridge.", "Apple", True),  # a plural's ending aside
+    ("Boil some water on the stove.", "StoveBurner", True),
+    ("Boil some water on the stove.", "Stool", False),  # "stove" names types of its own
+    ("Put the pot on the stove.", "Potato", False),
+    ("Peel the potatoes.", "Pot", False),
+    ("Put the pen in the drawer.", "Pencil", False),
 ])
 def test_an_instruction_names_a_type_by_a_word_of_its_name_or_the_first_letters_of_one(instruction, object_type,
                                                                                          named):
+    """The first letters, only of a word that names no type of its own: asked to boil water on the stove, the
+    1.5B's wine bottle put on a stool was taken for asked, the stool named by "stove"."""
     assert names(instruction, object_type) == named
 
 

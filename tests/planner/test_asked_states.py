@@ -483,3 +483,42 @@ def test_a_placements_part_that_names_no_holder_is_a_clear_error(tmp_path: Path)
     (tmp_path / "goal" / "asked_states.toml").write_text("[placements]\ngarbage_can = ['\\\\bthrow\\\\b']\n")
     with pytest.raises(UserError, match="'garbage_can' is not a holder's type name"):
         load_state_words(tmp_path)
+
+
+@pytest.mark.parametrize(("floor_plan", "instruction", "states", "placed"), [
+    (20, "Boil some water on the stove.", {"HOT": ["Pot"], "FILLED": ["Pot"]}, {"StoveBurner": ["Pot"]}),
+    (1, "Boil some water on the stove.", {"HOT": ["Kettle", "Pot"], "FILLED": ["Kettle", "Pot"]},
+     {"StoveBurner": ["Kettle", "Pot"]}),
+    (1, "Boil water in the pot.", {"HOT": ["Pot"], "FILLED": ["Pot"]}, {}),  # the pot holds the water
+    (1, "Fill the kettle with water and put it on the stove.", {"FILLED": ["Kettle"]}, {"StoveBurner": ["Kettle"]}),
+    (1, "Water the plant and boil the egg.", {"HOT": ["Egg"]}, {}),  # the verb names no liquid
+])
+def test_a_liquid_asked_for_is_a_thing_that_holds_it_filled(floor_plan, instruction, states, placed):
+    """Asked to boil some water on the stove, both models heated a wine bottle and left it where it stood: water
+    names no thing, so the words asked nothing of the pot on the burner."""
+    vocabulary = goal_vocabulary(scene_objects(floor_plan))
+    asked = asked_of(instruction, vocabulary.less(outnamed(instruction, vocabulary.types)), WORDS)
+    assert (dict(asked.states), dict(asked.placements)) == (states, placed)
+
+
+def test_water_to_boil_on_the_stove_is_a_pot_there_filled_and_hot_through_the_grammar():
+    vocabulary = goal_vocabulary(scene_objects(20))
+    asked = asked_of("Boil some water on the stove.", vocabulary, WORDS)
+
+    def constraint() -> GoalConstraint:
+        return GoalConstraint(vocabulary, asked=asked.states, withheld=asked.withheld, placed=asked.placements)
+
+    assert accepts(constraint(), "Pot in StoveBurner\nPot hot\nPot filled\n\n")
+    assert not accepts(constraint(), "WineBottle hot\n")  # heat is asked of what holds the water
+    assert not accepts(constraint(), "Pot hot\n\n")  # the pot owed on the burner, filled
+
+
+def test_a_domain_s_liquids_are_read_and_one_under_no_state_is_a_clear_error(tmp_path: Path):
+    (tmp_path / "goal").mkdir()
+    path = tmp_path / "goal" / "asked_states.toml"
+    path.write_text("[liquids]\nFILLED = ['\\bmilk\\b']\n")
+    assert load_state_words(tmp_path).filled_by("warm the milk") == ["FILLED"]
+    assert load_state_words(tmp_path).filled_by("warm the bread") == []
+    path.write_text("[liquids]\nmilk = ['x']\n")
+    with pytest.raises(UserError, match=r"'milk' is not a state"):
+        load_state_words(tmp_path)

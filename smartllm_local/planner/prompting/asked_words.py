@@ -7,7 +7,7 @@ from __future__ import annotations
 import functools
 import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +29,8 @@ ASKED_STATES = "asked_states.toml"
 ONLY_WHERE_ASKED = "only_where_asked"
 #: The table of ``asked_states.toml`` naming the holders an instruction asks things into in so many words.
 PLACEMENTS = "placements"
+#: The table of ``asked_states.toml`` whose patterns find a liquid, under the state a thing filled with it is in.
+LIQUIDS = "liquids"
 #: The table of ``asked_states.toml`` whose patterns find a thing put in a holder the instruction names: its
 #: ``into`` patterns, each with a ``things`` group and a ``holder`` group; and its ``moves`` patterns, the words that
 #: ask for a thing moved at all, a holder named or not ("put the cup away", "tidy the desk").
@@ -49,24 +51,31 @@ class StateWords:
     ``[placements]`` table, the holders an instruction asks things into in so many words ("throw the cloth away":
     the GarbageCan), each thing the asking words name owed a line that puts it there; ``put``, its ``[put]`` table's
     ``into`` patterns, which find the things put in a holder the instruction names ("put the potato in the pot"),
-    owed the same way; ``moves``, its ``moves`` patterns (none: every instruction may ask for a thing moved)."""
+    owed the same way; ``moves``, its ``moves`` patterns (none: every instruction may ask for a thing moved);
+    ``liquids``, its ``[liquids]`` table, each state a thing filled with a liquid is in with the patterns naming
+    the liquid ("boil some water": a thing filled)."""
 
     asked: dict[str, tuple[re.Pattern[str], ...]]
     only_where_asked: dict[str, tuple[re.Pattern[str], ...]]
     placements: dict[str, tuple[re.Pattern[str], ...]]
     put: tuple[re.Pattern[str], ...] = ()
     moves: tuple[re.Pattern[str], ...] = ()
+    liquids: Mapping[str, tuple[re.Pattern[str], ...]] = field(default_factory=dict)
 
     def asks_to_move(self, instruction: str) -> bool:
         """Whether the instruction asks for any thing moved (always, where the domain has no ``moves`` words)."""
         return not self.moves or any(p.search(instruction) for p in self.moves)
 
+    def filled_by(self, words: str) -> list[str]:
+        """The states of a thing filled with a liquid the words name ("some water on the stove": FILLED)."""
+        return [state for state, listed in self.liquids.items() if any(p.search(words) for p in listed)]
+
 
 def load_state_words(prompts: Path) -> StateWords:
     """The domain's state words (none where there is no such file): ``STATE = ['<regular expression>', ...]`` a
-    line, the same lines under ``[only_where_asked]``, ``Holder = [...]`` lines under ``[placements]``, and
-    ``into = [...]`` and ``moves = [...]`` under ``[put]``. Parsed once per text of the file: every goal statement
-    and goal check reads them."""
+    line, the same lines under ``[only_where_asked]`` and ``[liquids]``, ``Holder = [...]`` lines under
+    ``[placements]``, and ``into = [...]`` and ``moves = [...]`` under ``[put]``. Parsed once per text of the file:
+    every goal statement and goal check reads them."""
     path = prompts / GOAL_FOLDER / ASKED_STATES
     if not path.is_file():
         return StateWords({}, {}, {})
@@ -74,16 +83,16 @@ def load_state_words(prompts: Path) -> StateWords:
         return _parse_state_words(path.read_text(encoding="utf-8"))
     except (OSError, ValueError, TypeError, re.error) as exc:
         raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...] "
-                        "each holder under [placements] as Holder = [...] and the [put] patterns as into = [...] and "
-                        "moves = [...], "
-                        "or remove the file") from exc
+                        "(under [liquids] too), each holder under [placements] as Holder = [...] and the [put] "
+                        "patterns as into = [...] and moves = [...], or remove the file") from exc
 
 
 @functools.lru_cache(maxsize=16)
 def _parse_state_words(text: str) -> StateWords:
     table = tomllib.loads(text)
     only, placements, put = table.pop(ONLY_WHERE_ASKED, {}), table.pop(PLACEMENTS, {}), table.pop(PUT, {})
-    for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements), (PUT, put)):
+    liquids = table.pop(LIQUIDS, {})
+    for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements), (PUT, put), (LIQUIDS, liquids)):
         if not isinstance(part, dict):
             raise ValueError(f"[{name}] is not a table")
     put_patterns = _patterns(put, {PUT_INTO, PUT_MOVES}.__contains__, f"'{PUT_INTO}' or '{PUT_MOVES}'")
@@ -92,7 +101,7 @@ def _parse_state_words(text: str) -> StateWords:
         raise ValueError(f"each [{PUT}] {PUT_INTO} pattern needs a (?P<things>...) group and a (?P<holder>...) group")
     return StateWords(_patterns(table), _patterns(only),
                       _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"), into,
-                      put_patterns.get(PUT_MOVES, ()))
+                      put_patterns.get(PUT_MOVES, ()), _patterns(liquids))
 
 
 def _patterns(table: Mapping[str, Any], known: Callable[[str], object] = STATE_WORDS.__contains__,
@@ -146,8 +155,9 @@ def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateW
     each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth), and
     those it puts things in by name (``[put]``: "put the potato in the pot", Pot, Potato), where the words name
     one holder and some thing that can go in it, by name or by a pronoun for the one thing (or all the things) the
-    sentence named before ("close the laptop and put it away in the drawer"); not "the soap", which may be the bar
-    or the bottle, nor "on the table" beside three."""
+    sentence named before ("close the laptop and put it away in the drawer"), or by a liquid (``StateWords.liquids``:
+    "boil some water on the stove", the things that can be filled); not "the soap", which may be the bar or the
+    bottle, nor "on the table" beside three."""
     placed = {holder: named_for(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
               for holder, said in states_asked(instruction, words.placements).items() if holder in vocabulary.types}
     holders = {h for hs in vocabulary.holders.values() for h in hs}
@@ -158,6 +168,9 @@ def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateW
         if holder and not named and (_IT.search(things) or _THEM.search(things)):
             earlier = things_named(before, able)  # "close the laptop and put it away in the drawer"
             named = earlier if len(earlier) == 1 or _THEM.search(things) else []
+        filled = set(words.filled_by(things)) if holder and not named else set()
+        if filled and not filled <= set(vocabulary.states.get(holder, ())):  # "boil some water on the stove": a pot
+            named = [t for t in able if filled <= set(vocabulary.states.get(t, ()))]  # (not "in the pot": the pot)
         if holder and named:
             placed[holder] = list(dict.fromkeys([*placed.get(holder, []), *named]))
     return placed
