@@ -6,6 +6,7 @@ import contextlib
 import json
 import os
 import secrets
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -15,7 +16,8 @@ from .errors import UserError
 
 def check_output_file(path: str | Path, what: str = "output file") -> Path:
     """Fail early, before any work is done, when ``path`` can never be written as a file:
-    it is an existing folder, or one of its parents is an existing file."""
+    it is an existing folder, one of its parents is an existing file, or nothing can be made in its nearest
+    parent that exists."""
     path = Path(path)
     if path.is_dir():
         raise UserError(f"{what} {path} is an existing folder: give a file name, e.g. {path / 'out.json'}")
@@ -25,19 +27,25 @@ def check_output_file(path: str | Path, what: str = "output file") -> Path:
 
 def check_output_folder(path: str | Path, what: str = "output folder") -> Path:
     """Fail early, before any work is done, when ``path`` can never be used as a folder:
-    it is an existing file, or one of its parents is."""
+    it is an existing file, one of its parents is, or nothing can be made in it or in its nearest parent
+    that exists (read-only, no permission: a plan of minutes was written, then lost)."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise UserError(f"{what} {path} is an existing file: give a folder (it is created if missing)")
-    _check_parents(path, what)
+    _check_parents(path, what, folder=True)
     return path
 
 
-def _check_parents(path: Path, what: str) -> None:
-    for parent in path.parents:
+def _check_parents(path: Path, what: str, *, folder: bool = False) -> None:
+    for parent in [path, *path.parents] if folder else path.parents:
         if parent.exists():
             if not parent.is_dir():
                 raise UserError(f"cannot write {what} {path}: {parent} is a file, not a folder")
+            try:  # a folder made and taken away again: writing there works, whoever runs this
+                os.rmdir(tempfile.mkdtemp(prefix=".check-", dir=parent))
+            except OSError as exc:
+                raise UserError(f"cannot write {what} {path}: nothing can be made in {parent} "
+                                f"({exc.strerror or exc}); give a folder you can write to") from exc
             return
 
 

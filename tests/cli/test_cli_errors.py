@@ -206,6 +206,19 @@ def test_out_that_is_a_file_is_refused_before_any_work(tmp_path, command):
     assert (tmp_path / "out").read_text() == "keep me"
 
 
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux's /proc, where nothing can be made")
+@pytest.mark.parametrize("command", [
+    ["plan", "Put the apple in the fridge", "--floor-plan", "6", "--robots", "1"],
+    ["benchmark", "run"],
+])
+def test_out_where_nothing_can_be_made_is_refused_before_any_work(tmp_path, command):
+    """Not after the plan: a user's minutes of planning were lost at the first file written (as root, no folder's
+    mode stops a write; /proc refuses whoever asks)."""
+    one_line_error(cli(*command, "--out", "/proc/smartllm-out", cwd=tmp_path),
+                   "cannot write --out /proc/smartllm-out: nothing can be made in /proc")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_import_into_a_folder_is_refused(tmp_path):
     (tmp_path / "tasks").mkdir()
     one_line_error(cli("benchmark", "import-smartllm", "nowhere", "--out", "tasks", cwd=tmp_path),
