@@ -64,6 +64,10 @@ class GoalVocabulary:
         return GoalVocabulary({t: s for t, s in self.states.items() if t not in types},
                               {t: h - set(types) for t, h in self.holders.items() if t not in types})
 
+    def holder_types(self) -> frozenset[str]:
+        """The receptacles any type of the scene can be put in."""
+        return frozenset().union(*self.holders.values())
+
     def state_names(self) -> list[str]:
         """The states any type of the scene can be in, in the scorer's order."""
         present = set().union(*self.states.values()) if self.states else set()

@@ -52,9 +52,13 @@ def names(instruction: str, object_type: str) -> bool:
     plural's ending aside), an informal name ("the TV": the Television) or a word sharing the first letters of a word
     of its name that names no type of its own ("the telly"; "the stove" names no Stool, "the pot" no Potato)."""
     said = set(_WORD.findall(instruction.lower()))
-    return any(w in (forms := _forms([word])) or (min(len(word), len(w)) >= PREFIX and word[:PREFIX] == w[:PREFIX]
-                                                  and not forms & _own_words())
-               for word in said for w in _type_words(object_type)) or _informally(said, object_type)
+    own = _type_words(object_type)
+    for word in said:
+        forms = _forms([word])
+        if forms.intersection(own) or not forms & _own_words() and any(
+                min(len(word), len(w)) >= PREFIX and word[:PREFIX] == w[:PREFIX] for w in own):
+            return True
+    return _informally(said, object_type)
 
 
 @cache

@@ -293,8 +293,8 @@ def _holding_liquid(words: str, states: Sequence[str], vocabulary: GoalVocabular
     them in, where one is named) that the words name, or every such thing where they name none: the words name a
     liquid, so they mean a thing holding it ("some water on the stove": a pot, not a wine bottle). A holder that can
     be in them itself holds the liquid ("boil water in the pot": the pot)."""
-    all_holders = {h for hs in vocabulary.holders.values() for h in hs}
-    where = next((h for m in LOCATED.finditer(words) if (h := holder_named(m["holder"], all_holders))), None)
+    holders = vocabulary.holder_types()
+    where = next((h for m in LOCATED.finditer(words) if (h := holder_named(m["holder"], holders))), None)
 
     def able(kind: str) -> bool:
         return set(states) <= set(vocabulary.states.get(kind, ())) and \

@@ -67,9 +67,9 @@ class GoalConstraint(Constraint):
         self.asked = {state: [kind for kind in named if state in vocabulary.states.get(kind, ())]
                       for state, named in (asked or {}).items() if state in able}
         # A holder nothing here can go in asks for nothing; a thing named that cannot go in it is not named for it.
+        receptacles = vocabulary.holder_types()
         self.placed = {holder: [kind for kind in named if holder in vocabulary.holders.get(kind, ())]
-                       for holder, named in (placed or {}).items()
-                       if any(holder in holders for holders in vocabulary.holders.values())}
+                       for holder, named in (placed or {}).items() if holder in receptacles}
         self.owing = False  # the model ended its statement; the states asked that it left out follow
         self.owed: list[Condition] = []  # the conditions written for them
         self.said: list[Condition] = []

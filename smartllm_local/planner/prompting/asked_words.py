@@ -160,7 +160,7 @@ def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateW
     bottle, nor "on the table" beside three."""
     placed = {holder: named_for(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
               for holder, said in states_asked(instruction, words.placements).items() if holder in vocabulary.types}
-    holders = {h for hs in vocabulary.holders.values() for h in hs}
+    holders = vocabulary.holder_types()
     for things, where, before in puts(instruction, words.put):
         holder = holder_named(where, holders)
         able = [t for t in vocabulary.types if holder in vocabulary.holders.get(t, ())]
