@@ -21,7 +21,7 @@ its own ("telly" names the Television; "stove" names the StoveBurner, not the St
 from __future__ import annotations
 
 import re
-from collections.abc import Collection, Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from functools import cache
 
 from ..goal_language import name_words
@@ -43,6 +43,11 @@ _WORD = re.compile(r"[a-z]+")
 #: Holders that give what they hold a state (heat, cold, a pan's frying, a basin's rinsing): where a thing goes in
 #: one of them is no mere place ("chill the apple": the fridge; "fry an egg": the pan on the burner).
 STATE_GIVING = HEAT_SOURCES | COLD_SOURCES | RECEPTACLE_ONLY_ACCEPTS["StoveBurner"] | WATER_BASINS
+#: The states each holder of :data:`STATE_GIVING` gives what it holds (a burner's pan fries; a basin under a running
+#: faucet rinses and fills).
+GIVES = {**{h: frozenset({"HOT", "COOKED"}) for h in HEAT_SOURCES | RECEPTACLE_ONLY_ACCEPTS["StoveBurner"]},
+         **{h: frozenset({"COLD"}) for h in COLD_SOURCES}, **{h: frozenset({"CLEAN", "FILLED"}) for h in WATER_BASINS},
+         "CoffeeMachine": frozenset({"HOT", "FILLED"})}
 #: Words after which an instruction names where a thing is now, not where it must be ("from the coffee table").
 ORIGIN = re.compile(r"\b(?:from|out of)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?([a-z]+(?:\s+[a-z]+)?)")
 
@@ -102,6 +107,19 @@ def placed_by_model(instruction: str, condition: Condition, asked_into: Collecti
     holder = condition.subject
     return condition.item is not None and holder not in asked_into and holder not in STATE_GIVING \
         and not names(instruction, holder)
+
+
+def gives_nothing_asked(instruction: str, condition: Condition, states: Mapping[str, Collection[str]],
+                        asked_into: Collection[str]) -> bool:
+    """Whether the condition puts a thing in a holder that gives states (:data:`GIVES`) none of which the instruction
+    asks for (``states``, each with the things its words name; the holder switched on asks for what it gives, "toast
+    the bread": the toaster on), that it does not ask things into, and that it names not at all or as a thing whose
+    own state it asks for: asked to open the fridge and cut the apple, the 0.5B put the apple in the fridge, which
+    chills, for a team that could not put anything down ("keep the slices in the fridge" names it as a place)."""
+    holder = condition.subject
+    return condition.item is not None and holder in GIVES and holder not in asked_into \
+        and not GIVES[holder] & set(states) and holder not in states.get("ON", ()) \
+        and (any(holder in things for things in states.values()) or not names(instruction, holder))
 
 
 def unasked(instruction: str, stated: Sequence[Condition], asked_into: Collection[str] = ()) -> list[Condition]:

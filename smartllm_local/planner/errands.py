@@ -10,7 +10,9 @@ So a sub-task's steps on a thing it acts on (picks up, switches, opens, pulls...
 led to each, the sleeps after a switch-on and the comments right above them, are an errand where the dry run (a
 notional robot per sub-task, in the order written) shows them unneeded: no call fails that did not, every stated
 goal that held still holds, every thing the instruction names or a goal is about ends as it did (what it holds
-aside: a cup nobody asked for leaves the fridge). On a thing nobody named that is a thing nobody asked for; on a
+aside: a cup nobody asked for leaves the fridge). A thing is named by words that are not part of another thing's
+name ("get the spray bottle" names no SoapBottle: the 1.5B carried the soap bottle beside it to the counter, and
+the sub-task that did held a robot). On a thing nobody named that is a thing nobody asked for; on a
 named one, steps that change nothing of how it ends (the cloth pushed in the bathtub before another sub-task
 carries it to the counter: the push needed a robot that pushes, and the carrying sub-task waited for it). A
 sub-task whose every action is an errand goes whole (its definition, and its thread or its call) where another
@@ -24,23 +26,21 @@ goals and the instruction are read; a plan with no stated goals is left as it is
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Collection, Sequence
 
 from ..scene import SceneObjects
 from ..scoring import Condition
 from ..skills import SkillSet
 from ..world.object_types import base_type
-from .asked import names
+from .asked import named_apart
 from .constraints.world_check import WorldCheck
 from .idle_steps import (
     WHERE_ROBOTS_STAND,
     Step,
     acts,
     comments_above,
-    definition_lines,
     dry_run,
-    function_name,
+    function_lines,
     gotos_before,
     skill_steps,
     sleeps_after,
@@ -49,8 +49,6 @@ from .idle_steps import (
 #: An object's fields that an errand may change on a thing that was asked for: where the robots stand, and what it
 #: holds (each thing held is an object of its own, asked for or not).
 _ASIDE = WHERE_ROBOTS_STAND | {"receptacleObjectIds"}
-#: An orchestration line that makes a thread: its variable and its target.
-THREAD = re.compile(r"^(\w+) = threading\.Thread\(target=(\w+)\)$")
 
 
 def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: str,
@@ -81,7 +79,7 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
     dropped |= sleeps_after(lines, steps, dropped, actions)
     dropped |= comments_above(lines, dropped)
     for function in gone:
-        dropped |= _function_lines(lines, function)
+        dropped |= function_lines(lines, function)
     return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
 
 
@@ -94,7 +92,7 @@ class Unneeded:
                  goals: Sequence[Condition]):
         self.steps, self.scene, self.skills, self.goals = steps, scene, skills, goals
         self.asked = {base_type(o) for c in goals for o in (c.subject, c.item) if o} \
-            | {t for t in scene.types if names(instruction, t)}
+            | {t for t in scene.types if named_apart(instruction, t, scene.types)}
         self.failed, world = dry_run(steps, set(), scene, skills)
         self.met, self.ends = world.met(goals), _ends(world, self.asked)
 
@@ -102,25 +100,6 @@ class Unneeded:
         """Whether the steps on the lines ``taken`` can go."""
         failed, world = dry_run(self.steps, taken, self.scene, self.skills)
         return failed <= self.failed and world.met(self.goals) >= self.met and _ends(world, self.asked) == self.ends
-
-
-def _function_lines(lines: Sequence[str], function: int) -> set[int]:
-    """The lines of the ``function``-th definition (its header, its body and the blank line after it) and of the
-    orchestration that runs it (its call, or its thread's creation, start and join)."""
-    defs = [n for n, line in enumerate(lines) if line.startswith("def ")]
-    header = defs[function]
-    name, taken = function_name(lines[header]), definition_lines(lines, header)
-    thread = None
-    for n, line in enumerate(lines):
-        line = line.rstrip("\n")
-        if line == f"{name}()":
-            taken.add(n)
-        elif (made := THREAD.match(line)) is not None and (made.group(2) == name or made.group(1) == thread):
-            thread = made.group(1) if made.group(2) == name else None
-            taken |= {n} if thread else set()
-        elif thread is not None and line in (f"{thread}.start()", f"{thread}.join()"):
-            taken.add(n)
-    return taken
 
 
 def _handled(steps: Sequence[Step], actions: dict[str, str]) -> list[tuple[int, str]]:

@@ -25,6 +25,7 @@ from ..world.object_types import base_type
 from .asked import (
     as_goal,
     coverage,
+    gives_nothing_asked,
     holder_named,
     invented,
     named_apart,
@@ -162,14 +163,16 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
     LightSwitch). Every goal condition of the household benchmark, held-out tasks included, is asked for so; the
     small models add a light switched on to moving a laptop, a tomato warmed to boiling water. Where the instruction
     asks for nothing moved (``Asked.moves``), a thing put in a holder it neither names nor asks into, and that gives
-    the thing no state, is left out too (:func:`.asked.placed_by_model`)."""
+    the thing no state, is left out too (:func:`.asked.placed_by_model`), as is one put in a holder that gives only
+    states nobody asked for (:func:`.asked.gives_nothing_asked`: "open the fridge and cut the apple")."""
     statement = stated.statement
     if statement is None or statement.refusal is not None:
         return stated
     out = {c for c in unasked(asked.naming or instruction, statement.conditions, asked.placements)
            if c.state not in asked.states and c.subject not in asked.placements}
-    if not asked.moves:  # nothing asked moved: a holder nobody named is the model's idea ("slice the apple")
-        out |= {c for c in statement.conditions if placed_by_model(instruction, c, asked.placements)}
+    if not asked.moves:  # nothing asked moved: a holder nobody named, or one for a state nobody asked, is the model's
+        out |= {c for c in statement.conditions if placed_by_model(instruction, c, asked.placements)
+                or gives_nothing_asked(instruction, c, asked.states, asked.placements)}
     return _leave_out(stated, out, "unasked")
 
 

@@ -7,18 +7,22 @@ robot that opens fridges besides the one that switches the coffee machine on, bo
 apple's sub-task, which needs the fridge's robot, waited for it (a transition the reference plan does not make:
 RU 0, by the paper's definition of it, for a plan that met every goal).
 
-So a pair of steps of one sub-task where the later one undoes the earlier (open and close, switch on and off the
-same object), with the GoToObject steps that led to each and the comments right above them, is taken out where the
-dry run shows it was idle: run as the decomposition's world check runs it (a notional robot per sub-task, in the
-order written), no other call fails that did not and the world ends in the same state, every object as it was
-(where the robots stand aside). A switch on and off that filled or cooked something in between changes the end,
-and stays; so does an open and close with something put in between (the put fails without it). A sub-task keeps
-at least one action. Only the model's own plan is read.
+So a pair of steps where the later one undoes the earlier (open and close, switch on and off the same object), in
+one sub-task or two, with the GoToObject steps that led to each and the comments right above them, is taken out
+where the dry run shows it was idle: run as the decomposition's world check runs it (a notional robot per sub-task,
+in the order written), no other call fails that did not and the world ends in the same state, every object as it
+was (where the robots stand aside). A switch on and off that filled or cooked something in between changes the end,
+and stays; so does an open and close with something put in between (the put fails without it). Across sub-tasks:
+asked to throw the plunger out and switch the light off, the 1.5B switched the light off in one sub-task and on
+again in the next, and the planner's last sub-task switched it off once more; the two later switches go, and the
+sub-task left with no action goes whole (its definition and its thread), where another still acts. Only the
+model's plan and the planner's lines in it are read.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
@@ -32,6 +36,8 @@ from .constraints.written import CALL_LINE
 UNDONE_BY = {"OpenObject": "CloseObject", "ToggleObjectOn": "ToggleObjectOff"}
 
 
+#: An orchestration line that makes a thread: its variable and its target.
+THREAD = re.compile(r"^(\w+) = threading\.Thread\(target=(\w+)\)$")
 #: An object's fields that say where the robots stand, not what state the world is in (a sub-task's robot is its
 #: own: no other sub-task starts where it ended).
 WHERE_ROBOTS_STAND = frozenset({"distance", "visible", "isInteractable"})
@@ -49,32 +55,39 @@ class Step:
 
 def drop_idle_steps(text: str, scene: SceneObjects, skills: SkillSet) -> tuple[str, list[str]]:
     """The decomposition without its idle pairs of steps (and the GoToObject steps and comments that served
-    them), and the lines taken out (none: the text as it was). A text with a line this does not know (a helper
-    call) is left as it is."""
+    them; a sub-task left with no action, whole), and the lines taken out (none: the text as it was). A text with
+    a line this does not know (a helper call) is left as it is."""
     lines = text.splitlines(keepends=True)
     steps = skill_steps(lines, skills)
     if steps is None:
         return text, []
     actions = {name: s.action for name, s in skills.items()}
     pairs = [(first, second) for a, first in enumerate(steps) for second in steps[a + 1:]
-             if second.function == first.function and _undoes(first, second, actions)]
+             if _undoes(first, second, actions)]
     if not pairs:
         return text, []
     base = dry_outcome(steps, set(), scene, skills)
     dropped: set[int] = set()
+    gone: set[int] = set()  # sub-tasks the pairs left with no action
     for first, second in pairs:
         pair = {first.line, second.line}
-        if not pair & dropped:
-            for trial in (pair | gotos_before(steps, pair, actions), pair):
-                taken = dropped | trial
-                if acts(steps, first.function, taken, actions) \
-                        and _same(base, dry_outcome(steps, taken, scene, skills)):
-                    dropped = taken
-                    break
+        if pair & dropped:
+            continue
+        for trial in (pair | gotos_before(steps, pair, actions), pair):
+            taken = dropped | trial
+            emptied = {f for f in (first.function, second.function) if not acts(steps, f, taken, actions)}
+            if emptied and not any(acts(steps, s.function, taken, actions) for s in steps):
+                continue  # the plan keeps a sub-task
+            taken |= {s.line for s in steps if s.function in emptied}
+            if _same(base, dry_outcome(steps, taken, scene, skills)):
+                dropped, gone = taken, gone | emptied
+                break
     if not dropped:
         return text, []
     dropped |= sleeps_after(lines, steps, dropped, actions)
     dropped |= comments_above(lines, dropped)
+    for function in gone:
+        dropped |= function_lines(lines, function)
     return "".join(line for n, line in enumerate(lines) if n not in dropped), [lines[n] for n in sorted(dropped)]
 
 
@@ -182,3 +195,22 @@ def comments_above(lines: Sequence[str], dropped: Collection[int]) -> set[int]:
             comments.add(k)
             k -= 1
     return comments
+
+
+def function_lines(lines: Sequence[str], function: int) -> set[int]:
+    """The lines of the ``function``-th definition (its header, its body and the blank line after it) and of the
+    orchestration that runs it (its call, or its thread's creation, start and join)."""
+    defs = [n for n, line in enumerate(lines) if line.startswith("def ")]
+    header = defs[function]
+    name, taken = function_name(lines[header]), definition_lines(lines, header)
+    thread = None
+    for n, line in enumerate(lines):
+        line = line.rstrip("\n")
+        if line == f"{name}()":
+            taken.add(n)
+        elif (made := THREAD.match(line)) is not None and (made.group(2) == name or made.group(1) == thread):
+            thread = made.group(1) if made.group(2) == name else None
+            taken |= {n} if thread else set()
+        elif thread is not None and line in (f"{thread}.start()", f"{thread}.join()"):
+            taken.add(n)
+    return taken

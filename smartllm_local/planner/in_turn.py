@@ -29,8 +29,8 @@ from ..scoring import Condition
 from ..skills import SkillSet
 from ..world.object_types import base_type
 from .constraints.feasibility import EXACT_COALITIONS, Need, can_do
-from .errands import THREAD, Unneeded
-from .idle_steps import Step, acts, comments_above, function_name, gotos_before, skill_steps
+from .errands import Unneeded
+from .idle_steps import THREAD, Step, acts, comments_above, function_name, gotos_before, skill_steps
 
 #: What a robot does to a thing it holds (its pick-up aside): the same robot must do it.
 _HELD = frozenset({"PutObject", "DropHandObject", "ThrowObject"})

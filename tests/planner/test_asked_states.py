@@ -264,8 +264,9 @@ def test_heat_cold_breaking_and_dirt_are_offered_only_where_the_instruction_asks
 
 def test_where_nothing_is_asked_moved_a_thing_put_in_a_holder_nobody_named_is_left_out():
     """Asked to cut the bread into slices, the 0.5B also put the bread in a cabinet; asked to slice the apple, the
-    1.5B put it in a bowl. A holder the words name, one they ask into, one that gives the thing its state, and any
-    holder where the instruction asks for things moved, stay."""
+    1.5B put it in a bowl; asked to open the fridge and cut the apple, the 0.5B put the apple in the fridge. A holder
+    the words name as a place, one they ask into, one that gives a state asked for, and any holder where the
+    instruction asks for things moved, stay."""
     vocabulary = goal_vocabulary(scene_objects(1))
 
     def left_out(instruction: str, text: str) -> list[str]:
@@ -282,6 +283,14 @@ def test_where_nothing_is_asked_moved_a_thing_put_in_a_holder_nobody_named_is_le
     assert left_out("Fry an egg.", "EggCracked cooked\nEggCracked in Pan\nPan in StoveBurner\n\n") == []
     assert left_out("Throw out the apple.", "Apple in GarbageCan\n\n") == []  # asked into
     assert left_out("Slice the bread.", "Bread in Cabinet\n\n") == []  # nothing else: kept as written
+    # A holder that gives only states nobody asked for, named as a thing to open: the 0.5B's apple in the fridge.
+    assert left_out("Open the fridge and cut the apple.", "Fridge opened\nApple in Fridge\nApple sliced\n\n") == \
+        ["Apple in Fridge"]
+    assert left_out("Cut the apple.", "Apple in Fridge\nApple sliced\n\n") == ["Apple in Fridge"]
+    assert left_out("Open the fridge and chill the apple.", "Fridge opened\nApple in Fridge\nApple cold\n\n") == []
+    assert left_out("Slice an apple and keep the slices in the fridge.", "AppleSliced in Fridge\nApple sliced\n\n") \
+        == []  # the fridge named as a place
+    assert left_out("Toast the bread.", "BreadSliced in Toaster\nToaster on\n\n") == []  # switched on: it toasts
 
 
 def test_the_statement_kept_leaves_out_a_goal_nobody_asked_for_and_keeps_what_was_asked_in_so_many_words():
@@ -425,6 +434,8 @@ def test_every_household_goal_of_a_thing_asked_into_a_holder_puts_it_there_and_t
     ("Take the apple and the egg and put them in the fridge.", {"Fridge": ["Apple", "Egg"]}),
     ("Wash the apple and the egg and put it in the fridge.", {}),  # which one?
     ("Slice the apple. Put it in the fridge.", {}),  # another sentence
+    ("The apple and the egg are in the sink; put both of them in the fridge.", {"Fridge": ["Apple", "Egg"]}),
+    ("Your lunch: take the potato and put it in the microwave.", {"Microwave": ["Potato"]}),
     ("Put the telly on, the match is about to start.", {}),
     ("Slice the apple and keep the slices in the fridge.", {}),  # "keep" puts nothing that is not there
 ])

@@ -97,6 +97,48 @@ def test_pairs_that_change_something_stay():
     assert drop_idle_steps(alone, scene_objects(6), SKILLS) == (alone, [])
 
 
+LIGHT_OFF = """def subtask1_throw_plunger():
+    GoToObject('LightSwitch')
+    SwitchOff('LightSwitch')
+
+"""
+LIGHT_ON = """def subtask2_turn_off_light():
+    # go to the light switch
+    GoToObject('LightSwitch')
+    # turn it off
+    SwitchOn('LightSwitch')
+
+"""
+MEET = """def subtask3_meet_goals():
+    # the goals left: Plunger in GarbageCan; LightSwitch off
+    GoToObject('Plunger')
+    PickupObject('Plunger')
+    GoToObject('GarbageCan')
+    PutObject('Plunger', 'GarbageCan')
+{light}
+t1 = threading.Thread(target=subtask1_throw_plunger)
+{second}t1.start()
+{start}t1.join()
+{join}subtask3_meet_goals()
+"""
+SECOND = {"second": "t2 = threading.Thread(target=subtask2_turn_off_light)\n", "start": "t2.start()\n",
+          "join": "t2.join()\n"}
+
+
+def test_a_switch_undone_in_another_sub_task_goes_with_the_sub_task_it_leaves_idle():
+    """Asked to throw the plunger out and switch off the light, the 1.5B switched the light off, then on again in a
+    sub-task of its own, and the planner's last sub-task switched it off once more: the two later switches go, and
+    the sub-task of the switch-on alone goes whole, its thread with it."""
+    light = "    GoToObject('LightSwitch')\n    SwitchOff('LightSwitch')\n"
+    plan = LIGHT_OFF + LIGHT_ON + MEET.format(light=light, **SECOND)
+    text, dropped = drop_idle_steps(plan, scene_objects(403), SKILLS)
+    assert text == LIGHT_OFF + MEET.format(light="", second="", start="", join="")
+    assert "".join(dropped) == LIGHT_ON + light + "".join(SECOND.values())
+    # Where nothing switches the light off again, the switch-on changes how the plan ends: it stays.
+    undone = LIGHT_OFF + LIGHT_ON + MEET.format(light="", **SECOND)
+    assert drop_idle_steps(undone, scene_objects(403), SKILLS) == (undone, [])
+
+
 def test_without_the_idle_pair_the_coffee_and_the_apple_run_at_once():
     """Robot 13 switches things on and cannot open a fridge, robot 18 opens fridges and cannot switch on: with the
     fridge's idle steps the coffee's sub-task needs both robots and the apple's waits for it (a transition); without

@@ -196,6 +196,19 @@ class Candidates:
         return next((objects[0] for went, skill, objects in reversed(fn.calls)
                      if skill in gotos and went in (slot, None)), None)
 
+    def within_reach(self, fn: WrittenFunction, slot: int | None, target: str | None) -> bool:
+        """Whether a restated step of the slot may act on ``target``: nothing (a drop), what the slot last went to,
+        or a holder that holds a thing of that type in the dry run now (the planner's steps go to the spray bottle,
+        then open "the Cabinet" by it: of four cabinets, the one that holds it)."""
+        place = self.place(fn, slot)
+        if target in (place, None):
+            return True
+        if self.world is None or place is None:
+            return False
+        objects = self.world.objects()
+        holders = {o["objectId"]: o["objectType"] for o in objects if o["objectType"] == target}
+        return any(p in holders for o in objects if o["objectType"] == place for p in o.get("parentReceptacles") or ())
+
     def hold_after(self, fn: WrittenFunction, candidate: Candidate) -> int:
         """With a world check a function ends with empty hands (its robot may do the next function):
         the reserve for putting down what is held after ``candidate``."""

@@ -96,11 +96,10 @@ class Repairer:
         found = self._plan(member, [goal], place, skills)
         if found is None:
             return None
-        calls, seconds = found
-        if calls[-1] != (skill.name, tuple(objects)) or not 1 < len(calls) <= MOST_STEPS + 1 \
-                or not self._usable(member, calls, allows):
-            return None
-        return Repair(tuple(calls[:-1]), seconds)
+        written, seconds = found
+        calls = next((calls for calls in written if calls[-1] == (skill.name, tuple(objects))
+                      and 1 < len(calls) <= MOST_STEPS + 1 and self._usable(member, calls, allows)), None)
+        return None if calls is None else Repair(tuple(calls[:-1]), seconds)
 
     def meet(self, member: int, goals: Sequence[Condition], most: int,
              allows: Callable[[str, Sequence[str]], bool] | None = None,
@@ -110,14 +109,17 @@ class Repairer:
         found = self._plan(member, goals, None, skills, hands_free=True)
         if found is None:
             return None
-        calls, seconds = found
-        if not 0 < len(calls) <= most or not self._usable(member, calls, allows, goals):
-            return None
-        return Repair(tuple(calls), seconds)
+        written, seconds = found
+        calls = next((calls for calls in written if 0 < len(calls) <= most
+                      and self._usable(member, calls, allows, goals)), None)
+        return None if calls is None else Repair(tuple(calls), seconds)
 
     def _plan(self, member: int, goals: Sequence[Condition], place: str | None, skills: frozenset[str] | None,
-              hands_free: bool = False) -> tuple[list[Written], float] | None:
-        """Fast Downward's shortest plan for ``member`` from the dry run's state now, as a plan writes it."""
+              hands_free: bool = False) -> tuple[list[list[Written]], float] | None:
+        """Fast Downward's shortest plan for ``member`` from the dry run's state now, as a plan may write it: going
+        to each place it acts at, and then (where that differs) going to the thing it takes out of a shut holder
+        before opening the holder. A type names the instance nearest the robot: by the thing, the holder that holds
+        it; by "the Cabinet", any of four (the spray bottle's cabinet was not the one the plan went to)."""
         # Unified Planning takes most of a second to import: it loads with the first repair sought, not every plan
         from ..classical.problem import Unreachable, planning_task, with_future_pieces
         from ..classical.search import UP_LOCK, search
@@ -148,8 +150,25 @@ class Repairer:
         # names types, and the StoveKnob nearest the robot need not be the one the planner meant.
         types |= {o["objectId"]: types.get(o["controlledObjects"][0], o["objectType"]) for o in objects
                   if len(o.get("controlledObjects") or ()) == 1}
-        return self._gone_first([(s.skill, tuple(types.get(o, o) for o in s.objects)) for s in found.steps],
-                                place), seconds
+        steps = [(s.skill, tuple(s.objects)) for s in found.steps]
+        calls = [(name, tuple(types.get(o, o) for o in ids)) for name, ids in steps]
+        written = [self._gone_first(calls, place)]
+        by_thing = self._gone_first(calls, place, self._taken_out(steps, types))
+        return written + ([by_thing] if by_thing != written[0] else []), seconds
+
+    def _taken_out(self, steps: Sequence[tuple[str, tuple[str, ...]]], types: dict[str, str]) -> list[str | None]:
+        """For each step that opens a holder, and the step going there just before it, the type of the first thing
+        a later step picks up out of it (where it holds it now); None for every other step."""
+        holds = {o["objectId"]: set(o.get("receptacleObjectIds") or ()) for o in self.run.objects}
+        where: list[str | None] = [None] * len(steps)
+        for n, (name, ids) in reversed(list(enumerate(steps))):
+            if self.skills[name].action == "OpenObject" and ids:
+                where[n] = next((types.get(later[0], later[0]) for skill, later in steps[n + 1:]
+                                 if self.skills[skill].action == "PickupObject" and later
+                                 and later[0] in holds.get(ids[0], ())), None)
+            elif self.skills[name].action == "" and n + 1 < len(steps) and steps[n + 1][1][:1] == ids[:1]:
+                where[n] = where[n + 1]
+        return where
 
     def _usable(self, member: int, calls: Sequence[Written], allows: Callable[[str, Sequence[str]], bool] | None,
                 goals: Sequence[Condition] = ()) -> bool:
@@ -158,15 +177,18 @@ class Repairer:
         return (allows is None or all(allows(name, objs) for name, objs in calls)) \
             and self._succeeds(member, calls, goals)
 
-    def _gone_first(self, calls: Sequence[Written], place: str | None) -> list[Written]:
+    def _gone_first(self, calls: Sequence[Written], place: str | None,
+                    where: Sequence[str | None] = ()) -> list[Written]:
         """The calls as a decomposition writes them: each action where the function last went (a GoToObject
         before one that acts elsewhere: the planner's robot stands by all it sees, a plan's robot surely only
-        by what it went to), and no GoToObject to where it already is."""
+        by what it went to; for the n-th call, to ``where[n]`` where given), and no GoToObject to where it already
+        is."""
         goto = next(s.name for s in self.skills.values() if s.action == "")
         written: list[Written] = []
-        for name, objects in calls:
+        for n, (name, objects) in enumerate(calls):
             skill = self.skills[name]
             target = objects[0] if skill.action == "" else acts_on((skill, objects))
+            target = where[n] if n < len(where) and where[n] is not None else target
             if target is not None and target != place:
                 written.append((goto, (target,)))
                 place = target

@@ -231,8 +231,8 @@ class RestatedAllocation(PlanConstraint):
                 continue  # slots are numbered as they first act: robot_list[1] comes after robot_list[0]
             if self.world is not None and skill.action and (
                     not (fn.together if slot is None else slot in fn.slots_went)
-                    or acts_on((skill, tuple(objects))) not in (self.candidates.place(fn, slot), None)):
-                continue  # with a world check, robots act on what they went to in this function
+                    or not self.candidates.within_reach(fn, slot, acts_on((skill, tuple(objects))))):
+                continue  # with a world check, robots act on what they went to in this function (or its holder)
             if self.team is not None:
                 demand = self.scene.world.call_demand(skill.name, objects)
                 steps = self._steps(fn) + [Step(slot, skill.name, mass, demand)]

@@ -37,7 +37,9 @@ LIQUIDS = "liquids"
 PUT, PUT_INTO, PUT_GROUPS, PUT_MOVES = "put", "into", frozenset({"things", "holder"}), "moves"
 _TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*")
 _CLAUSE = re.compile(r"[,.;:!?]")
-_SENTENCE = re.compile(r"[.;:!?]")
+#: Where a sentence ends: a pronoun of a put means what was named before it in its sentence, across ";" and ":"
+#: ("the potato and the egg are in the sink; put both of them in the fridge").
+_SENTENCE = re.compile(r"[.!?]")
 #: Pronouns for the one thing, or all the things, the sentence named before ("put it away", "put them on the bed").
 _IT, _THEM = re.compile(r"\bit\b", re.IGNORECASE), re.compile(r"\b(?:them|both)\b", re.IGNORECASE)
 

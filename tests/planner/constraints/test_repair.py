@@ -24,7 +24,9 @@ from smartllm_local.planner.decoding.writer import REWRITTEN, run_constraint, ru
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.planner.stages import Fitted, run_stage
 from smartllm_local.scoring import Condition
+from smartllm_local.world.controller import open_controller
 from smartllm_local.worlds import scene_objects
+from tests.executor.helpers import run, scores
 from tests.planner.writers import TokenAdversary
 
 CATALOGUE = load_domain().catalogue
@@ -134,6 +136,27 @@ def test_a_search_past_its_wall_clock_backstop_is_an_error_not_a_missing_repair(
     world = WorldCheck(scene_objects(6), SKILLS, MAX_SUBTASKS)
     with pytest.raises(SearchWallClockError, match="wall-clock"):
         _slice_with_empty_hands(Repairer(world, SKILLS, time_limit=0.01))
+
+
+def test_a_thing_in_a_shut_holder_of_several_is_gone_to_before_its_holder_is_opened():
+    """Asked to get the spray bottle out of the cabinet, the planner's steps went to "the Cabinet", the nearest of
+    four, not the one holding the bottle: written so, no plan met the goal. Written as going to the bottle, then
+    opening "the Cabinet" (the one by it), they meet it, in the dry run and on the real Controller."""
+    world = WorldCheck(scene_objects(412), SKILLS, MAX_SUBTASKS)
+    assert sum(o["objectType"] == "Cabinet" for o in world.run.objects) == 4
+    goal = Condition("CounterTop", item="SprayBottle")
+    found = Repairer(world, SKILLS).meet(2, [goal], 10)
+    assert found is not None
+    assert found.calls[:3] == (("GoToObject", ("SprayBottle",)), ("OpenObject", ("Cabinet",)),
+                               ("PickupObject", ("SprayBottle",)))
+    plan = "".join(f"{name}(robots[0], {', '.join(repr(o) for o in objects)})\n" for name, objects in found.calls)
+    controller = open_controller(412, agent_count=1)
+    try:
+        ex = run(plan, [1], controller, 412)
+    finally:
+        controller.stop()
+    assert all(e.success for e in ex.trace), [e.error for e in ex.trace]
+    assert scores(ex, [{"name": "CounterTop", "contains": ["SprayBottle"], "state": None}]).GCR == 1
 
 
 def test_an_effect_is_the_scorers_condition():
