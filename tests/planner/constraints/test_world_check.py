@@ -114,6 +114,36 @@ def test_a_body_the_coalition_accepts_is_not_a_dead_end_for_the_restated_allocat
     assert planned is not None and planned[1] == (0, 0)
 
 
+SPRAY_BOTTLE = """def subtask1_spray_bottle():
+    GoToObject('SprayBottle')
+    OpenObject('Cabinet')
+    PickupObject('SprayBottle')
+    GoToObject('CounterTop')
+    PutObject('SprayBottle', 'CounterTop')
+
+subtask1_spray_bottle()
+"""
+
+
+@pytest.mark.parametrize("robots", [[25, 23], [23, 25]])
+def test_a_robot_by_a_thing_opens_the_holder_it_is_in(robots):
+    """The planner's steps for the spray bottle in one of four shut cabinets go to the bottle, then open "the
+    Cabinet" by it. Robot 23 opens but cannot carry, robot 25 carries but cannot open: the allocation sends both to
+    the bottle, lets robot 23 open the cabinet the bottle is in, and the plan runs with every call succeeding."""
+    scene, team = scene_objects(412), CATALOGUE.team(robots)
+    allocator = RestatedAllocation(scene, CATALOGUE.skills, team=team, function_names=["subtask1_spray_bottle"],
+                                   bodies=restated_bodies(SPRAY_BOTTLE, ["subtask1_spray_bottle"]),
+                                   world=WorldCheck(scene, CATALOGUE.skills, len(team)))
+    allocated = run_constraint(allocator, writer("random", random.Random(0), refusals=0.0), len,
+                               allocator.maximum_output())
+    assert allocator.world_counts()[1] == 0, allocated
+    plan = parse_plan(allocated, form="allocated", skills=CATALOGUE.skills, team_size=len(team))
+    execution = run_plan(plan, 412, team, skills=CATALOGUE.skills)
+    assert all(e.success for e in execution.trace), [e.error for e in execution.trace]
+    assert any("SprayBottle" in child for o in execution.final_objects if o["objectType"] == "CounterTop"
+               for child in o.get("receptacleObjectIds") or ())
+
+
 def test_a_tight_budget_never_leaves_a_promised_subtask_without_a_step_that_succeeds():
     """One character per token and a budget that binds on every task: each promised sub-task keeps room
     for the cheapest go-to and an action that can follow it there, and a go-to is offered only where
