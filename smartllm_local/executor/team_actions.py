@@ -149,10 +149,13 @@ class TeamWorld:
                 held[obj["objectId"]] = m
         return held
 
-    def resolve(self, name: str, affordance: str, near: int, members: Sequence[int]) -> dict[str, Any] | None:
+    def resolve(self, name: str, affordance: str, near: int, members: Sequence[int], *,
+                going: bool = False) -> dict[str, Any] | None:
         """The instance a plan's object name means: among usable matches, for a fixture (what is not picked up) the
-        one ``near`` last meant by its type, else the nearest to ``near``; "the stove burner" a robot switched on
-        is the one it comes back to put the pot on, though another is nearer the sink it comes from."""
+        one ``near`` last meant by its type, where it is going there or sees it, else the nearest to ``near``; "the
+        stove burner" a robot switched on is the one it comes back to put the pot on, though another is nearer the
+        sink it comes from, and "the cabinet" it opens by the spray bottle is the one by it, whichever it went to
+        before."""
         if "|" in name:
             return next((o for o in self.objects if o["objectId"] == name.strip()), None)
         wanted = name.strip().lower()
@@ -181,10 +184,10 @@ class TeamWorld:
             return held[0]
         x, z = self.position(near)
         shut = self._shut_away()
+        meant = {i for o in matches if (i := self.meant.get((near, o["objectType"]))) and (going or self.sees(near, i))}
         # Prefer instances the robots can get at (not in a closed fridge or drawer), then whole ones (a broken
         # one can be neither picked up nor broken again), then the fixture meant before, then the nearest.
-        chosen = min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")),
-                                             o["objectId"] != self.meant.get((near, o["objectType"])),
+        chosen = min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")), o["objectId"] not in meant,
                                              round(Box.of(o).distance(x, z), 6), o["objectId"]))
         if not chosen.get("pickupable"):
             self.meant.update({(m, chosen["objectType"]): chosen["objectId"] for m in {near, *members}})
@@ -244,7 +247,7 @@ class TeamWorld:
         return [m for m in ranked if condition(m)] or []
 
     def _go_to(self, name: str, members: Sequence[int]) -> Outcome:
-        target = self.resolve(name, "", members[0], members)
+        target = self.resolve(name, "", members[0], members, going=True)
         if target is None:
             return Outcome(False, f"there is no {name!r} to go to", action="Teleport")
         if target["objectId"] in self._held_by_team(members):

@@ -71,3 +71,21 @@ def test_a_fixture_a_robot_meant_before_is_the_one_its_type_names_again():
     assert len(burners) == 1
     pot = next(o for o in ex.final_objects if o["objectType"] == "Pot")
     assert pot["temperature"] == "Hot" and pot["isFilledWithLiquid"] and pot["parentReceptacles"] == list(burners)
+
+
+def test_a_fixture_meant_before_gives_way_to_one_within_reach():
+    """A robot that went to "the Cabinet" (the nearest of FloorPlan412's four) and then to the spray bottle in
+    another opens "the Cabinet" by the bottle: the one it meant before is out of its reach, so the type names the
+    nearest again, on the real Controller; going back to "the Cabinet" goes to the one it last meant."""
+    controller = open_controller(412, agent_count=1)
+    steps = ["GoToObject('Cabinet')", "GoToObject('SprayBottle')", "OpenObject('Cabinet')",
+             "PickupObject('SprayBottle')", "GoToObject('Cabinet')", "CloseObject('Cabinet')"]
+    try:
+        ex = run("".join(f"{s[:s.index('(') + 1]}robots[0], {s[s.index('(') + 1:]}\n" for s in steps), [1],
+                 controller, 412)
+    finally:
+        controller.stop()
+    assert [e.success for e in ex.trace] == [True] * len(steps), [e.error for e in ex.trace]
+    first, opened, back = (ex.trace[n].object_id for n in (0, 2, 4))
+    bottle = next(o for o in ex.final_objects if o["objectType"] == "SprayBottle")
+    assert first != opened and back == opened and bottle["isPickedUp"]
