@@ -49,6 +49,8 @@ from .idle_steps import (
 #: An object's fields that an errand may change on a thing that was asked for: where the robots stand, and what it
 #: holds (each thing held is an object of its own, asked for or not).
 _ASIDE = WHERE_ROBOTS_STAND | {"receptacleObjectIds"}
+#: A held thing's fields that say where the robot holding it stands (it is in a hand either way).
+_CARRIED = frozenset({"position", "rotation", "axisAlignedBoundingBox", "objectOrientedBoundingBox"})
 
 
 def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: str,
@@ -114,6 +116,8 @@ def _handled(steps: Sequence[Step], actions: dict[str, str]) -> list[tuple[int, 
 
 
 def _ends(world: WorldCheck, asked: Collection[str]) -> str:
-    """How the things of the asked types end, what they hold aside."""
-    return json.dumps([{k: v for k, v in o.items() if k not in _ASIDE} for o in world.objects()
-                       if base_type(o["objectType"]) in asked], sort_keys=True, default=str)
+    """How the things of the asked types end, what they hold aside, and where a thing held is (by its robot):
+    asked to open the fridge and cut the apple, the 0.5B carried a slice to the fridge and on to open the
+    microwave; without the microwave's steps the slice ends in the same hand by the fridge."""
+    return json.dumps([{k: v for k, v in o.items() if k not in _ASIDE and not (o.get("isPickedUp") and k in _CARRIED)}
+                       for o in world.objects() if base_type(o["objectType"]) in asked], sort_keys=True, default=str)

@@ -229,3 +229,33 @@ def test_a_thing_named_only_by_a_word_of_another_things_name_is_not_asked_for():
     assert "    PickupObject('SoapBottle')\n" in dropped
     soap = asked.replace("spray bottle", "soap bottle")
     assert drop_errands(DOOR + SOAP_BOTTLE + BOTH, scene, SKILLS, soap, goals)[1] == []
+
+
+SLICE_CARRIED = """def subtask1_slice():
+    GoToObject('ButterKnife')
+    PickupObject('ButterKnife')
+    GoToObject('Apple')
+    SliceObject('Apple')
+
+def subtask2_fridge():
+    GoToObject('AppleSliced')
+    PickupObject('AppleSliced')
+    GoToObject('Fridge')
+    OpenObject('Fridge')
+{microwave}
+subtask1_slice()
+subtask2_fridge()
+"""
+MICROWAVE = """    GoToObject('Microwave')
+    OpenObject('Microwave')
+"""
+
+
+def test_a_thing_still_held_ends_as_it_did_wherever_its_robot_stands():
+    """Asked to open the fridge and cut the apple, the 0.5B carried a slice to the fridge and then opened the
+    microwave: without the microwave's steps the slice is in the same hand, by the fridge instead; the microwave's
+    steps are an errand."""
+    plan = SLICE_CARRIED.format(microwave=MICROWAVE)
+    goals = [Condition("Apple", state="SLICED"), Condition("Fridge", state="OPENED")]
+    text, dropped = drop_errands(plan, scene_objects(24), SKILLS, "Open the fridge and cut the apple.", goals)
+    assert (text, "".join(dropped)) == (SLICE_CARRIED.format(microwave=""), MICROWAVE)
