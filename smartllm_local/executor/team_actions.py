@@ -184,7 +184,9 @@ class TeamWorld:
             return held[0]
         x, z = self.position(near)
         shut = self._shut_away()
-        meant = {i for o in matches if (i := self.meant.get((near, o["objectType"]))) and (going or self.sees(near, i))}
+        # The fixture meant before counts where the robot is going to it or sees it (each asked once, not per match).
+        before = {self.meant.get((near, o["objectType"])) for o in matches} - {None}
+        meant = {i for i in before if going or self.sees(near, i)}
         # Prefer instances the robots can get at (not in a closed fridge or drawer), then whole ones (a broken
         # one can be neither picked up nor broken again), then the fixture meant before, then the nearest.
         chosen = min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")), o["objectId"] not in meant,

@@ -40,14 +40,14 @@ from ..world.object_types import (
 #: How many first letters a word of the instruction and a word of a type's name must share.
 PREFIX = 3
 _WORD = re.compile(r"[a-z]+")
-#: Holders that give what they hold a state (heat, cold, a pan's frying, a basin's rinsing): where a thing goes in
-#: one of them is no mere place ("chill the apple": the fridge; "fry an egg": the pan on the burner).
-STATE_GIVING = HEAT_SOURCES | COLD_SOURCES | RECEPTACLE_ONLY_ACCEPTS["StoveBurner"] | WATER_BASINS
-#: The states each holder of :data:`STATE_GIVING` gives what it holds (a burner's pan fries; a basin under a running
-#: faucet rinses and fills).
+#: The holders that give what they hold a state, each with the states it gives (heat, cold, a burner's pan frying, a
+#: basin under a running faucet rinsing and filling).
 GIVES = {**{h: frozenset({"HOT", "COOKED"}) for h in HEAT_SOURCES | RECEPTACLE_ONLY_ACCEPTS["StoveBurner"]},
          **{h: frozenset({"COLD"}) for h in COLD_SOURCES}, **{h: frozenset({"CLEAN", "FILLED"}) for h in WATER_BASINS},
          "CoffeeMachine": frozenset({"HOT", "FILLED"})}
+#: Holders that give what they hold a state: where a thing goes in one of them is no mere place ("chill the apple":
+#: the fridge; "fry an egg": the pan on the burner).
+STATE_GIVING = frozenset(GIVES)
 #: Words after which an instruction names where a thing is now, not where it must be ("from the coffee table").
 ORIGIN = re.compile(r"\b(?:from|out of)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?([a-z]+(?:\s+[a-z]+)?)")
 

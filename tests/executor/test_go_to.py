@@ -52,20 +52,25 @@ def test_a_name_means_a_whole_instance_before_a_broken_one_however_near():
     assert all(o["isBroken"] for o in ex.final_objects if o["objectType"] == "Statue")
 
 
+def _run_alone(steps: list[str], robot: int, floor_plan: int):
+    """Steps written without a robot, run by one robot on the real Controller."""
+    controller = open_controller(floor_plan, agent_count=1)
+    try:
+        return run("".join(f"{s[:s.index('(') + 1]}robots[0], {s[s.index('(') + 1:]}\n" for s in steps), [robot],
+                   controller, floor_plan)
+    finally:
+        controller.stop()
+
+
 def test_a_fixture_a_robot_meant_before_is_the_one_its_type_names_again():
     """Asked to boil water on the stove, the planner's steps switch "the StoveBurner" on beside the stove, fill the
     pot at the sink, then go to "the StoveBurner" and put the pot on it: from the sink another burner is nearer, and
     the pot stayed cold on it. A fixture a robot has meant by its type is the one the type names again for it, on the
     real Controller."""
-    controller = open_controller(20, agent_count=1)
     steps = ["GoToObject('StoveBurner')", "SwitchOn('StoveBurner')", "GoToObject('Pot')", "PickupObject('Pot')",
              "GoToObject('Faucet')", "SwitchOn('Faucet')", "GoToObject('SinkBasin')", "PutObject('Pot', 'SinkBasin')",
              "GoToObject('Pot')", "PickupObject('Pot')", "GoToObject('StoveBurner')", "PutObject('Pot', 'StoveBurner')"]
-    try:
-        ex = run("".join(f"{s[:s.index('(') + 1]}robots[0], {s[s.index('(') + 1:]}\n" for s in steps), [3],
-                 controller, 20)
-    finally:
-        controller.stop()
+    ex = _run_alone(steps, 3, 20)
     assert [e.success for e in ex.trace] == [True] * len(steps), [e.error for e in ex.trace]
     burners = {e.object_id for e in ex.trace if e.objects[-1] == "StoveBurner" and e.skill != "SwitchOn"}
     assert len(burners) == 1
@@ -77,14 +82,9 @@ def test_a_fixture_meant_before_gives_way_to_one_within_reach():
     """A robot that went to "the Cabinet" (the nearest of FloorPlan412's four) and then to the spray bottle in
     another opens "the Cabinet" by the bottle: the one it meant before is out of its reach, so the type names the
     nearest again, on the real Controller; going back to "the Cabinet" goes to the one it last meant."""
-    controller = open_controller(412, agent_count=1)
     steps = ["GoToObject('Cabinet')", "GoToObject('SprayBottle')", "OpenObject('Cabinet')",
              "PickupObject('SprayBottle')", "GoToObject('Cabinet')", "CloseObject('Cabinet')"]
-    try:
-        ex = run("".join(f"{s[:s.index('(') + 1]}robots[0], {s[s.index('(') + 1:]}\n" for s in steps), [1],
-                 controller, 412)
-    finally:
-        controller.stop()
+    ex = _run_alone(steps, 1, 412)
     assert [e.success for e in ex.trace] == [True] * len(steps), [e.error for e in ex.trace]
     first, opened, back = (ex.trace[n].object_id for n in (0, 2, 4))
     bottle = next(o for o in ex.final_objects if o["objectType"] == "SprayBottle")
