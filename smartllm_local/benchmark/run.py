@@ -77,7 +77,8 @@ class TaskOutcome:
                                         **({"repairs": len(r.repairs), "unrepaired": r.unrepaired,
                                             "ended_at_goals": r.ended_at_goals, "finished": r.finish is not None,
                                             "folded": bool(r.finish and r.finish.get("into")),
-                                            "errands": len(r.errands), "idle_steps": len(r.idle_steps)}
+                                            "errands": len(r.errands), "idle_steps": len(r.idle_steps),
+                                            "joined": len(r.joined)}
                                            if r.stage == "decomposition" else {}),
                                         **({"executable": len(r.executable)} if r.stage == "allocation" else {})}
                               for r in self.result.stages.values()}

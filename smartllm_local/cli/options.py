@@ -235,8 +235,9 @@ _NO_FINISH_GOALS = typer.Option(False, "--no-finish-goals", help=(
 
 _ONE_AT_A_TIME = typer.Option(False, "--one-at-a-time", help=(
     "Let the allocation call a sub-task on its own or start a block of threads where the next sub-task could "
-    "still join it, rather than have every sub-task that can join the block being written join it (see "
-    "docs/planner.md, \"Threads together\")."))
+    "still join it, rather than have every sub-task that can join the block being written join it, and keep "
+    "apart sub-tasks that can only run in turn rather than write them as one (see docs/planner.md, \"Threads "
+    "together\")."))
 _KEEP_IDLE_STEPS = typer.Option(False, "--keep-idle-steps", help=(
     "Keep the decomposition's pairs of steps that undo each other in a sub-task with nothing changed (a fridge "
     "opened and closed with nothing put in), rather than take them out before the teams are formed (see "

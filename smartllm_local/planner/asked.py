@@ -85,16 +85,20 @@ def asks_for(instruction: str, condition: Condition) -> bool:
 
 
 def invented(instruction: str, out_of_reach: Sequence[Condition], stated: Sequence[Condition],
-             asked_into: Collection[str] = ()) -> list[Condition]:
+             asked_into: Collection[str] = (), unsaid: Collection[tuple[str, str]] = ()) -> list[Condition]:
     """The goals out of reach to drop rather than refuse for: all of them where none is asked for and some goal
     within reach is; otherwise none (the task is refused). A goal is asked for where the instruction names one of
     its objects, or where one of them is in a goal asked for ("make me a coffee": ``Mug in CoffeeMachine`` is
     named, so ``Mug filled`` is asked for too); but a named thing's place is the model's choice where the instruction
     neither names the holder nor asks for it in so many words (``asked_into``), and the holder gives what it holds
     no state (:data:`STATE_GIVING`): asked to slice the apple, the 1.5B also put the slices in a bowl, for a team
-    that cannot put anything down."""
+    that cannot put anything down. So is a state of a thing the instruction asks put somewhere, where it has no
+    words for the state (``unsaid``: (thing, state) pairs): asked to take the candle out of the bathtub and put it on
+    the counter, the 1.5B stated it there and `Candle on`. ("Put the telly on" puts the TV nowhere: its `on` is
+    asked.)"""
     asked = _asked(instruction, stated, asked_into)
-    if not out_of_reach or any(c in asked and not placed_by_model(instruction, c, asked_into) for c in out_of_reach):
+    if not out_of_reach or any(c in asked and not placed_by_model(instruction, c, asked_into)
+                               and (base_type(c.subject), c.state) not in unsaid for c in out_of_reach):
         return []
     left = [c for c in stated if c not in out_of_reach]
     return list(out_of_reach) if any(c in asked for c in left) else []

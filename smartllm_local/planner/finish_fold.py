@@ -27,7 +27,7 @@ from ..scene import SceneObjects
 from ..skills import SkillSet
 from .constraints.feasibility import EXACT_COALITIONS
 from .constraints.finish import NAME
-from .idle_steps import body_end, dry_outcome, function_name, skill_steps
+from .idle_steps import body_end, function_name, same_outcome
 from .in_turn import all_apart
 
 
@@ -52,19 +52,9 @@ def fold_finish(text: str, scene: SceneObjects, skills: SkillSet,
     for model in reversed(defs[:-1]):
         end = body_end(lines, model)
         folded = lines[:end] + lines[last + 1:body] + lines[end:last - 1]
-        if not _same_outcome(lines, folded, scene, skills):
+        if not same_outcome(lines, folded, scene, skills):
             continue
         if not checks_team or all_apart(folded, skills, team, scene):
             return "".join(folded), function_name(lines[model])
         first = first or ("".join(folded), function_name(lines[model]))
     return first or (text, None)
-
-
-def _same_outcome(before: Sequence[str], after: Sequence[str], scene: SceneObjects, skills: SkillSet) -> bool:
-    """Whether ``after`` fails no more calls than ``before`` in the dry run and leaves the world as it does."""
-    old, new = skill_steps(before, skills), skill_steps(after, skills)
-    if old is None or new is None:
-        return False
-    (old_failed, old_end), (new_failed, new_end) = dry_outcome(old, (), scene, skills), \
-        dry_outcome(new, (), scene, skills)
-    return len(new_failed) <= len(old_failed) and new_end == old_end

@@ -12,7 +12,7 @@ from __future__ import annotations
 import re
 import time
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from ..errors import PlanError
@@ -34,6 +34,7 @@ from .asked import (
     outnamed,
     placed_by_model,
     present_yet_refused,
+    things_named,
     unasked,
 )
 from .backends.base import Backend
@@ -215,13 +216,16 @@ class Asked:
     in it, and ``placements``, each holder with the things to go in it (both owed where the model leaves them
     out); ``withheld``, the states offered only where asked for, and not asked for; ``naming``, the instruction less
     the verbs of the switches it asks for, whose words name no thing ("switch off the lamp"; None: all of it);
-    ``moves``, whether it asks for any thing moved at all (:meth:`StateWords.asks_to_move`)."""
+    ``moves``, whether it asks for any thing moved at all (:meth:`StateWords.asks_to_move`); ``each``, the states
+    whose words name several things each by a name of its own ("slice the apple, the lettuce and the tomato"), with
+    those things, each owed the state (of the others, one is)."""
 
     states: Mapping[str, Sequence[str]]
     withheld: Collection[str]
     placements: Mapping[str, Sequence[str]]
     naming: str | None = None
     moves: bool = True
+    each: Mapping[str, Sequence[str]] = field(default_factory=dict)
 
 
 def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
@@ -231,7 +235,8 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
     :func:`standing`); where they name a liquid, the things that hold it, owed filled too (:func:`_holding_liquid`)."""
     holders = {holder for holder, _ in there}
     states: dict[str, list[str]] = {}
-    for state, said in states_asked(instruction, words.asked).items():
+    each: dict[str, list[str]] = {}
+    for state, said in states_asked(instruction, words.asked, words.verbs).items():
         filled = [s for s in words.filled_by(said) if s != state]
         liquid = _holding_liquid(said, [state, *filled], vocabulary) if filled else {}
         if liquid:  # "boil some water on the stove": a pot, filled and hot (and on the burner: the put's)
@@ -240,10 +245,13 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
         else:
             states[state] = _located(said, named_for(said, lambda t, s=state: s in vocabulary.states.get(t, ()),
                                                      vocabulary), holders, there)
+            apart = [t for t in things_named(said, vocabulary.types) if t in states[state]]
+            if len(apart) > 1:  # "the desk lamp and the ceiling light", not "the lamp" beside two
+                each[state] = apart
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
     return Asked(states, withheld, placements_asked(instruction, vocabulary, words),
-                 without_asking_verbs(instruction, switches), words.asks_to_move(instruction))
+                 without_asking_verbs(instruction, switches), words.asks_to_move(instruction), each)
 
 
 def checked_against_team(record: StageRecord, instruction: str, scene: SceneObjects, conditions: Sequence[Condition],
@@ -252,8 +260,10 @@ def checked_against_team(record: StageRecord, instruction: str, scene: SceneObje
     reach that nobody asked for (:func:`.asked.invented`), which leave the record's output for its
     ``dropped_goals``: a task is refused for what it asks, not for the model's invention."""
     problems = {c: scene.world.unattainable([as_goal(c)], team, skills, scene.floor_plan) for c in conditions}
-    dropped = invented(instruction, [c for c, why in problems.items() if why], conditions,
-                       holders_asked(instruction, scene))
+    words = load_state_words(scene.world.examples_dir())
+    placed = placements_asked(instruction, goal_vocabulary(scene), words)
+    unsaid = {(thing, state) for things in placed.values() for thing in things for state in words.unsaid(instruction)}
+    dropped = invented(instruction, [c for c, why in problems.items() if why], conditions, list(placed), unsaid)
     if dropped:
         record.dropped_goals = [condition_line(c) for c in dropped]
         record.output = "".join(line for line in record.output.splitlines(keepends=True)
@@ -328,7 +338,7 @@ def _candidate(planner: Planner, backend: Backend, k: int, prompt: Fitted, scene
     owing what the instruction ``asked`` for in so many words."""
     record = StageRecord(STAGE, chat_template=planner.chat_status)
     constraint = GoalConstraint(vocabulary, allow_refusal=refusals, asked=asked.states, withheld=asked.withheld,
-                                placed=asked.placements) if planner.config.grammar else None
+                                placed=asked.placements, each=asked.each) if planner.config.grammar else None
     # No team: the goal is what the instruction asks, whoever reaches it.
     task = PlanResult(instruction=instruction, floor_plan=scene.floor_plan, robots=[])
     rng = planner.stage_rng(task, STAGE if k == 0 else f"{STAGE} candidate {k}")

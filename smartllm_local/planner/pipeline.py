@@ -47,6 +47,7 @@ from .finish_fold import fold_finish
 from .goal_stage import GOAL_CHECK, StatedGoals, checked_against_team, said_of, state_goals, stated_conditions
 from .idle_steps import drop_idle_steps
 from .in_turn import free_blocks
+from .joined import join_in_turn
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -186,8 +187,8 @@ class Planner:
     def _tidy(self, record: StageRecord, result: PlanResult, scene: SceneObjects) -> None:
         """The chosen decomposition without its errands nobody asked for (:mod:`.errands`, and :mod:`.in_turn`'s
         steps that alone made sub-tasks run in turn) and its idle steps (:mod:`.idle_steps`), the planner's last
-        sub-task folded into the model's last (:mod:`.finish_fold`): the text the coalition and the allocation
-        read."""
+        sub-task folded into the model's last (:mod:`.finish_fold`), sub-tasks that could only run in turn joined
+        (:mod:`.joined`): the text the coalition and the allocation read."""
         if not (self.config.world_check and isinstance(record.plan, Plan) and not record.plan.is_refusal):
             return
         skills, config, team = self.catalogue.skills, self.config, self.catalogue.team(result.robots)
@@ -203,7 +204,9 @@ class Planner:
             record.output, into = fold_finish(record.output, scene, skills, team)
             if into is not None:
                 record.finish = {**record.finish, "into": into}
-        if record.errands or record.idle_steps or into is not None:
+        if config.together:
+            record.output, record.joined = join_in_turn(record.output, scene, skills, team)
+        if record.errands or record.idle_steps or into is not None or record.joined:
             record.plan = None  # parsed again, from the text the coalition and the allocation read
 
     def _decomposition(self, result: PlanResult, scene: SceneObjects, team: Sequence[Robot], prompt: Fitted,

@@ -117,7 +117,7 @@ def test_a_holder_the_model_chose_for_a_named_thing_asks_for_nothing_else_in_it(
     assert unasked("Chill the wine.", chill) == []  # a cold source gives what is in it a state
 
 
-@pytest.mark.parametrize("tasks", ["benchmark", "heldout", "development"])
+@pytest.mark.parametrize("tasks", ["benchmark", "heldout", "development", "development-3"])
 def test_every_household_goal_condition_is_one_the_instruction_asks_for(tasks):
     """So the lines the goal stage leaves out as nobody's asking are never among a task's goals (the goals read
     here to check the reading, never by the stage)."""
@@ -138,12 +138,15 @@ def test_every_household_goal_condition_is_one_the_instruction_asks_for(tasks):
         assert not {c.state for c in truth} & set(asked.withheld), task.id  # no state asked is withheld
 
 
-def test_every_infeasible_benchmark_task_is_still_refused_for_its_own_goals():
-    """On the benchmark's own goals, the goal check names a problem for every infeasible task, and the rule drops
-    none of them."""
+@pytest.mark.parametrize("tasks", ["benchmark", "heldout", "development", "development-3"])
+def test_every_infeasible_household_task_is_still_refused_for_its_own_goals(tasks):
+    """On each task's own goals, the goal check names a problem for every infeasible task, and the rule drops none
+    of them."""
+    household = load_domain("household")
     world = scene_objects(1).world
-    infeasible = [t for t in load_tasks() if not t.feasible]
-    assert len(infeasible) == 7
+    chosen = load_tasks() if tasks == "benchmark" else load_tasks([household.folder / tasks / "tasks.jsonl"])
+    infeasible = [t for t in chosen if not t.feasible]
+    assert len(infeasible) >= 3
     for task in infeasible:
         conditions = statement_of(task.goals).conditions
         team = CATALOGUE.team(task.robots)
@@ -151,10 +154,30 @@ def test_every_infeasible_benchmark_task_is_still_refused_for_its_own_goals():
         assert out and invented(task.instruction, out, conditions) == [], task.id
 
 
-def _checked(monkeypatch, instruction: str, statement: str) -> tuple[PlanResult, StageRecord]:
-    """The goal check of a statement the model is made to write, for robot 13 (switches things on, opens
+def test_a_state_the_instruction_has_no_words_for_of_a_thing_it_puts_somewhere_is_the_model_s_choice(monkeypatch):
+    """Asked to take the candle out of the bathtub and put it on the counter, the 1.5B stated it there and `Candle
+    on`, which robot 30 cannot switch: the task was refused for the model's reading of "on". "Put the telly on" puts
+    the TV nowhere, so its `on` is asked (an infeasible task of the benchmark: the 1.5B stated the remote on the TV
+    stand beside it), and so is the bed clean for "freshen up the bed"."""
+    candle = "Take the candle out of the bathtub and put it on the counter."
+    _, record = _checked(monkeypatch, candle, "Candle in CounterTop\nCandle on\n\n", floor_plan=407, robots=[30])
+    assert record.refusal is None and record.dropped_goals == ["Candle on"]
+    lit = "Put the candle on the counter and turn it on."
+    _, record = _checked(monkeypatch, lit, "Candle in CounterTop\nCandle on\n\n", floor_plan=407, robots=[30])
+    assert record.refused_by == GOAL_CHECK and "SwitchOn" in record.refusal
+    _, record = _checked(monkeypatch, "Put the telly on, the match is about to start.",
+                         "Television on\nRemoteControl in TVStand\n\n", floor_plan=201, robots=[25, 23])
+    assert record.refused_by == GOAL_CHECK and "SwitchOn" in record.refusal
+    _, record = _checked(monkeypatch, "Freshen up the bed before my guests stay over.",
+                         "Boots in DogBed\nBed clean\nBoots in Bed\n\n", floor_plan=301, robots=[1, 2])
+    assert record.refused_by == GOAL_CHECK and "CleanObject" in record.refusal
+
+
+def _checked(monkeypatch, instruction: str, statement: str, floor_plan: int = 6,
+             robots: list[int] | None = None) -> tuple[PlanResult, StageRecord]:
+    """The goal check of a statement the model is made to write, by default for robot 13 (switches things on, opens
     nothing) in a kitchen."""
-    scene = scene_objects(6)
+    scene = scene_objects(floor_plan)
 
     def stated(planner, text, floor_plan, refusals=True):
         record = StageRecord("goal", output=statement)
@@ -162,7 +185,7 @@ def _checked(monkeypatch, instruction: str, statement: str) -> tuple[PlanResult,
 
     monkeypatch.setattr(pipeline, "state_goals", stated)
     planner = Planner(FakeBackend(), CATALOGUE, PlannerConfig(goal_check=True))
-    result = PlanResult(instruction, "FloorPlan6", [13])
+    result = PlanResult(instruction, f"FloorPlan{floor_plan}", robots or [13])
     return result, planner.check_goals(result)
 
 

@@ -130,3 +130,22 @@ def test_the_planners_steps_go_to_the_sub_task_that_keeps_the_teams_apart():
     assert not failed and _met(dry, [Condition("Pan", item="Potato"), Condition("Potato", state="COOKED")])
     assert fold_finish(FRY_AND_CHILL + MEET, scene, SKILLS)[1] == "subtask2_chill_bread"
     assert fold_finish(FRY_AND_CHILL + MEET, scene, SKILLS, CATALOGUE.team([1, 2]))[1] == "subtask2_chill_bread"
+
+
+def test_the_same_end_is_the_same_to_the_micrometre():
+    """Asked to turn the TV on and put the pillow on the armchair (FloorPlan202, the laptop on the armchair), the
+    1.5B had its robot carry the laptop to the sofa and stop; the planner put the pillow on the armchair. Folded,
+    the pillow's box ended 2e-15 m from where it ended apart, so the fold was refused and the plan took a
+    transition (RU 0)."""
+    text = (
+        "def subtask1_turn_on_tv():\n    GoToObject('Television')\n    SwitchOn('Television')\n\n"
+        "def subtask2_clear_armchair():\n    GoToObject('Laptop')\n    PickupObject('Laptop')\n"
+        "    GoToObject('Sofa')\n    PutObject('Laptop', 'Sofa')\n\n"
+        "subtask1_turn_on_tv()\nsubtask2_clear_armchair()\n\n"
+        "def subtask3_meet_goals():\n    # the goals left: Pillow in ArmChair\n    GoToObject('Pillow')\n"
+        "    PickupObject('Pillow')\n    GoToObject('ArmChair')\n    PutObject('Pillow', 'ArmChair')\n\n"
+        "subtask3_meet_goals()\n")
+    folded, into = fold_finish(text, scene_objects(202), SKILLS, CATALOGUE.team([24, 25]))
+    assert into == "subtask2_clear_armchair" and "subtask3" not in folded
+    dry, failed = _final_state(folded, 202)
+    assert not failed and _met(dry, [Condition("ArmChair", item="Pillow"), Condition("Television", state="ON")])

@@ -176,9 +176,12 @@ def test_a_plan_with_a_line_it_does_not_know_is_left_as_it_is():
     assert drop_idle_steps(helper, scene_objects(6), SKILLS) == (helper, [])
 
 
-def decomposed(monkeypatch, output: str, config, goals: str = ""):
-    """The decomposition stage's record where the model wrote ``output`` (a fake backend) for the coffee-and-apple
-    instruction in FloorPlan6 with robots 13 and 18, and the goal stage stated ``goals``."""
+def decomposed(monkeypatch, output: str, config, goals: str = "",
+               task: tuple[str, str, list[int]] = ("Make me a coffee and put the apple in the fridge.", "FloorPlan6",
+                                                   [13, 18])):
+    """The decomposition stage's record where the model wrote ``output`` (a fake backend) for the ``task``
+    (instruction, floor plan, robots: by default the coffee and the apple in FloorPlan6 with robots 13 and 18), and
+    the goal stage stated ``goals``."""
     from smartllm_local.planner.goal_stage import STAGE
     from smartllm_local.planner.pipeline import Planner
     from smartllm_local.planner.result import PlanResult, StageRecord
@@ -192,7 +195,7 @@ def decomposed(monkeypatch, output: str, config, goals: str = ""):
 
     monkeypatch.setattr(Planner, "decomposition_prompt", lambda self, instruction, scene, team: None)
     monkeypatch.setattr(Planner, "_decomposition", written)
-    result = PlanResult("Make me a coffee and put the apple in the fridge.", "FloorPlan6", [13, 18])
+    result = PlanResult(*task)
     if goals:
         result.add(StageRecord(STAGE, output=goals))
     return Planner(FakeBackend(), CATALOGUE, config).decompose(result)
@@ -215,5 +218,5 @@ def test_the_summary_counts_the_idle_lines_taken_out():
     from smartllm_local.benchmark.results import repairs_line
 
     lines = [{"tokens": {"decomposition": {"idle_steps": 8}}}, {"tokens": {"decomposition": {"idle_steps": 0}}}]
-    assert repairs_line(lines).endswith("8 idle line(s) taken out in 1 task(s)")
+    assert "8 idle line(s) taken out in 1 task(s);" in repairs_line(lines)
     assert repairs_line([{"tokens": {"decomposition": {"idle_steps": 0}}}]) == ""

@@ -58,7 +58,7 @@ class GoalConstraint(Constraint):
 
     def __init__(self, vocabulary: GoalVocabulary, *, allow_refusal: bool = True, max_goals: int = MAX_GOALS,
                  asked: Mapping[str, Sequence[str]] | None = None, withheld: Collection[str] = (),
-                 placed: Mapping[str, Sequence[str]] | None = None):
+                 placed: Mapping[str, Sequence[str]] | None = None, each: Mapping[str, Sequence[str]] | None = None):
         super().__init__()
         self.vocabulary, self.allow_refusal, self.max_goals = vocabulary, allow_refusal, max_goals
         self.withheld = frozenset(withheld)  # states not offered (not asked for, and offered only where asked)
@@ -66,6 +66,8 @@ class GoalConstraint(Constraint):
         # A state nothing here can be in asks for nothing; a thing named that cannot be in it is not named for it.
         self.asked = {state: [kind for kind in named if state in vocabulary.states.get(kind, ())]
                       for state, named in (asked or {}).items() if state in able}
+        self.each = {state: [kind for kind in named if kind in self.asked[state]]
+                     for state, named in (each or {}).items() if state in self.asked}
         # A holder nothing here can go in asks for nothing; a thing named that cannot go in it is not named for it.
         receptacles = vocabulary.holder_types()
         self.placed = {holder: [kind for kind in named if holder in vocabulary.holders.get(kind, ())]
@@ -114,10 +116,17 @@ class GoalConstraint(Constraint):
             self.ended = self.owing or not (self._missing() or self._unplaced())
             self.owing = not self.ended
 
-    def _missing(self) -> list[str]:
-        """The states asked for that no condition said so far states."""
-        said = {c.state for c in self.said}
-        return [state for state in self.asked if state not in said]
+    def _missing(self) -> list[tuple[str, list[str]]]:
+        """The states asked for that no condition said so far states, each with the things one of which is owed it
+        (none: any), and one for each of the things owed a state each that no condition states it of."""
+        said = {(c.subject, c.state) for c in self.said}
+        missing = []
+        for state, named in self.asked.items():
+            if state in self.each:
+                missing += [(state, [kind]) for kind in self.each[state] if (kind, state) not in said]
+            elif not any(s == state for _, s in said):
+                missing.append((state, named))
+        return missing
 
     def _unplaced(self) -> list[tuple[str, list[str]]]:
         """The placements asked for that no condition said so far makes: (holder, the things one of which goes
@@ -156,11 +165,10 @@ class GoalConstraint(Constraint):
             if names:
                 lines.append(seq(alt(*names), CONTAINMENT, alt(*self.names[holder]), "\n"))
         closed = self._closed_states()
-        for state in [] if lines else self._missing():
+        for state, named in [] if lines else self._missing():
             able = [kind for kind in self.vocabulary.types if state in self.vocabulary.states.get(kind, ())
                     and state not in closed.get(kind, ())]
             spoken = {kind for c in self.said for kind in (c.subject, c.item)}
-            named = self.asked[state]
             kinds = [kind for kind in able if kind in named] if named else \
                 [kind for kind in able if kind in spoken] or able
             names = [name for kind in kinds for name in self.names[kind]]

@@ -36,7 +36,15 @@ LIQUIDS = "liquids"
 #: ask for a thing moved at all, a holder named or not ("put the cup away", "tidy the desk").
 PUT, PUT_INTO, PUT_GROUPS, PUT_MOVES = "put", "into", frozenset({"things", "holder"}), "moves"
 _TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*")
-_CLAUSE = re.compile(r"[,.;:!?]")
+#: Where the words asking for a state or a holder end: at the end of their part of the sentence, or before the next
+#: verb that asks for something (``StateWords.verbs``) once they name something ("cut the bread and put the apple in
+#: the microwave": the bread; "slice the apple, the lettuce and the tomato": all three; "wash and slice the apple":
+#: the apple, for both).
+_PART = re.compile(r"[.;:!?]")
+_THEN = re.compile(r"\bthen\b", re.IGNORECASE)
+_WORD = re.compile(r"[a-z']+")
+_NAMING_NOTHING = frozenset({"and", "or", "then", "also", "the", "a", "an", "please", "now", "too", "both", "all",
+                             "some", "it", "them", "of", "on", "off", "away", "out", "up", "down"})
 #: Where a sentence ends: a pronoun of a put means what was named before it in its sentence, across ";" and ":"
 #: ("the potato and the egg are in the sink; put both of them in the fridge").
 _SENTENCE = re.compile(r"[.!?]")
@@ -63,6 +71,17 @@ class StateWords:
     put: tuple[re.Pattern[str], ...] = ()
     moves: tuple[re.Pattern[str], ...] = ()
     liquids: Mapping[str, tuple[re.Pattern[str], ...]] = field(default_factory=dict)
+
+    @functools.cached_property
+    def verbs(self) -> tuple[re.Pattern[str], ...]:
+        """The patterns that begin a phrase asking for something: a state, a holder, a thing moved, or "then"."""
+        return (*(p for listed in (*self.asked.values(), *self.placements.values()) for p in listed), *self.moves,
+                _THEN)
+
+    def unsaid(self, instruction: str) -> set[str]:
+        """The states it has words to ask for that the instruction does not use ("put it on the counter" asks for no
+        switch on)."""
+        return {state for state, listed in self.asked.items() if not any(p.search(instruction) for p in listed)}
 
     def asks_to_move(self, instruction: str) -> bool:
         """Whether the instruction asks for any thing moved (always, where the domain has no ``moves`` words)."""
@@ -116,17 +135,27 @@ def _patterns(table: Mapping[str, Any], known: Callable[[str], object] = STATE_W
     return patterns
 
 
-def states_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> dict[str, str]:
+def states_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]],
+                 verbs: Sequence[re.Pattern[str]] = ()) -> dict[str, str]:
     """The states the instruction asks for in so many words, each with the words after the asking verb to the end
-    of their clause, which name what is to be in it ("fry the potato in a pan, and ...": COOKED, "the potato in a
-    pan"); the verb names nothing ("switch the TV on" does not ask for the LightSwitch on)."""
+    of their part of the sentence or the next of ``verbs`` after a thing named, which name what is to be in it ("fry
+    the potato in a pan, and switch ...": COOKED, "the potato in a pan, and"); the verb names nothing ("switch the TV
+    on" does not ask for the LightSwitch on)."""
     asked = {}
     for state, listed in patterns.items():
         found = [m for p in listed for m in p.finditer(instruction)]
         if found:
-            asked[state] = " ".join(_after_verb(instruction[m.start():m.end()]) +
-                                    _CLAUSE.split(instruction[m.end():], 1)[0] for m in found).strip()
+            asked[state] = " ".join(_asking_words(instruction, m, verbs) for m in found).strip()
     return asked
+
+
+def _asking_words(instruction: str, match: re.Match[str], verbs: Sequence[re.Pattern[str]]) -> str:
+    after = _after_verb(instruction[match.start():match.end()])
+    rest = _PART.split(instruction[match.end():], 1)[0]
+    for start in sorted({m.start() for p in verbs for m in p.finditer(rest)}):
+        if set(_WORD.findall((after + rest[:start]).lower())) - _NAMING_NOTHING:
+            return (after + rest[:start]).rstrip(", ")
+    return after + rest
 
 
 def without_asking_verbs(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> str:
@@ -161,7 +190,8 @@ def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateW
     "boil some water on the stove", the things that can be filled); not "the soap", which may be the bar or the
     bottle, nor "on the table" beside three."""
     placed = {holder: named_for(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
-              for holder, said in states_asked(instruction, words.placements).items() if holder in vocabulary.types}
+              for holder, said in states_asked(instruction, words.placements, words.verbs).items()
+              if holder in vocabulary.types}
     holders = vocabulary.holder_types()
     for things, where, before in puts(instruction, words.put):
         holder = holder_named(where, holders)

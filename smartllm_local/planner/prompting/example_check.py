@@ -107,7 +107,7 @@ def check_goal_examples(domain: Domain) -> tuple[int, list[str]]:
             continue
         # As the stage writes it: the refusal line alone, or the conditions and the blank line that ends them.
         written = ex.statement.rstrip("\n") + ("\n" if ex.statement.startswith(REFUSAL_PREFIX) else "\n\n")
-        vocabulary, owed = goal_vocabulary(scene), states_asked(ex.instruction, words.asked)
+        vocabulary, owed = goal_vocabulary(scene), states_asked(ex.instruction, words.asked, words.verbs)
         withheld = set(words.only_where_asked) - set(states_asked(ex.instruction, words.only_where_asked))
         placed = placements_asked(ex.instruction, vocabulary.less(outnamed(ex.instruction, vocabulary.types)), words)
         if not accepts(GoalConstraint(vocabulary), written):

@@ -1,0 +1,73 @@
+"""Sub-tasks that could only run in turn, joined into one, so that the later costs no transition.
+
+The paper's RU counts each time one group of robots finishes and another takes over. Asked to switch off the desk
+lamp and the ceiling light, with one robot of two that switches, the 1.5B wrote a sub-task for each: both need
+that robot, so they ran one after the other, a transition the reference plan (one sub-task for both) does not make
+(RU 0). Asked to put the dumbbell and the baseball bat on the bed, with two robots that lift the dumbbell only
+together, the same. So, in the order written, a sub-task that cannot have a team apart from those of the
+sub-tasks before it (:func:`.in_turn.apart`: a team has every skill its sub-task uses and lifts what it lifts) is
+written at the end of one of them, the latest that then leaves every sub-task a team apart, where the dry run (a
+notional robot per sub-task, in the order written) ends the same: no call fails that did not, and the world ends
+in the same state. A sub-task that joins none starts the sub-tasks after it afresh. Only the model's plan and the
+team are read.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+
+from ..robots import Robot
+from ..scene import SceneObjects
+from ..skills import SkillSet
+from .constraints.feasibility import EXACT_COALITIONS
+from .constraints.format import INDENT
+from .idle_steps import body_end, function_lines, function_name, same_outcome, skill_steps
+from .in_turn import apart
+
+
+def join_in_turn(text: str, scene: SceneObjects, skills: SkillSet, team: Sequence[Robot]) -> tuple[str, list[str]]:
+    """The decomposition with each sub-task that would wait for the robots of one before it written at the end of
+    that one, and what was joined ("<later> into <earlier>"); the text as it was and none where nothing is."""
+    joined: list[str] = []
+    if not 1 <= len(team) <= EXACT_COALITIONS:
+        return text, joined
+    while (join := _next_join(text.splitlines(keepends=True), scene, skills, team)) is not None:
+        text, later, earlier = join
+        joined.append(f"{later} into {earlier}")
+    return text, joined
+
+
+def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet,
+               team: Sequence[Robot]) -> tuple[str, str, str] | None:
+    """The first join the rule makes: the text after it, and the later and the earlier sub-task's names."""
+    steps = skill_steps(lines, skills)
+    if not steps:
+        return None
+    actions = {name: s.action for name, s in skills.items()}
+    defs = [n for n, line in enumerate(lines) if line.startswith("def ")]
+    start = 0  # the first sub-task of those the next must have a team apart from
+    for later in range(len(defs)):
+        if apart(range(start, later + 1), steps, (), actions, team, scene):
+            continue
+        for earlier in range(later - 1, start - 1, -1):
+            moved = [replace(s, function=earlier) if s.function == later else s for s in steps]
+            if not apart(range(start, later), moved, (), actions, team, scene):
+                continue
+            after = _joined(lines, defs, earlier, later)
+            if same_outcome(lines, after, scene, skills):
+                return "".join(after), function_name(lines[defs[later]]), function_name(lines[defs[earlier]])
+        start = later
+    return None
+
+
+def _joined(lines: list[str], defs: Sequence[int], earlier: int, later: int) -> list[str]:
+    """The lines with the ``later``-th sub-task's body written at the end of the ``earlier``-th's (after a comment
+    naming it), and its definition and the orchestration that ran it gone."""
+    head = defs[later]
+    body = [line for line in lines[head + 1:body_end(lines, head)] if line.strip()]
+    comment = f"{INDENT}# then: {function_name(lines[head])}\n"
+    end = body_end(lines, defs[earlier])
+    gone = function_lines(lines, later)
+    return [line for n, line in enumerate(lines[:end]) if n not in gone] + [comment, *body] + \
+        [line for n, line in enumerate(lines[end:], end) if n not in gone]
