@@ -15,7 +15,9 @@ be a refusal. At most :data:`MAX_GOALS` conditions, the lines owed among them.
 A state the instruction asks for in so many words (``asked``: "fry the potato", COOKED) that the model ends its
 statement without is owed: after the blank line comes a line of that state, then a blank line again. Its thing is
 the model's choice among those the asking words name ("the potato") that the world can give the state, or where they
-name none ("boil some water"), among those the statement speaks of that it can, else all the scene's. A small model
+name none ("boil some water"), among those the statement speaks of that it can, else all the scene's; where they
+name several each by a name of its own (``each``: "slice the apple, the lettuce and the tomato"), each is owed a
+line. A small model
 states where the potato goes and forgets that it must be cooked; the plan is then made for the goals stated. The
 goal stage puts the owed lines first in the statement it keeps: where no plan meets every goal, the planner meets
 the first it can. Where the asking words name some things, the state is not offered of any other thing in the
