@@ -27,7 +27,7 @@ from ..scene import SceneObjects
 from ..skills import SkillSet
 from .constraints.feasibility import EXACT_COALITIONS
 from .constraints.finish import NAME
-from .idle_steps import body_end, function_name, same_outcome
+from .idle_steps import body_end, ends_as, function_name, text_outcome
 from .in_turn import all_apart
 
 
@@ -49,10 +49,11 @@ def fold_finish(text: str, scene: SceneObjects, skills: SkillSet,
         return text, None
     checks_team = 2 <= len(team) <= EXACT_COALITIONS
     first = None  # the latest sub-task where the dry run ends the same, teams apart or not
+    base = text_outcome(lines, scene, skills)
     for model in reversed(defs[:-1]):
         end = body_end(lines, model)
         folded = lines[:end] + lines[last + 1:body] + lines[end:last - 1]
-        if not same_outcome(lines, folded, scene, skills):
+        if not ends_as(base, folded, scene, skills):
             continue
         if not checks_team or all_apart(folded, skills, team, scene):
             return "".join(folded), function_name(lines[model])

@@ -149,15 +149,17 @@ def dry_outcome(steps: Sequence[Step], dropped: Collection[int], scene: SceneObj
     return failed, json.dumps(objects, sort_keys=True, default=str)
 
 
-def same_outcome(before: Sequence[str], after: Sequence[str], scene: SceneObjects, skills: SkillSet) -> bool:
-    """Whether the text ``after`` fails no more calls than ``before`` in the dry run and leaves the world as it
-    does."""
-    old, new = skill_steps(before, skills), skill_steps(after, skills)
-    if old is None or new is None:
-        return False
-    (old_failed, old_end), (new_failed, new_end) = dry_outcome(old, (), scene, skills), \
-        dry_outcome(new, (), scene, skills)
-    return len(new_failed) <= len(old_failed) and new_end == old_end
+def text_outcome(lines: Sequence[str], scene: SceneObjects, skills: SkillSet) -> tuple[set[int], str] | None:
+    """:func:`dry_outcome` of a decomposition's text (None: a text of other lines)."""
+    steps = skill_steps(lines, skills)
+    return None if steps is None else dry_outcome(steps, (), scene, skills)
+
+
+def ends_as(base: tuple[set[int], str] | None, after: Sequence[str], scene: SceneObjects, skills: SkillSet) -> bool:
+    """Whether the text ``after`` fails no more calls in the dry run than the text whose :func:`text_outcome` is
+    ``base`` and leaves the world as it does (its lines are others, so the failures are counted)."""
+    new = None if base is None else text_outcome(after, scene, skills)
+    return new is not None and len(new[0]) <= len(base[0]) and new[1] == base[1]
 
 
 def _rounded(value: object) -> object:

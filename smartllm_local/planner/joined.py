@@ -22,7 +22,7 @@ from ..scene import SceneObjects
 from ..skills import SkillSet
 from .constraints.feasibility import EXACT_COALITIONS
 from .constraints.format import INDENT
-from .idle_steps import body_end, function_lines, function_name, same_outcome, skill_steps
+from .idle_steps import body_end, dry_outcome, ends_as, function_lines, function_name, skill_steps
 from .in_turn import apart
 
 
@@ -46,6 +46,7 @@ def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet,
         return None
     actions = {name: s.action for name, s in skills.items()}
     defs = [n for n, line in enumerate(lines) if line.startswith("def ")]
+    base = None  # the text's dry run, made once a join is tried
     start = 0  # the first sub-task of those the next must have a team apart from
     for later in range(len(defs)):
         if apart(range(start, later + 1), steps, (), actions, team, scene):
@@ -55,7 +56,8 @@ def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet,
             if not apart(range(start, later), moved, (), actions, team, scene):
                 continue
             after = _joined(lines, defs, earlier, later)
-            if same_outcome(lines, after, scene, skills):
+            base = base or dry_outcome(steps, (), scene, skills)
+            if ends_as(base, after, scene, skills):
                 return "".join(after), function_name(lines[defs[later]]), function_name(lines[defs[earlier]])
         start = later
     return None

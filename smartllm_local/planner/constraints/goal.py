@@ -122,11 +122,12 @@ class GoalConstraint(Constraint):
         """The states asked for that no condition said so far states, each with the things one of which is owed it
         (none: any), and one for each of the things owed a state each that no condition states it of."""
         said = {(c.subject, c.state) for c in self.said}
+        states = {state for _, state in said}
         missing = []
         for state, named in self.asked.items():
             if state in self.each:
                 missing += [(state, [kind]) for kind in self.each[state] if (kind, state) not in said]
-            elif not any(s == state for _, s in said):
+            elif state not in states:
                 missing.append((state, named))
         return missing
 
