@@ -2,11 +2,13 @@
 
 A llama.cpp built where the processor reports AMX (Intel's matrix tiles) multiplies quantized weights on AMX
 tiles, which llama.cpp keeps in an "extra" buffer type of its own. Some virtual machines report AMX and grant
-its permission, yet trap its instructions: the process dies of SIGILL at its first prompt, with no message
-(measured on a 2-core Xeon guest, 2026-11-28: ``tilezero`` in ``ggml_backend_amx_mul_mat``). So where the build
-has AMX, a child process loads the model and evaluates a few tokens first; where the child dies of SIGILL, the
-model is loaded without llama.cpp's extra buffer types (its weights in plain CPU buffers, computed with
-AVX-512 or AVX2). The answer is kept in the cache per llama.cpp build, machine and model file.
+its permission, yet trap its instructions: the process dies at its first prompt, with no message, of SIGILL
+(measured on a 2-core Xeon guest, 2026-11-28: ``tilezero`` in ``ggml_backend_amx_mul_mat``) or of SIGSEGV (a
+general protection fault in ``libggml-cpu``, another 2-core guest, 2026-12-01). So where the build has AMX, a
+child process loads the model and evaluates a few tokens first; where that child dies of a signal and a second,
+loading the model without llama.cpp's extra buffer types (its weights in plain CPU buffers, computed with
+AVX-512 or AVX2), ends well, the model is loaded that way. The answer is kept in the cache per llama.cpp build,
+machine, model file and probe.
 """
 
 from __future__ import annotations
@@ -14,7 +16,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import platform
-import signal
 import subprocess
 import sys
 from collections.abc import Callable, Iterator
@@ -23,11 +24,14 @@ from typing import Any
 
 from ...files import read_cache_map, remember_in_cache_map
 
-#: What the child runs: load the model (argv[1]) and evaluate a few tokens, as the planner's first prompt does.
+#: What the child runs: load the model (argv[1]; its weights in plain buffers where argv[2] is "plain") and evaluate
+#: a few tokens, as the planner's first prompt does.
 PROBE = """\
 import sys
 import llama_cpp
-llm = llama_cpp.Llama(model_path=sys.argv[1], n_ctx=64, n_batch=32, n_threads=1, verbose=False)
+from smartllm_local.planner.backends.amx import without_extra_buffers
+with without_extra_buffers(llama_cpp, wanted=sys.argv[2:] == ["plain"]):
+    llm = llama_cpp.Llama(model_path=sys.argv[1], n_ctx=64, n_batch=32, n_threads=1, verbose=False)
 llm.eval(llm.tokenize(b"def probe(): return 1"))
 """
 PROBE_TIMEOUT = 120.0  # seconds: a load from a cold disk; past it the answer is unknown and not kept
@@ -39,22 +43,24 @@ def amx_in_build(llama_cpp: Any) -> bool:
     return "AMX_INT8 = 1" in llama_cpp.llama_print_system_info().decode("utf-8", errors="replace")
 
 
-def probe(model_path: str | Path, code: str = PROBE) -> int | None:
-    """Run ``code`` in a child Python with the model's path; its exit status (negative: the signal that ended
-    it), or None where it did not end within :data:`PROBE_TIMEOUT` (the child is killed, not left behind)."""
+def probe(model_path: str | Path, plain: bool = False, code: str = PROBE) -> int | None:
+    """Run ``code`` in a child Python with the model's path (and "plain" where ``plain``); its exit status
+    (negative: the signal that ended it), or None where it did not end within :data:`PROBE_TIMEOUT` (the child
+    is killed, not left behind)."""
     try:
-        return subprocess.run([sys.executable, "-c", code, str(model_path)], stdin=subprocess.DEVNULL,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=PROBE_TIMEOUT,
-                              check=False).returncode
+        command = [sys.executable, "-c", code, str(model_path), *(["plain"] if plain else [])]
+        return subprocess.run(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, timeout=PROBE_TIMEOUT, check=False).returncode
     except subprocess.TimeoutExpired:
         return None
 
 
 def amx_runs(llama_cpp: Any, model_path: str | Path, cache_dir: Path | None = None,
-             run_probe: Callable[[str | Path], int | None] = probe) -> bool:
+             run_probe: Callable[[str | Path, bool], int | None] = probe) -> bool:
     """Whether the model may be loaded with llama.cpp's extra buffer types: yes where the build has no AMX,
-    else as the probe found (kept in ``cache_dir``; a probe that ended otherwise than by SIGILL counts as yes,
-    and one that did not end is not kept)."""
+    else as the probes found (kept in ``cache_dir``): no where the child with them died of a signal and the
+    child without them ended well; a child that died without them too has another fault, which the load then
+    reports; where a child did not end, yes, not kept."""
     if not amx_in_build(llama_cpp) or not Path(model_path).is_file():
         return True  # (a missing file: the load says so, no child need try it first)
     if cache_dir is None:
@@ -65,12 +71,22 @@ def amx_runs(llama_cpp: Any, model_path: str | Path, cache_dir: Path | None = No
     known = read_cache_map(path)
     if key in known:
         return bool(known[key])
-    status = run_probe(model_path)
-    if status is None:
+    traps = _traps(model_path, run_probe)
+    if traps is None:
         return True
-    runs = status != -signal.SIGILL
+    runs = not traps
     remember_in_cache_map(path, key, runs)  # where it cannot be written: a probe per process, nothing else
     return runs
+
+
+def _traps(model_path: str | Path, run_probe: Callable[[str | Path, bool], int | None]) -> bool | None:
+    """Whether the model dies with llama.cpp's extra buffer types and runs without them; None where a child
+    did not end."""
+    status = run_probe(model_path, False)
+    if status is None or status >= 0:
+        return None if status is None else False
+    plain = run_probe(model_path, True)
+    return None if plain is None else plain == 0
 
 
 @contextlib.contextmanager
@@ -97,7 +113,8 @@ def without_extra_buffers(llama_cpp: Any, wanted: bool) -> Iterator[None]:
 
 
 def _machine_key(llama_cpp: Any, model_path: Path) -> str:
-    """The build, the processor (its name and flags), the kernel, and the model file (name and size)."""
+    """The build, the processor (its name and flags), the kernel, the model file (name and size) and the probe
+    (an answer another probe gave is asked again)."""
     cpu = ""
     with contextlib.suppress(OSError):
         lines = Path("/proc/cpuinfo").read_text(encoding="utf-8", errors="replace").splitlines()
@@ -107,5 +124,5 @@ def _machine_key(llama_cpp: Any, model_path: Path) -> str:
     except OSError:
         size = -1
     parts = [getattr(llama_cpp, "__version__", ""), platform.machine(), platform.release(), cpu,
-             model_path.name, str(size)]
+             model_path.name, str(size), PROBE]
     return hashlib.sha256("\0".join(parts).encode("utf-8")).hexdigest()[:24]
