@@ -148,7 +148,8 @@ def summary_table(lines: Sequence[Line]) -> str:
 def repairs_line(lines: Sequence[Line]) -> str:
     """What the planner wrote into the decompositions: repairs (its steps before a model's call, and the calls it
     could not enable), plans ended at the stated goals, plans it finished (and of those, folded into the model's last
-    sub-task), errands and idle steps it took out, sub-tasks it joined ("" where it did nothing)."""
+    sub-task), errands and idle steps it took out, sub-tasks it joined, things kept in hand it put away ("" where it
+    did nothing)."""
     ran = [line["tokens"]["decomposition"] for line in lines if "decomposition" in line.get("tokens", {})]
     repairs, tasks = sum(r.get("repairs", 0) for r in ran), sum(bool(r.get("repairs")) for r in ran)
     missed, ended = sum(r.get("unrepaired", 0) for r in ran), sum(bool(r.get("ended_at_goals")) for r in ran)
@@ -156,13 +157,15 @@ def repairs_line(lines: Sequence[Line]) -> str:
     idle, idle_tasks = sum(r.get("idle_steps", 0) for r in ran), sum(bool(r.get("idle_steps")) for r in ran)
     errands, errand_tasks = sum(r.get("errands", 0) for r in ran), sum(bool(r.get("errands")) for r in ran)
     joined, joined_tasks = sum(r.get("joined", 0) for r in ran), sum(bool(r.get("joined")) for r in ran)
-    if not (repairs or missed or ended or finished or idle or errands or joined):
+    put, put_tasks = sum(r.get("put_away", 0) for r in ran), sum(bool(r.get("put_away")) for r in ran)
+    if not (repairs or missed or ended or finished or idle or errands or joined or put):
         return ""
     return (f"planner in the decomposition: {repairs} repair(s) in {tasks} task(s), {missed} call(s) it could not "
             f"enable taken back; {ended} plan(s) ended at the stated goals; {finished} finished by its last "
             f"sub-task ({folded} in the model's last); {errands} errand line(s) taken out in {errand_tasks} task(s); "
             f"{idle} idle line(s) taken out in {idle_tasks} task(s); {joined} sub-task(s) joined to one before in "
-            f"{joined_tasks} task(s)")
+            f"{joined_tasks} task(s); {put} line(s) putting a thing kept in hand where it goes in {put_tasks} "
+            f"task(s)")
 
 
 def executable_line(lines: Sequence[Line]) -> str:

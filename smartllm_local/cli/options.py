@@ -230,8 +230,8 @@ _NO_REPAIR = typer.Option(False, "--no-repair", help=(
     "slice; see docs/planner.md, \"Repair\")."))
 _NO_FINISH_GOALS = typer.Option(False, "--no-finish-goals", help=(
     "End the decomposition where the model ends it, rather than have Fast Downward write a last sub-task that "
-    "meets the stated goals the model's sub-tasks left unmet in the dry run (see docs/planner.md, \"The "
-    "planner's last sub-task\")."))
+    "meets the stated goals the model's sub-tasks left unmet in the dry run, and steps that put a thing a "
+    "sub-task's robot keeps in hand where they want it (see docs/planner.md, \"The planner's last sub-task\")."))
 
 _ONE_AT_A_TIME = typer.Option(False, "--one-at-a-time", help=(
     "Let the allocation call a sub-task on its own or start a block of threads where the next sub-task could "

@@ -48,6 +48,7 @@ from .goal_stage import GOAL_CHECK, StatedGoals, checked_against_team, said_of, 
 from .idle_steps import drop_idle_steps
 from .in_turn import free_blocks
 from .joined import join_in_turn
+from .kept_in_hand import put_kept_things
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -186,8 +187,9 @@ class Planner:
 
     def _tidy(self, record: StageRecord, result: PlanResult, scene: SceneObjects) -> None:
         """The chosen decomposition without its errands nobody asked for (:mod:`.errands`, and :mod:`.in_turn`'s
-        steps that alone made sub-tasks run in turn) and its idle steps (:mod:`.idle_steps`), the planner's last
-        sub-task folded into the model's last (:mod:`.finish_fold`), sub-tasks that could only run in turn joined
+        steps that alone made sub-tasks run in turn) and its idle steps (:mod:`.idle_steps`), things kept in hand
+        put where the goals want them (:mod:`.kept_in_hand`), the planner's last sub-task folded into the model's
+        last (:mod:`.finish_fold`), sub-tasks that could only run in turn joined
         (:mod:`.joined`): the text the coalition and the allocation read."""
         if not (self.config.world_check and isinstance(record.plan, Plan) and not record.plan.is_refusal):
             return
@@ -199,6 +201,9 @@ class Planner:
             record.errands += in_turn
         if config.drop_idle:
             record.output, record.idle_steps = drop_idle_steps(record.output, scene, skills)
+        if config.finish_goals:
+            record.output, record.put_away = put_kept_things(record.output, scene, skills,
+                                                             stated_conditions(result, scene))
         into = None
         if config.fold_finish and record.finish is not None:
             record.output, into = fold_finish(record.output, scene, skills, team)
@@ -206,7 +211,7 @@ class Planner:
                 record.finish = {**record.finish, "into": into}
         if config.together:
             record.output, record.joined = join_in_turn(record.output, scene, skills, team)
-        if record.errands or record.idle_steps or into is not None or record.joined:
+        if record.errands or record.idle_steps or record.put_away or into is not None or record.joined:
             record.plan = None  # parsed again, from the text the coalition and the allocation read
 
     def _decomposition(self, result: PlanResult, scene: SceneObjects, team: Sequence[Robot], prompt: Fitted,
