@@ -21,7 +21,7 @@ from ..scene import SceneObjects
 from ..scoring import Condition
 from ..skills import SkillSet
 from ..world.object_types import base_type
-from .constraints.candidates import args_text
+from .constraints.candidates import call_line
 from .constraints.format import INDENT, MAX_SUBTASKS
 from .constraints.repair import Repairer
 from .constraints.world_check import WorldCheck
@@ -37,17 +37,14 @@ def put_kept_things(text: str, scene: SceneObjects, skills: SkillSet,
     wants it written at the end of that sub-task, and the lines written (none: the text as it was)."""
     lines = text.splitlines(keepends=True)
     placements = [c for c in goals if c.item]
+    steps = skill_steps(lines, skills) if placements else None
+    if not steps:
+        return text, []
+    failed, world = dry_run(steps, (), scene, skills)
+    if not Repairer.fits(world):
+        return text, []
     added: list[str] = []
-    while placements:
-        steps = skill_steps(lines, skills)
-        if not steps:
-            break
-        failed, world = dry_run(steps, (), scene, skills)
-        if not Repairer.fits(world):
-            break
-        found = _put_away(lines, world, skills, placements)
-        if found is None:
-            break
+    while (found := _put_away(lines, world, skills, placements)) is not None:
         header, written = found
         end = body_end(lines, header)
         trial = lines[:end] + written + lines[end:]
@@ -57,7 +54,7 @@ def put_kept_things(text: str, scene: SceneObjects, skills: SkillSet,
         trial_failed, trial_world = dry_run(trial_steps, (), scene, skills)
         if len(trial_failed) > len(failed) or trial_world.met(goals) <= world.met(goals):
             break
-        lines, added = trial, added + written
+        lines, added, failed, world = trial, added + written, trial_failed, trial_world
     return "".join(lines), added
 
 
@@ -77,6 +74,6 @@ def _put_away(lines: Sequence[str], world: WorldCheck, skills: SkillSet,
                 continue
             plan = repairer.meet(member, [goal], MOST_STEPS)
             if plan is not None:
-                calls = [f"{INDENT}{skill}({args_text(objects)})\n" for skill, objects in plan.calls]
+                calls = [call_line(skill, objects) for skill, objects in plan.calls]
                 return header, [f"{INDENT}# then put it where it goes: {condition_line(goal)}\n", *calls]
     return None

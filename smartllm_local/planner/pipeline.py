@@ -194,16 +194,15 @@ class Planner:
         if not (self.config.world_check and isinstance(record.plan, Plan) and not record.plan.is_refusal):
             return
         skills, config, team = self.catalogue.skills, self.config, self.catalogue.team(result.robots)
+        goals = stated_conditions(result, scene) if config.drop_errands or config.finish_goals else []
         if config.drop_errands:
-            goals = stated_conditions(result, scene)
             record.output, record.errands = drop_errands(record.output, scene, skills, result.instruction, goals)
             record.output, in_turn = free_blocks(record.output, scene, skills, team, result.instruction, goals)
             record.errands += in_turn
         if config.drop_idle:
             record.output, record.idle_steps = drop_idle_steps(record.output, scene, skills)
         if config.finish_goals:
-            record.output, record.put_away = put_kept_things(record.output, scene, skills,
-                                                             stated_conditions(result, scene))
+            record.output, record.put_away = put_kept_things(record.output, scene, skills, goals)
         into = None
         if config.fold_finish and record.finish is not None:
             record.output, into = fold_finish(record.output, scene, skills, team)

@@ -74,3 +74,20 @@ def test_the_summary_counts_the_lines_that_put_kept_things_away():
 
     lines = [{"tokens": {"decomposition": {"put_away": 3}}}, {"tokens": {"decomposition": {"put_away": 0}}}]
     assert repairs_line(lines).endswith("3 line(s) putting a thing kept in hand where it goes in 1 task(s)")
+
+
+def test_each_thing_kept_is_put_away_by_its_own_sub_task_from_where_the_one_before_left_the_world():
+    """FloorPlan6: two sub-tasks each end holding a thing for the fridge; the first opens it, the second finds it
+    open (its steps planned from the text with the first's put away)."""
+    kept = ("def subtask1_take_apple():\n    GoToObject('Apple')\n    PickupObject('Apple')\n\n"
+            "def subtask2_take_tomato():\n    GoToObject('Tomato')\n    PickupObject('Tomato')\n\n"
+            "subtask1_take_apple()\nsubtask2_take_tomato()\n")
+    goals = [Condition("Fridge", item="Apple"), Condition("Fridge", item="Tomato")]
+    text, added = put_kept_things(kept, scene_objects(6), SKILLS, goals)
+    assert [line.strip() for line in added] == [
+        "# then put it where it goes: Apple in Fridge", "GoToObject('Fridge')", "OpenObject('Fridge')",
+        "PutObject('Apple', 'Fridge')",
+        "# then put it where it goes: Tomato in Fridge", "GoToObject('Fridge')", "PutObject('Tomato', 'Fridge')"]
+    assert text.index("PutObject('Apple'") < text.index("def subtask2_take_tomato") < text.index("PutObject('Tomato'")
+    dry, failed = _final_state(text, 6)
+    assert not failed and _met(dry, goals)

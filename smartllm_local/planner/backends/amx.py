@@ -83,8 +83,10 @@ def _traps(model_path: str | Path, run_probe: Callable[[str | Path, bool], int |
     """Whether the model dies with llama.cpp's extra buffer types and runs without them; None where a child
     did not end."""
     status = run_probe(model_path, False)
-    if status is None or status >= 0:
-        return None if status is None else False
+    if status is None:
+        return None
+    if status >= 0:
+        return False
     plain = run_probe(model_path, True)
     return None if plain is None else plain == 0
 

@@ -35,6 +35,11 @@ def args_text(objects: Sequence[str]) -> str:
     return ", ".join(f"'{t}'" for t in objects)
 
 
+def call_line(skill: str, objects: Sequence[str]) -> str:
+    """A decomposition's line for a call of the skill named ``skill`` on ``objects``."""
+    return f"{INDENT}{skill}({args_text(objects)})\n"
+
+
 def acts_on(candidate: Candidate) -> str | None:
     """Where a call acts: its object, a put's receptacle; None for dropping or throwing what is held.
     With a world check a call acts only on what the function last went to: where exactly a robot
@@ -136,7 +141,7 @@ class Candidates:
 
     def line(self, candidate: Candidate) -> str:
         """A decomposition's line for the call."""
-        return f"{INDENT}{candidate[0].name}({args_text(candidate[1])})\n"
+        return call_line(candidate[0].name, candidate[1])
 
     def node(self, candidates: Sequence[Candidate]) -> Node | None:
         """Call lines for candidates, grouped by skill; None for none."""
