@@ -10,7 +10,7 @@ so a condition is a disjunction over the scene's candidates.
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -147,10 +147,12 @@ def relevant(objects: Sequence[Mapping[str, Any]], conditions: Sequence[Conditio
 
 def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditions: Sequence[Condition],
                   name: str = "task", members: Sequence[int] | None = None,
-                  hands_free: bool = False) -> PlanningTask:
+                  hands_free: bool = False, leave_out: Collection[str] = ()) -> PlanningTask:
     """The problem of reaching ``conditions`` with ``team`` from the dry run's current state. ``members``: the
     dry run's robots the team's are, each starting as that one stands (by what it sees, holding what it holds);
     none given, the team starts with empty hands, by nothing. ``hands_free``: every robot ends holding nothing.
+    ``leave_out``: objects the plan may not use (the fixtures of a type a plan's robot does not go to), save those
+    holding what the goal involves.
 
     Raises:
         Unreachable: a condition that no object of the scene can meet (naming it).
@@ -168,6 +170,8 @@ def planning_task(dry: DryRun, team: Sequence[Robot], skills: SkillSet, conditio
     kept = {h["objectId"] for h in held if h is not None}
     kept |= {o["objectId"] for o in relevant(table, conditions)}
     chosen = [o for o in table if o["objectId"] in kept]
+    holders = {p for o in chosen for p in o.get("parentReceptacles") or ()}
+    chosen = [o for o in chosen if o["objectId"] not in leave_out or o["objectId"] in holders]
     taken: set[str] = set()
     things = {o["objectId"]: Object(pddl_name(o["objectType"] + str(k), taken),
                                     ITEM if o.get("pickupable") else FIXTURE)

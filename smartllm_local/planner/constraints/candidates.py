@@ -13,7 +13,9 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from ...scene import SceneObjects
+from ...scoring import Condition
 from ...skills import Skill
+from ...world.object_types import base_type
 from ..decoding.grammar import Node, Ref, alt, seq
 from .format import INDENT
 from .world_check import WorldCheck
@@ -29,6 +31,18 @@ KNIVES = frozenset({"Knife", "ButterKnife"})
 STATE_ACTIONS = {"OpenObject": "CloseObject", "CloseObject": "OpenObject",
                  "ToggleObjectOn": "ToggleObjectOff", "ToggleObjectOff": "ToggleObjectOn"}
 RELEASE = ("PutObject", "DropHandObject", "ThrowObject")
+#: The states a thing may be broken or cut to reach: broken or sliced itself, and cooked (an egg cooks once cracked).
+BROKEN_FOR = frozenset({"BROKEN", "SLICED", "COOKED"})
+
+
+def wanted_whole(goals: Sequence[Condition]) -> frozenset[str]:
+    """The types stated goals want whole, which no call may break: a thing put somewhere and what holds it, a thing
+    whose state is stated, save one a goal wants in pieces (a state of :data:`BROKEN_FOR`, or a goal on its pieces:
+    an egg is fried cracked). Asked to slice the potato and put the wine bottle in the fridge, the 0.5B broke the
+    bottle, and no plan could then put it anywhere."""
+    named = {n for c in goals for n in ((c.item, c.subject) if c.item else (c.subject,))}
+    in_pieces = {c.subject for c in goals if c.state in BROKEN_FOR} | {base_type(n) for n in named if base_type(n) != n}
+    return frozenset(named - in_pieces)
 
 
 def args_text(objects: Sequence[str]) -> str:
@@ -54,10 +68,12 @@ class Candidates:
     """The action and GoToObject calls of a scene's skills, filtered by what a function has done."""
 
     def __init__(self, scene: SceneObjects, skills: Sequence[Skill], *, robot_arg_len: int, allocated: bool,
-                 world: WorldCheck | None, max_steps: int, allows: Allows | None = None):
-        """``allows``: the calls a plan may make at all (the team's); none given, every call of ``skills``."""
+                 world: WorldCheck | None, max_steps: int, allows: Allows | None = None,
+                 spared: frozenset[str] = frozenset()):
+        """``allows``: the calls a plan may make at all (the team's); none given, every call of ``skills``.
+        ``spared``: the types no call breaks (:func:`wanted_whole`)."""
         self.scene = scene
-        self.allows = allows
+        self.allows, self.spared = allows, spared
         self.skills = list(skills)
         self.gotos = [s for s in self.skills if s.action == ""]
         self.robot_arg_len = robot_arg_len
@@ -111,6 +127,8 @@ class Candidates:
             types = [list(self.scene.types_for(a)) for a in skill.arguments]
             if self.allows is not None:  # what a call asks of its robots depends on its first object
                 types[0] = [t for t in types[0] if self.allows(skill.name, (t,))]
+            if skill.action == "BreakObject":
+                types[0] = [t for t in types[0] if t not in self.spared]
             if fn is not None:
                 if skill.action in RELEASE:
                     types[0] = [t for t in types[0] if t in fn.held]

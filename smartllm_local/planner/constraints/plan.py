@@ -43,7 +43,7 @@ from ..decoding.grammar import Node, Ref, alt, chars, rep, seq
 from ..decoding.line_ends import COMMENT_NEXT, INDENTED_NEXT
 from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, Rewrite, longest
 from .budget import Budget
-from .candidates import Candidates
+from .candidates import Candidates, wanted_whole
 from .feasibility import Step, WholeTeam
 from .finish import Finish, Said
 from .format import (
@@ -174,7 +174,8 @@ class PlanConstraint(Orchestration, Constraint):
         self._lists: dict[tuple[str, int, int], list[tuple[int, ...]] | None] = {}
         self.candidates = Candidates(self.scene, self.skills, robot_arg_len=self.robot_arg_len,
                                      allocated=self.allocated, world=self.world, max_steps=self.max_steps,
-                                     allows=self.whole.can if self.whole is not None else None)
+                                     allows=self.whole.can if self.whole is not None else None,
+                                     spared=wanted_whole(self.goals))
         self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
         self._plan_with(repairer, repair, finish)
         self.budget = Budget(allocated=self.allocated, team_size=self.team_size, fixed_names=self.fixed_names,

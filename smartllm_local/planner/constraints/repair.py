@@ -14,7 +14,7 @@ recorded as such); where there is no repair, the line is taken back and the mode
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 from ...errors import SmartLLMError
@@ -37,6 +37,9 @@ CPU_LIMIT = 10
 #: load alone never reaches it. Reaching it is an error (:class:`SearchWallClockError`), never a silent "no repair",
 #: since where it ended would depend on the load.
 TIME_LIMIT = 300.0
+#: The most plans sought for one repair, each with only the fixtures the last went to of the types where it went to
+#: others than the planner meant (:meth:`Repairer._written`).
+ROUNDS = 3
 #: A call as a plan writes it: the skill's name and the object types.
 Written = tuple[str, tuple[str, ...]]
 #: The state each action's effect is, as the scorer names it.
@@ -70,6 +73,16 @@ class Repair:
     seconds: float
 
 
+@dataclass(frozen=True)
+class Planned:
+    """Fast Downward's plan as a plan may write it (each way), the search's time, and the fixtures it meant by
+    each type written (a knob by the one thing it switches)."""
+
+    written: list[list[Written]]
+    seconds: float
+    meant: dict[str, set[str]]
+
+
 class Repairer:
     """Finds repairs for the calls of one decomposition (a dry run of the household world)."""
 
@@ -93,33 +106,70 @@ class Repairer:
         goal = effect(skill, objects)
         if goal is None:
             return None
-        found = self._plan(member, [goal], place, skills)
-        if found is None:
-            return None
-        written, seconds = found
-        calls = next((calls for calls in written if calls[-1] == (skill.name, tuple(objects))
-                      and 1 < len(calls) <= MOST_STEPS + 1 and self._usable(member, calls, allows)), None)
-        return None if calls is None else Repair(tuple(calls[:-1]), seconds)
+        call = (skill.name, tuple(objects))
+        found = self._written(member, [goal], place, skills, False, lambda calls: calls[-1] == call and 1 < len(
+            calls) <= MOST_STEPS + 1 and self._usable(member, calls, allows))
+        return None if found is None else Repair(tuple(found.calls[:-1]), found.seconds)
 
     def meet(self, member: int, goals: Sequence[Condition], most: int,
              allows: Callable[[str, Sequence[str]], bool] | None = None,
              skills: frozenset[str] | None = None) -> Repair | None:
         """The steps of a new sub-task whose robot ``member`` (one no sub-task has used) meets ``goals`` and ends
         with empty hands, in at most ``most`` steps, or None."""
-        found = self._plan(member, goals, None, skills, hands_free=True)
-        if found is None:
-            return None
-        written, seconds = found
-        calls = next((calls for calls in written if 0 < len(calls) <= most
-                      and self._usable(member, calls, allows, goals)), None)
-        return None if calls is None else Repair(tuple(calls), seconds)
+        return self._written(member, goals, None, skills, True, lambda calls: 0 < len(calls) <= most
+                             and self._usable(member, calls, allows, goals))
+
+    def _written(self, member: int, goals: Sequence[Condition], place: str | None, skills: frozenset[str] | None,
+                 hands_free: bool, fits: Callable[[list[Written]], bool]) -> Repair | None:
+        """The first of Fast Downward's plans, as written, that ``fits``. A type names the instance the executor
+        chooses, not the planner's: where no way of writing the plan fits, and the robot went to another fixture
+        of a type than the one planned (the burner nearest the sink, cold, for the one switched on; the drawer
+        nearest the spray bottle, shut, for the one another robot opened), the planner plans again with only the
+        fixtures of that type the robot went to, for at most :data:`ROUNDS` plans in all."""
+        went: dict[str, set[str]] = {}
+        seconds = 0.0
+        for _ in range(ROUNDS):
+            others = frozenset(o["objectId"] for o in self.run.objects
+                               if o["objectId"] not in went.get(o["objectType"], {o["objectId"]}))
+            found = self._plan(member, goals, place, skills, hands_free, others)
+            if found is None:
+                return None
+            seconds += found.seconds
+            calls = next((calls for calls in found.written if fits(calls)), None)
+            if calls is not None:
+                return Repair(tuple(calls), round(seconds, 3))
+            elsewhere = self._went_elsewhere(member, found.written[0], found.meant)
+            if all(ids <= went.get(kind, set()) for kind, ids in elsewhere.items()):
+                return None
+            for kind, ids in elsewhere.items():
+                went.setdefault(kind, set()).update(ids)
+        return None
+
+    def _went_elsewhere(self, member: int, calls: Sequence[Written],
+                        meant: Mapping[str, set[str]]) -> dict[str, set[str]]:
+        """The fixtures, by type, that the calls' GoToObject steps reach in the dry run (up to the first that
+        fails) where the planner meant another of that type."""
+        saved = self.run.snapshot()
+        elsewhere: dict[str, set[str]] = {}
+        try:
+            for name, objects in calls:
+                outcome = self.run.apply([member], name, objects)
+                if not outcome.success:
+                    break
+                kind = objects[0] if objects else ""
+                if self.skills[name].action == "" and kind in meant and outcome.object_id not in meant[kind]:
+                    elsewhere.setdefault(kind, set()).add(outcome.object_id or "")
+        finally:
+            self.run.restore(saved)
+        return elsewhere
 
     def _plan(self, member: int, goals: Sequence[Condition], place: str | None, skills: frozenset[str] | None,
-              hands_free: bool = False) -> tuple[list[list[Written]], float] | None:
+              hands_free: bool = False, leave_out: frozenset[str] = frozenset()) -> Planned | None:
         """Fast Downward's shortest plan for ``member`` from the dry run's state now, as a plan may write it: going
         to each place it acts at, and then (where that differs) going to the thing it takes out of a shut holder
         before opening the holder. A type names the instance nearest the robot: by the thing, the holder that holds
-        it; by "the Cabinet", any of four (the spray bottle's cabinet was not the one the plan went to)."""
+        it; by "the Cabinet", any of four (the spray bottle's cabinet was not the one the plan went to). The
+        fixtures ``leave_out`` are not the planner's to use (:func:`..classical.problem.planning_task`)."""
         # Unified Planning takes most of a second to import: it loads with the first repair sought, not every plan
         from ..classical.problem import Unreachable, planning_task, with_future_pieces
         from ..classical.search import UP_LOCK, search
@@ -131,7 +181,7 @@ class Repairer:
         with UP_LOCK:
             try:
                 task = planning_task(self.run, [robot], self.skills, goals, name="repair", members=[member],
-                                     hands_free=hands_free)
+                                     hands_free=hands_free, leave_out=leave_out)
             except Unreachable:
                 return None
             found = search(task, self.time_limit, cpu_limit=self.cpu_limit)
@@ -154,7 +204,12 @@ class Repairer:
         calls = [(name, tuple(types.get(o, o) for o in ids)) for name, ids in steps]
         written = [self._gone_first(calls, place)]
         by_thing = self._gone_first(calls, place, self._taken_out(steps, types))
-        return written + ([by_thing] if by_thing != written[0] else []), seconds
+        by_id = {o["objectId"]: o for o in objects}
+        meant: dict[str, set[str]] = {}
+        for oid in {oid for _, ids in steps for oid in ids if not by_id.get(oid, {}).get("pickupable", True)}:
+            switched = by_id[oid].get("controlledObjects") or ()
+            meant.setdefault(types[oid], set()).add(switched[0] if len(switched) == 1 else oid)
+        return Planned(written + ([by_thing] if by_thing != written[0] else []), seconds, meant)
 
     def _taken_out(self, steps: Sequence[tuple[str, tuple[str, ...]]], types: dict[str, str]) -> list[str | None]:
         """For each step that opens a holder, and the step going there just before it, the type of the first thing

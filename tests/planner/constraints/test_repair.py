@@ -14,6 +14,8 @@ from smartllm_local.executor.dry_run import DryRun, notional_robot
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.classical.problem import planning_task
 from smartllm_local.planner.classical.search import search
+from smartllm_local.planner.constraints import repair as repair_module
+from smartllm_local.planner.constraints.candidates import wanted_whole
 from smartllm_local.planner.constraints.format import MAX_SUBTASKS
 from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.repair import TIME_LIMIT, Repairer, SearchWallClockError, effect
@@ -157,6 +159,77 @@ def test_a_thing_in_a_shut_holder_of_several_is_gone_to_before_its_holder_is_ope
         controller.stop()
     assert all(e.success for e in ex.trace), [e.error for e in ex.trace]
     assert scores(ex, [{"name": "CounterTop", "contains": ["SprayBottle"], "state": None}]).GCR == 1
+
+
+#: A first robot's calls, and the goals a second robot's plan is sought for, where the planner's first plan counts
+#: on the fixture the first robot used and the second robot, going by type, reaches another of its type: FloorPlan410's
+#: drawer opened (the one nearest the second robot is shut), FloorPlan20's burner switched on (from the sink, the
+#: nearest burner is a cold one).
+OTHER_FIXTURE = {
+    410: ([("GoToObject", ("Drawer",)), ("OpenObject", ("Drawer",))],
+          [{"name": "Drawer", "contains": ["SprayBottle"], "state": None}]),
+    20: ([("GoToObject", ("StoveKnob",)), ("SwitchOn", ("StoveKnob",))],
+         [{"name": "StoveBurner", "contains": ["Pot"], "state": None}, {"name": "Pot", "contains": [], "state": "HOT"},
+          {"name": "Pot", "contains": [], "state": "FILLED"}]),
+}
+
+
+@pytest.mark.parametrize("floor_plan", sorted(OTHER_FIXTURE))
+def test_where_the_robot_goes_to_another_fixture_than_planned_it_is_planned_again_with_that_one(
+        floor_plan, monkeypatch):
+    """Written as types, the planner's first plan puts the spray bottle in the drawer another robot opened, or the
+    pot on the burner it switched on; the second robot, going to "the Drawer" or "the StoveBurner", reaches the
+    nearest, shut or cold: with one plan sought there is none. Planned again with the fixtures it goes to, it
+    opens that drawer or switches that burner on, and the calls meet the goals in the dry run and on the real
+    Controller."""
+    first, goals = OTHER_FIXTURE[floor_plan]
+    conditions = [Condition(g["name"], state=g["state"], item=(g["contains"] or [None])[0]) for g in goals]
+
+    def second_robots_plan():
+        world = WorldCheck(scene_objects(floor_plan), SKILLS, MAX_SUBTASKS)
+        assert all(world.run.apply([0], name, objects).success for name, objects in first)
+        return Repairer(world, SKILLS).meet(1, conditions, 20)
+
+    monkeypatch.setattr(repair_module, "ROUNDS", 1)
+    assert second_robots_plan() is None
+    monkeypatch.undo()
+    found = second_robots_plan()
+    assert found is not None
+    acted = {(name, objects[0]) for name, objects in found.calls}
+    assert ("OpenObject", "Drawer") in acted if floor_plan == 410 else ("SwitchOn", "StoveBurner") in acted
+    plan = "".join(f"{name}(robots[{k}], {', '.join(repr(o) for o in objects)})\n"
+                   for k, calls in enumerate((first, found.calls)) for name, objects in calls)
+    controller = open_controller(floor_plan, agent_count=2)
+    try:
+        ex = run(plan, [1, 2], controller, floor_plan)
+    finally:
+        controller.stop()
+    assert all(e.success for e in ex.trace), [e.error for e in ex.trace]
+    assert scores(ex, goals).GCR == 1
+
+
+def test_a_thing_the_goals_want_whole_is_not_broken():
+    """Asked to slice the potato and put the wine bottle in the fridge (FloorPlan13), the 0.5B went to the bottle
+    and broke it: no plan could then put it anywhere. With those goals the grammar offers no call that breaks the
+    bottle (or the fridge that is to hold it), neither as written nor through a repair, and the writer writes
+    another line; without goals, or where the goals want it broken, the same writer breaks it."""
+    script = ["def subtask1_bottle():\n", "    GoToObject('WineBottle')\n", "    BreakObject('WineBottle')\n"]
+    goals = [Condition("Potato", state="SLICED"), Condition("Fridge", item="WineBottle")]
+    assert wanted_whole(goals) == {"WineBottle", "Fridge"}
+    assert "BreakObject('WineBottle')" not in run_constraint(_decomposer(13, goals=goals), _scripted(script), len,
+                                                              3000)
+    for others in ([], [Condition("WineBottle", state="BROKEN")]):
+        assert "    BreakObject('WineBottle')\n" in run_constraint(_decomposer(13, goals=others), _scripted(script),
+                                                                   len, 3000)
+
+
+def test_a_thing_a_goal_wants_in_pieces_may_be_broken():
+    """An egg is fried cracked: goals on the cracked egg, or the egg sliced, leave it breakable; what holds it is
+    kept whole."""
+    fried = [Condition("Pan", item="EggCracked"), Condition("EggCracked", state="COOKED"),
+             Condition("Pan", item="Egg")]
+    assert wanted_whole(fried) == {"Pan"}
+    assert wanted_whole([Condition("Egg", state="SLICED"), Condition("Mug", state="FILLED")]) == {"Mug"}
 
 
 def test_an_effect_is_the_scorers_condition():
