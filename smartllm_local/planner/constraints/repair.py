@@ -130,7 +130,7 @@ class Repairer:
         seconds = 0.0
         for _ in range(ROUNDS):
             others = frozenset(o["objectId"] for o in self.run.objects
-                               if o["objectId"] not in went.get(o["objectType"], {o["objectId"]}))
+                               if o["objectType"] in went and o["objectId"] not in went[o["objectType"]])
             found = self._plan(member, goals, place, skills, hands_free, others)
             if found is None:
                 return None
@@ -198,17 +198,17 @@ class Repairer:
         types = {o["objectId"]: o["objectType"] for o in objects}
         # A switch of one thing is written as the thing (the executor switches a StoveBurner by its knob): a plan
         # names types, and the StoveKnob nearest the robot need not be the one the planner meant.
-        types |= {o["objectId"]: types.get(o["controlledObjects"][0], o["objectType"]) for o in objects
-                  if len(o.get("controlledObjects") or ()) == 1}
+        switched = {o["objectId"]: o["controlledObjects"][0] for o in objects
+                    if len(o.get("controlledObjects") or ()) == 1}
+        types |= {oid: types.get(thing, types[oid]) for oid, thing in switched.items()}
         steps = [(s.skill, tuple(s.objects)) for s in found.steps]
         calls = [(name, tuple(types.get(o, o) for o in ids)) for name, ids in steps]
         written = [self._gone_first(calls, place)]
         by_thing = self._gone_first(calls, place, self._taken_out(steps, types))
-        by_id = {o["objectId"]: o for o in objects}
+        fixtures = {o["objectId"] for o in objects if not o.get("pickupable")}
         meant: dict[str, set[str]] = {}
-        for oid in {oid for _, ids in steps for oid in ids if not by_id.get(oid, {}).get("pickupable", True)}:
-            switched = by_id[oid].get("controlledObjects") or ()
-            meant.setdefault(types[oid], set()).add(switched[0] if len(switched) == 1 else oid)
+        for oid in {oid for _, ids in steps for oid in ids} & fixtures:
+            meant.setdefault(types[oid], set()).add(switched.get(oid, oid))
         return Planned(written + ([by_thing] if by_thing != written[0] else []), seconds, meant)
 
     def _taken_out(self, steps: Sequence[tuple[str, tuple[str, ...]]], types: dict[str, str]) -> list[str | None]:
