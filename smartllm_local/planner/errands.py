@@ -10,7 +10,8 @@ So a sub-task's steps on a thing it acts on (picks up, switches, opens, pulls...
 led to each, the sleeps after a switch-on and the comments right above them, are an errand where the dry run (a
 notional robot per sub-task, in the order written) shows them unneeded: no call fails that did not, every stated
 goal that held still holds, every thing the instruction names or a goal is about ends as it did (what it holds
-aside: a cup nobody asked for leaves the fridge). A thing is named by words that are not part of another thing's
+aside: a cup nobody asked for leaves the fridge; its pieces only where a goal is about them or the thing itself, not
+where it only wants it cut: :func:`asked_types`). A thing is named by words that are not part of another thing's
 name ("get the spray bottle" names no SoapBottle: the 1.5B carried the soap bottle beside it to the counter, and
 the sub-task that did held a robot). On a thing nobody named that is a thing nobody asked for; on a
 named one, steps that change nothing of how it ends (the cloth pushed in the bathtub before another sub-task
@@ -31,7 +32,7 @@ from collections.abc import Collection, Sequence
 from ..scene import SceneObjects
 from ..scoring import Condition
 from ..skills import SkillSet
-from ..world.object_types import base_type
+from ..world.object_types import SLICE_RESULTS, base_type
 from .asked import named_apart
 from .constraints.world_check import WorldCheck
 from .idle_steps import (
@@ -93,8 +94,7 @@ class Unneeded:
     def __init__(self, steps: Sequence[Step], scene: SceneObjects, skills: SkillSet, instruction: str,
                  goals: Sequence[Condition]):
         self.steps, self.scene, self.skills, self.goals = steps, scene, skills, goals
-        self.asked = {base_type(o) for c in goals for o in (c.subject, c.item) if o} \
-            | {t for t in scene.types if named_apart(instruction, t, scene.types)}
+        self.asked = asked_types(scene, instruction, goals)
         self.failed, world = dry_run(steps, set(), scene, skills)
         self.met, self.ends = world.met(goals), _ends(world, self.asked)
 
@@ -102,6 +102,18 @@ class Unneeded:
         """Whether the steps on the lines ``taken`` can go."""
         failed, world = dry_run(self.steps, taken, self.scene, self.skills)
         return failed <= self.failed and world.met(self.goals) >= self.met and _ends(world, self.asked) == self.ends
+
+
+def asked_types(scene: SceneObjects, instruction: str, goals: Sequence[Condition]) -> set[str]:
+    """The types whose things must end as they did: those a stated goal is about and those the instruction names,
+    with their pieces where a goal is about the thing itself (the scorer counts a slice of the apple put in the
+    fridge as the apple), not where it only wants it cut: asked to open the fridge and cut the apple, the 0.5B carried
+    a slice to the fridge, and the sub-task that did waited for the cutting."""
+    about = {o for c in goals for o in (c.subject, c.item) if o}
+    whole = {base_type(o) for c in goals for o in (c.subject, c.item) if o and not (o == c.subject and c.state
+                                                                                    == "SLICED")}
+    named = {base_type(t) for t in scene.types if named_apart(instruction, t, scene.types)}
+    return about | named | {base_type(o) for o in about} | {SLICE_RESULTS[t][0] for t in whole if t in SLICE_RESULTS}
 
 
 def _handled(steps: Sequence[Step], actions: dict[str, str]) -> list[tuple[int, str]]:
@@ -120,4 +132,4 @@ def _ends(world: WorldCheck, asked: Collection[str]) -> str:
     asked to open the fridge and cut the apple, the 0.5B carried a slice to the fridge and on to open the
     microwave; without the microwave's steps the slice ends in the same hand by the fridge."""
     return json.dumps([{k: v for k, v in o.items() if k not in _ASIDE and not (o.get("isPickedUp") and k in _CARRIED)}
-                       for o in world.objects() if base_type(o["objectType"]) in asked], sort_keys=True, default=str)
+                       for o in world.objects() if o["objectType"] in asked], sort_keys=True, default=str)

@@ -46,6 +46,7 @@ from .prompting.asked_words import (
     StateWords,
     load_state_words,
     named_for,
+    placement_words,
     placements_asked,
     states_asked,
     without_asking_verbs,
@@ -165,12 +166,15 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
     small models add a light switched on to moving a laptop, a tomato warmed to boiling water. Where the instruction
     asks for nothing moved (``Asked.moves``), a thing put in a holder it neither names nor asks into, and that gives
     the thing no state, is left out too (:func:`.asked.placed_by_model`), as is one put in a holder that gives only
-    states nobody asked for (:func:`.asked.gives_nothing_asked`: "open the fridge and cut the apple")."""
+    states nobody asked for (:func:`.asked.gives_nothing_asked`: "open the fridge and cut the apple"). So is a thing
+    put in a holder the instruction asks other things into, by words that do not name it (:meth:`Asked.put_elsewhere`:
+    asked to cut the bread and put the apple in the microwave, the 0.5B put the bread in it too)."""
     statement = stated.statement
     if statement is None or statement.refusal is not None:
         return stated
     out = {c for c in unasked(asked.naming or instruction, statement.conditions, asked.placements)
            if c.state not in asked.states and c.subject not in asked.placements}
+    out |= {c for c in statement.conditions if asked.put_elsewhere(c)}
     if not asked.moves:  # nothing asked moved: a holder nobody named, or one for a state nobody asked, is the model's
         out |= {c for c in statement.conditions if placed_by_model(instruction, c, asked.placements)
                 or gives_nothing_asked(instruction, c, asked.states, asked.placements)}
@@ -218,7 +222,8 @@ class Asked:
     the verbs of the switches it asks for, whose words name no thing ("switch off the lamp"; None: all of it);
     ``moves``, whether it asks for any thing moved at all (:meth:`StateWords.asks_to_move`); ``each``, the states
     whose words name several things each by a name of its own ("slice the apple, the lettuce and the tomato"), with
-    those things, each owed the state (of the others, one is)."""
+    those things, each owed the state (of the others, one is); ``placing``, each holder of ``placements`` with the
+    words asking things into it."""
 
     states: Mapping[str, Sequence[str]]
     withheld: Collection[str]
@@ -226,6 +231,14 @@ class Asked:
     naming: str | None = None
     moves: bool = True
     each: Mapping[str, Sequence[str]] = field(default_factory=dict)
+    placing: Mapping[str, str] = field(default_factory=dict)
+
+    def put_elsewhere(self, condition: Condition) -> bool:
+        """Whether the condition puts a thing in a holder the instruction asks other things into, by words that do
+        not name it ("cut the bread and put the apple in the microwave": ``Bread in Microwave``)."""
+        things = self.placements.get(condition.subject)
+        return condition.item is not None and bool(things) and base_type(condition.item) not in things \
+            and condition.item not in things and not names(self.placing.get(condition.subject, ""), condition.item)
 
 
 def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
@@ -251,7 +264,8 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
     return Asked(states, withheld, placements_asked(instruction, vocabulary, words),
-                 without_asking_verbs(instruction, switches), words.asks_to_move(instruction), each)
+                 without_asking_verbs(instruction, switches), words.asks_to_move(instruction), each,
+                 placement_words(instruction, vocabulary, words))
 
 
 def checked_against_team(record: StageRecord, instruction: str, scene: SceneObjects, conditions: Sequence[Condition],

@@ -115,12 +115,14 @@ def with_future_pieces(objects: Sequence[Mapping[str, Any]]) -> tuple[list[dict[
 
 
 def relevant(objects: Sequence[Mapping[str, Any]], conditions: Sequence[Condition]) -> list[Mapping[str, Any]]:
-    """The objects the goal can involve: its types (and their pieces or wholes), the tools and sources its
-    states need, every receptacle holding any of those (to be opened), and what a receptacle to be emptied
-    holds (not what the places it may go to hold: nothing there need move)."""
+    """The objects the goal can involve: its types (and their pieces or wholes; the pieces of a thing cut already,
+    which the scorer counts as it), the tools and sources its states need, every receptacle holding any of those (to
+    be opened), and what a receptacle to be emptied holds (not what the places it may go to hold: nothing there need
+    move)."""
     names = {normalize_name(n) for c in conditions for n in (c.subject, c.item) if n}
     wanted = set(names)
     cut = {normalize_name(c.subject) for c in conditions if c.state == "SLICED"}
+    cut |= {o["objectType"].lower() for o in objects if o.get("isSliced")} & names  # cut already: its pieces are it
     for kind in {o["objectType"] for o in objects}:
         if kind in SLICE_PARENT and (kind.lower() in names or SLICE_PARENT[kind].lower() in cut):
             wanted |= {kind.lower(), SLICE_PARENT[kind].lower()}  # the pieces, and the whole they come from

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 from ...scene import SceneObjects
 from ...scoring import Condition
 from ...skills import Skill
-from ...world.object_types import base_type
+from ...world.object_types import RECEPTACLE_ONLY_ACCEPTS, base_type
 from ..decoding.grammar import Node, Ref, alt, seq
 from .format import INDENT
 from .world_check import WorldCheck
@@ -33,15 +33,20 @@ STATE_ACTIONS = {"OpenObject": "CloseObject", "CloseObject": "OpenObject",
 RELEASE = ("PutObject", "DropHandObject", "ThrowObject")
 #: The states a thing may be broken or cut to reach: broken or sliced itself, and cooked (an egg cooks once cracked).
 BROKEN_FOR = frozenset({"BROKEN", "SLICED", "COOKED"})
+#: The actions that leave a thing in pieces.
+CUTTING = frozenset({"BreakObject", "SliceObject"})
 
 
 def wanted_whole(goals: Sequence[Condition]) -> frozenset[str]:
-    """The types stated goals want whole, which no call may break: a thing put somewhere and what holds it, a thing
-    whose state is stated, save one a goal wants in pieces (a state of :data:`BROKEN_FOR`, or a goal on its pieces:
-    an egg is fried cracked). Asked to slice the potato and put the wine bottle in the fridge, the 0.5B broke the
-    bottle, and no plan could then put it anywhere."""
+    """The types stated goals want whole, which no call may break or cut: a thing put somewhere and what holds it, a
+    thing whose state is stated, save one a goal wants in pieces (a state of :data:`BROKEN_FOR`, a goal on its pieces:
+    an egg is fried cracked, or a holder that takes only its pieces: bread in the toaster). Asked to slice the potato
+    and put the wine bottle in the fridge, the 0.5B broke the bottle, and no plan could then put it anywhere; asked to
+    cut the bread and put the apple in the microwave, it cut the apple too."""
     named = {n for c in goals for n in ((c.item, c.subject) if c.item else (c.subject,))}
     in_pieces = {c.subject for c in goals if c.state in BROKEN_FOR} | {base_type(n) for n in named if base_type(n) != n}
+    in_pieces |= {c.item for c in goals if c.item and any(base_type(t) == c.item != t
+                                                           for t in RECEPTACLE_ONLY_ACCEPTS.get(c.subject, ()))}
     return frozenset(named - in_pieces)
 
 
@@ -71,7 +76,7 @@ class Candidates:
                  world: WorldCheck | None, max_steps: int, allows: Allows | None = None,
                  spared: frozenset[str] = frozenset()):
         """``allows``: the calls a plan may make at all (the team's); none given, every call of ``skills``.
-        ``spared``: the types no call breaks (:func:`wanted_whole`)."""
+        ``spared``: the types no call breaks or cuts (:func:`wanted_whole`)."""
         self.scene = scene
         self.allows, self.spared = allows, spared
         self.skills = list(skills)
@@ -127,7 +132,7 @@ class Candidates:
             types = [list(self.scene.types_for(a)) for a in skill.arguments]
             if self.allows is not None:  # what a call asks of its robots depends on its first object
                 types[0] = [t for t in types[0] if self.allows(skill.name, (t,))]
-            if skill.action == "BreakObject":
+            if skill.action in CUTTING:
                 types[0] = [t for t in types[0] if t not in self.spared]
             if fn is not None:
                 if skill.action in RELEASE:

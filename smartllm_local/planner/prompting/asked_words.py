@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -189,23 +189,42 @@ def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateW
     sentence named before ("close the laptop and put it away in the drawer"), or by a liquid (``StateWords.liquids``:
     "boil some water on the stove", the things that can be filled); not "the soap", which may be the bar or the
     bottle, nor "on the table" beside three."""
-    placed = {holder: named_for(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary)
-              for holder, said in states_asked(instruction, words.placements, words.verbs).items()
-              if holder in vocabulary.types}
+    placed: dict[str, list[str]] = {}
+    for holder, named, _ in _placed(instruction, vocabulary, words):
+        placed[holder] = list(dict.fromkeys([*placed.get(holder, []), *named]))
+    return placed
+
+
+def placement_words(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> dict[str, str]:
+    """Each holder of :func:`placements_asked` with the words that ask things into it ("cut the bread and put the
+    apple in the microwave": Microwave, "the apple"; a pronoun's, the words before it too)."""
+    said: dict[str, str] = {}
+    for holder, _, asking in _placed(instruction, vocabulary, words):
+        said[holder] = f"{said.get(holder, '')} {asking}".strip()
+    return said
+
+
+def _placed(instruction: str, vocabulary: GoalVocabulary,
+            words: StateWords) -> Iterator[tuple[str, list[str], str]]:
+    """Each holder asked things into (:func:`placements_asked`), with the things named and the words naming them."""
+    for holder, said in states_asked(instruction, words.placements, words.verbs).items():
+        if holder in vocabulary.types:
+            yield holder, named_for(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary), said
     holders = vocabulary.holder_types()
     for things, where, before in puts(instruction, words.put):
         holder = holder_named(where, holders)
         able = [t for t in vocabulary.types if holder in vocabulary.holders.get(t, ())]
         named = things_named(things, able) if holder else []
+        asking = things
         if holder and not named and (_IT.search(things) or _THEM.search(things)):
             earlier = things_named(before, able)  # "close the laptop and put it away in the drawer"
             named = earlier if len(earlier) == 1 or _THEM.search(things) else []
+            asking = f"{before} {things}"
         filled = set(words.filled_by(things)) if holder and not named else set()
         if filled and not filled <= set(vocabulary.states.get(holder, ())):  # "boil some water on the stove": a pot
             named = [t for t in able if filled <= set(vocabulary.states.get(t, ()))]  # (not "in the pot": the pot)
         if holder and named:
-            placed[holder] = list(dict.fromkeys([*placed.get(holder, []), *named]))
-    return placed
+            yield holder, named, asking
 
 
 def named_for(words: str, able: Callable[[str], bool], vocabulary: GoalVocabulary) -> list[str]:

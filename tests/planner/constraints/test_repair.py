@@ -225,11 +225,41 @@ def test_a_thing_the_goals_want_whole_is_not_broken():
 
 def test_a_thing_a_goal_wants_in_pieces_may_be_broken():
     """An egg is fried cracked: goals on the cracked egg, or the egg sliced, leave it breakable; what holds it is
-    kept whole."""
+    kept whole. Bread goes in the toaster in slices."""
     fried = [Condition("Pan", item="EggCracked"), Condition("EggCracked", state="COOKED"),
              Condition("Pan", item="Egg")]
     assert wanted_whole(fried) == {"Pan"}
     assert wanted_whole([Condition("Egg", state="SLICED"), Condition("Mug", state="FILLED")]) == {"Mug"}
+    assert wanted_whole([Condition("Toaster", item="Bread"), Condition("Fridge", item="Apple")]) == {
+        "Toaster", "Fridge", "Apple"}
+
+
+def test_a_thing_the_goals_want_whole_is_not_cut_and_one_cut_already_is_put_where_the_goals_say_in_pieces():
+    """Asked to cut the bread and put the apple in the microwave (FloorPlan19), the 0.5B cut the apple too. With
+    those goals the grammar offers no call cutting the apple, and the writer writes another line; without them the
+    same writer cuts it. Where the apple is cut already, the planner puts its pieces in the microwave, which the
+    scorer counts as the apple, and the calls meet the goal on the real Controller."""
+    script = ["def subtask1_apple():\n", "    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
+              "    GoToObject('Apple')\n", "    SliceObject('Apple')\n"]
+    goals = [Condition("Bread", state="SLICED"), Condition("Microwave", item="Apple")]
+    assert "SliceObject('Apple')" not in run_constraint(_decomposer(19, goals=goals), _scripted(script), len, 3000)
+    text = run_constraint(_decomposer(19), _scripted(script), len, 3000)
+    assert "    SliceObject('Apple')\n" in text
+    cut = [("GoToObject", ["Knife"]), ("PickupObject", ["Knife"]), ("GoToObject", ["Apple"]),
+           ("SliceObject", ["Apple"])]
+    world = WorldCheck(scene_objects(19), SKILLS, MAX_SUBTASKS)
+    assert all(world.run.apply([0], name, objects).success for name, objects in cut)
+    found = Repairer(world, SKILLS).meet(1, [Condition("Microwave", item="Apple")], 20)
+    assert found is not None and ("PutObject", ("AppleSliced", "Microwave")) in found.calls
+    plan = "".join(f"{name}(robots[{k}], {', '.join(repr(o) for o in objects)})\n"
+                   for k, calls in enumerate((cut, found.calls)) for name, objects in calls)
+    controller = open_controller(19, agent_count=2)
+    try:
+        ex = run(plan, [1, 2], controller, 19)
+    finally:
+        controller.stop()
+    assert all(e.success for e in ex.trace), [e.error for e in ex.trace]
+    assert scores(ex, [{"name": "Microwave", "contains": ["Apple"], "state": None}]).GCR == 1
 
 
 def test_an_effect_is_the_scorers_condition():
