@@ -46,7 +46,7 @@ from .prompting.asked_words import (
     StateWords,
     load_state_words,
     named_for,
-    placement_words,
+    placements_and_words,
     placements_asked,
     states_asked,
     without_asking_verbs,
@@ -263,9 +263,9 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
                 each[state] = apart
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
-    return Asked(states, withheld, placements_asked(instruction, vocabulary, words),
-                 without_asking_verbs(instruction, switches), words.asks_to_move(instruction), each,
-                 placement_words(instruction, vocabulary, words))
+    placements, placing = placements_and_words(instruction, vocabulary, words)
+    return Asked(states, withheld, placements, without_asking_verbs(instruction, switches),
+                 words.asks_to_move(instruction), each, placing)
 
 
 def checked_against_team(record: StageRecord, instruction: str, scene: SceneObjects, conditions: Sequence[Condition],

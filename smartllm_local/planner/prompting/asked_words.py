@@ -189,19 +189,19 @@ def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateW
     sentence named before ("close the laptop and put it away in the drawer"), or by a liquid (``StateWords.liquids``:
     "boil some water on the stove", the things that can be filled); not "the soap", which may be the bar or the
     bottle, nor "on the table" beside three."""
+    return placements_and_words(instruction, vocabulary, words)[0]
+
+
+def placements_and_words(instruction: str, vocabulary: GoalVocabulary,
+                         words: StateWords) -> tuple[dict[str, list[str]], dict[str, str]]:
+    """:func:`placements_asked`, and each of its holders with the words that ask things into it ("cut the bread and
+    put the apple in the microwave": Microwave, "the apple"; a pronoun's, the words before it too)."""
     placed: dict[str, list[str]] = {}
-    for holder, named, _ in _placed(instruction, vocabulary, words):
-        placed[holder] = list(dict.fromkeys([*placed.get(holder, []), *named]))
-    return placed
-
-
-def placement_words(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> dict[str, str]:
-    """Each holder of :func:`placements_asked` with the words that ask things into it ("cut the bread and put the
-    apple in the microwave": Microwave, "the apple"; a pronoun's, the words before it too)."""
     said: dict[str, str] = {}
-    for holder, _, asking in _placed(instruction, vocabulary, words):
+    for holder, named, asking in _placed(instruction, vocabulary, words):
+        placed[holder] = list(dict.fromkeys([*placed.get(holder, []), *named]))
         said[holder] = f"{said.get(holder, '')} {asking}".strip()
-    return said
+    return placed, said
 
 
 def _placed(instruction: str, vocabulary: GoalVocabulary,
