@@ -10,7 +10,8 @@ on the safe side (a plan it finds stays valid in the world):
 - containment and enclosure are followed two levels deep (an egg in a pan on a burner), the
   simulator follows them to any depth;
 - a robot lifts what its own capacity allows, or with one teammate that stands by the object
-  (the executor pools any number of free-handed teammates);
+  (the executor pools any number of free-handed teammates); a thing the plan put something in is lifted
+  again only where every lift of it could carry every movable thing besides;
 - DropHandObject and ThrowObject land wherever the robot's heading leads, and PushObject and
   PullObject move an object by a distance: the model has no positions, so it has no action for them.
 
@@ -40,10 +41,11 @@ AFFORDANCE_FLUENTS = ("pickupable", "receptacle", "openable", "toggleable", "sli
                       "movable")
 #: Further static predicates of things, each set from the scene (see :func:`.problem.static_facts`).
 THING_FACTS = ("can_fill", "cookable", "knife", "shuts", "microwave", "heats_when_on", "coffee_maker", "mug",
-               "chills", "cracks")
-#: What changes: the world's object states (``present``: not cut into pieces that replaced it).
+               "chills", "cracks", "tight")
+#: What changes: the world's object states (``present``: not cut into pieces that replaced it; ``weighed_down``:
+#: ``tight`` and holding a thing the plan put in it, so maybe heavier than ``lifts`` reckoned).
 THING_STATES = ("present", "is_open", "is_on", "heating", "rinsing", "dirty", "broken", "sliced", "hot", "cold",
-                "cooked", "filled", "held")
+                "cooked", "filled", "held", "weighed_down")
 #: The AI2-THOR actions the model has an action for (the others move things by geometry it lacks).
 MODELLED_ACTIONS = frozenset({"", "PickupObject", "PutObject", "OpenObject", "CloseObject", "ToggleObjectOn",
                               "ToggleObjectOff", "SliceObject", "BreakObject", "CleanObject"})
@@ -187,6 +189,7 @@ def pick_up(skill: Skill, v: Vocabulary, together: bool) -> InstantaneousAction:
         action.add_effect(v.helping(helper, t), True)
     else:
         action.add_precondition(v.lifts(r, t))
+    action.add_precondition(Not(v.weighed_down(t)))
     c = Variable("c", THING)
     action.add_effect(v.inside(t, c), False, forall=[c])
     # What is lifted leaves where it lay: a robot that went to the place would act on it wherever it is taken.
@@ -225,7 +228,17 @@ def put(skill: Skill, v: Vocabulary) -> InstantaneousAction:
     settle(action, v, t, c, TRUE())
     settle(action, v, t, d, v.inside(c, d), forall=[d])
     settle(action, v, x, c, v.inside(x, t), forall=[x])
+    heavier(action, v, c)
     return action
+
+
+def heavier(action: InstantaneousAction, v: Vocabulary, c: FNode) -> None:
+    """What a thing is put into weighs more now, as does a thing that holds it: ``lifts`` was reckoned with what
+    each held as the plan began, so where that leaves too little to spare (``tight``) neither is lifted again (a
+    robot of 1 kg lifts the mug, not the mug with a CD in it; the executor weighs what a thing holds)."""
+    e = Variable("e", ITEM)
+    action.add_effect(v.weighed_down(c), True, v.tight(c))
+    action.add_effect(v.weighed_down(e), True, And(v.inside(c, e), v.tight(e)), forall=[e])
 
 
 def open_or_close(skill: Skill, v: Vocabulary, opening: bool) -> InstantaneousAction:

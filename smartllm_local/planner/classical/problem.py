@@ -252,16 +252,21 @@ def _robots(problem: Problem, v: Vocabulary, dry: DryRun, by_id: Mapping[str, Ma
             if skill_fluent(skill) in v.fluents:
                 problem.set_initial_value(v.fluents[skill_fluent(skill)](robot), True)
         problem.set_initial_value(v.free(robot), True)  # a dry run starts with empty hands
+    movable = sum(float(o.get("mass") or 0.0) for o in table.values() if o.get("pickupable"))
     for oid, o in by_id.items():
         if not o.get("pickupable"):
             continue
         mass = _carried_mass(table, o)
+        lifts = [team[i].mass_capacity for i in range(len(robots)) if team[i].mass_capacity + _MASS_TOLERANCE >= mass]
         for i, robot in enumerate(robots):
             if team[i].mass_capacity + _MASS_TOLERANCE >= mass:
                 problem.set_initial_value(v.lifts(robot, things[oid]), True)
             for j, helper in enumerate(robots):
                 if j != i and team[i].mass_capacity + team[j].mass_capacity + _MASS_TOLERANCE >= mass:
                     problem.set_initial_value(v.lifts_together(robot, helper, things[oid]), True)
+                    lifts.append(team[i].mass_capacity + team[j].mass_capacity)
+        if any(capacity < mass + movable for capacity in lifts):  # a lift that every other thing put in could stop
+            problem.set_initial_value(v.tight(things[oid]), True)
 
 
 def _stands(problem: Problem, v: Vocabulary, dry: DryRun, member: int, robot: Object,
