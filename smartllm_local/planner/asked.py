@@ -27,6 +27,7 @@ from functools import cache
 from ..goal_language import name_words
 from ..scoring import Condition, Goal
 from ..world.object_types import (
+    CALLED_BY_WHOLE,
     COLD_SOURCES,
     HEAT_SOURCES,
     INFORMAL_NAMES,
@@ -148,18 +149,26 @@ def named_in_full(instruction: str, types: Sequence[str]) -> list[str]:
 def outnamed(instruction: str, types: Sequence[str]) -> set[str]:
     """The types whose every name word the instruction says belongs to other types it names as a phrase
     (:func:`named_as_phrase`): "the bar of soap" names the SoapBar, so "soap" does not name the SoapBottle; "the
-    side table" is not the CoffeeTable. A type whose name holds another's whole name is not outnamed by it ("the
-    sink" may be the SinkBasin)."""
-    phrases = [set(_type_words(t)) for t in types if named_as_phrase(instruction, t)]
+    side table" is not the CoffeeTable; "on the desk" names no DeskLamp. A type whose name holds another's whole
+    name is not outnamed by it where it is a kind of the other, its name ending as the other's does ("the chair"
+    may be the ArmChair), or a part people call by the other's name ("the sink" may be the SinkBasin)."""
+    phrases = [t for t in types if named_as_phrase(instruction, t)]
     said = _forms(_WORD.findall(instruction.lower()))
     out = set()
     for t in types:
         words = set(_type_words(t))
         spoken = words & said
-        if spoken and not any(words == p for p in phrases) and \
-                spoken <= set().union(*(p for p in phrases if not p <= words)):
+        if spoken and not any(words == set(_type_words(p)) for p in phrases) and \
+                spoken <= set().union(*(set(_type_words(p)) for p in phrases if not _may_be(t, p))):
             out.add(t)
     return out
+
+
+def _may_be(kind: str, named: str) -> bool:
+    """Whether a thing of ``kind`` may be what the name of ``named`` means: a kind of it ("the chair": an ArmChair;
+    not "the desk": a DeskLamp) or a part called by its name (a SinkBasin)."""
+    words, whole = _type_words(kind), _type_words(named)
+    return set(whole) <= set(words) and (words[-1] == whole[-1] or CALLED_BY_WHOLE.get(base_type(kind)) == named)
 
 
 def named_as_phrase(instruction: str, object_type: str) -> bool:

@@ -111,6 +111,8 @@ COLD_SOURCES: Final = frozenset({"Fridge"})
 
 #: Receptacles under a faucet: a running faucet rinses and fills what they hold.
 WATER_BASINS: Final = frozenset({"Sink", "SinkBasin", "Bathtub", "BathtubBasin"})
+#: Parts people call by the name of the thing they are part of ("put the soap in the sink": its basin).
+CALLED_BY_WHOLE: Final[dict[str, str]] = {"SinkBasin": "Sink", "BathtubBasin": "Bathtub"}
 
 
 def is_known_type(object_type: str) -> bool:

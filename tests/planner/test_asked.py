@@ -285,6 +285,10 @@ def test_a_type_s_name_is_said_as_a_phrase(instruction, object_type, said):
     ("Put the wine bottle next to the soap.", ["WineBottle", "SoapBottle", "SoapBar"], set()),  # "soap" is its own
     ("Make me a coffee.", ["CoffeeMachine", "CoffeeTable", "Mug"], set()),  # no name said as a phrase
     ("Put it in two coffee tables.", ["CoffeeTable", "SideTable"], {"SideTable"}),
+    ("Put the mug on the desk and turn the TV on.", ["Mug", "Desk", "DeskLamp", "Television"], {"DeskLamp"}),
+    ("Put the towel on the counter.", ["Towel", "HandTowel", "TowelHolder", "CounterTop"], {"TowelHolder"}),
+    ("Put the pillow on the chair.", ["Pillow", "Chair", "ArmChair"], set()),  # an armchair is a chair
+    ("Put the cloth in the bathtub.", ["Cloth", "Bathtub", "BathtubBasin"], set()),  # its basin is called so
 ])
 def test_a_type_a_word_of_whose_name_belongs_to_another_named_as_a_phrase_is_outnamed(instruction, types, out):
     assert outnamed(instruction, types) == out
