@@ -162,16 +162,20 @@ def untangle_containment(objects: list[dict[str, Any]]) -> list[dict[str, Any]]:
     Overlapping boxes make some of AI2-THOR's parentReceptacles mutual (in FloorPlan5,
     16, 18, 21, 30, 310, 329). Left in, they loop containment walks and put a counter
     inside a plate. A link in a cycle is kept only where a pickupable object sits in
-    a fixed one, the one direction that is physically possible. Then only the
-    innermost of an object's holders are kept (see :func:`_keep_innermost_holders`).
+    a fixed one, the one direction that is physically possible. No fixture is shut
+    inside a cabinet, drawer or other thing that opens: the same overlaps put
+    FloorPlan16's floor in two cabinets and FloorPlan19's fridge in a drawer, and
+    so out of every robot's reach. Then only the innermost of an object's holders
+    are kept (see :func:`_keep_innermost_holders`).
     """
     by_id = {o["objectId"]: o for o in objects}
     dropped = [
         (obj["objectId"], parent)
         for obj in objects
         for parent in obj.get("parentReceptacles") or []
-        if parent in by_id and obj["objectId"] in linked(by_id, [parent], "parentReceptacles")
-        and not (obj.get("pickupable") and not by_id[parent].get("pickupable"))
+        if parent in by_id and (obj["objectId"] in linked(by_id, [parent], "parentReceptacles")
+                                and not (obj.get("pickupable") and not by_id[parent].get("pickupable"))
+                                or not obj.get("pickupable") and by_id[parent].get("openable"))
     ]
     for child, parent in dropped:
         _unlink(by_id, child, parent)

@@ -144,6 +144,19 @@ def test_untangling_keeps_a_pickupable_in_a_fixed_receptacle_and_drops_fixed_in_
     assert by_id["Cup|1"]["parentReceptacles"] == ["Cabinet|a"]
 
 
+def test_no_fixture_is_shut_inside_a_thing_that_opens():
+    """Overlapping boxes put FloorPlan16's floor inside two cabinets (and so the fridge, the bin and all else that
+    stands on it out of reach) and FloorPlan19's fridge inside a drawer."""
+    for plan in scenes.all_floor_plans():
+        objects = {o["objectId"]: o for o in scenes.load_scene(plan)}
+        for oid, obj in objects.items():
+            if not obj.get("pickupable"):
+                assert not [p for p in obj.get("parentReceptacles") or [] if objects.get(p, {}).get("openable")], oid
+    for plan, kind in (("FloorPlan16", "Fridge"), ("FloorPlan16", "GarbageCan"), ("FloorPlan19", "Fridge")):
+        sim = Simulator(plan)
+        assert not sim.is_enclosed(next(o for o in sim.objects.values() if o["objectType"] == kind)), (plan, kind)
+
+
 def test_load_scene_returns_independent_copies():
     first = scenes.load_scene(6)
     first[0]["objectType"] = "Mangled"
