@@ -135,6 +135,7 @@ class PlanConstraint(Orchestration, Constraint):
         self.scene, self.world = scene, world
         self.goals, self.said = (list(goals), said) if world is not None else ([], Said())
         self.stop = stop
+        self.held_at_start = self._all_held()  # goals the plan did not bring about are not kept from it
         self.joins = together and self.allocated
         self.ended_at_goals = False  # a sub-task was withheld: the goals held
         self.finish_made: dict[str, object] | None = None  # the planner's last sub-task (see :mod:`.finish`)
@@ -360,11 +361,27 @@ class PlanConstraint(Orchestration, Constraint):
 
     def _goals_held(self) -> bool:
         """Whether every stated goal holds in the dry run (a sub-task begun now would be one nobody asked for)."""
-        held = bool(self.goals) and self.world is not None and self.world.met(self.goals) == len(self.goals)
+        held = self._all_held()
         self.ended_at_goals = self.ended_at_goals or held
         return held
 
     def _body(self, remaining: int) -> Forced | Choose:
+        """A body line, where the plan has brought the stated goals about (stopping at them) one that leaves them
+        holding: asked to put the potato in the fridge and make sure the light is off, the 0.5B did both, then
+        switched the light on again."""
+        if self.world is None:
+            return self._line(remaining)
+        self.world.keep = self.goals if self.stop and not self.allocated and not self.held_at_start \
+            and self._all_held() else ()
+        try:
+            return self._line(remaining)
+        finally:
+            self.world.keep = ()
+
+    def _all_held(self) -> bool:
+        return bool(self.goals) and self.world is not None and self.world.met(self.goals) == len(self.goals)
+
+    def _line(self, remaining: int) -> Forced | Choose:
         """A body line. The budget is kept on the unchecked choices (the world check's preferences give
         way to it): a line is offered if the cheapest unchecked completion still fits after it, and
         when no checked line fits, the unchecked ones that do are offered (a dead end, counted)."""

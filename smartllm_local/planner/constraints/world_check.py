@@ -39,10 +39,17 @@ class WorldCheck:
         self.run = scene.world.dry_run(scene.floor_plan, skills, robots, agents)
         self.tries = 0
         self.dead_ends = 0  # lines for which nothing that succeeds could be offered
+        self.keep: Sequence[Condition] = ()  # conditions a call must leave holding to count as succeeding
 
     def succeeds(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> bool:
         self.tries += 1
-        return self.run.succeeds(members, skill, objects).success
+        if not self.keep:
+            return self.run.succeeds(members, skill, objects).success
+        saved = self.run.snapshot()
+        try:
+            return self.run.apply(members, skill, objects).success and self.met(self.keep) == len(self.keep)
+        finally:
+            self.run.restore(saved)
 
     def apply(self, members: Sequence[int], skill: str, objects: Sequence[str]) -> None:
         self.run.apply(members, skill, objects)

@@ -282,6 +282,25 @@ def test_no_sub_task_is_begun_once_the_stated_goals_hold():
     assert not free.ended_at_goals
 
 
+def test_once_the_stated_goals_hold_a_sub_task_makes_no_call_that_undoes_one():
+    """Asked to put the potato in the fridge and make sure the light is off, the 0.5B did both, then switched the
+    light on again (dev4-p1). Once the goals hold, the fridge may still be shut, but the light is not switched on
+    nor the potato taken out; without goals the same writer does both."""
+    script = ["def subtask1_potato_and_light():\n", "    GoToObject('LightSwitch')\n", "    SwitchOff('LightSwitch')\n",
+              "    GoToObject('Potato')\n", "    PickupObject('Potato')\n", "    GoToObject('Fridge')\n",
+              "    OpenObject('Fridge')\n", "    PutObject('Potato', 'Fridge')\n", "    CloseObject('Fridge')\n",
+              "    GoToObject('LightSwitch')\n", "    SwitchOn('LightSwitch')\n", "    GoToObject('Fridge')\n",
+              "    OpenObject('Fridge')\n", "    PickupObject('Potato')\n"]
+    goals = [Condition("Fridge", item="Potato"), Condition("LightSwitch", state="OFF")]
+    kept = _body(run_constraint(_decomposer(14, repair=False, goals=goals), _scripted(script), len, 3000),
+                 "subtask1_potato_and_light")
+    assert "CloseObject('Fridge')" in kept and "SwitchOn('LightSwitch')" not in kept
+    assert "PickupObject('Potato')" not in kept[kept.index("PutObject('Potato', 'Fridge')"):]
+    free = _body(run_constraint(_decomposer(14, repair=False), _scripted(script), len, 3000),
+                 "subtask1_potato_and_light")
+    assert "SwitchOn('LightSwitch')" in free
+
+
 @pytest.mark.parametrize("kind, tasks", [("random", 2), pytest.param("longest", 6, marks=pytest.mark.heavy)])
 def test_writers_that_write_as_models_do_keep_every_guarantee_with_repair(kind, tasks):
     """Adversarial writers (ending mid-line, running past line ends, taking repairable lines where they are
