@@ -222,8 +222,8 @@ class Planner:
         world = WorldCheck(scene, skills, MAX_SUBTASKS) if self.config.world_check else None
         config = self.config
         goals = stated_conditions(result, scene) if config.stop_at_goals or config.finish_goals else []
-        repairer = Repairer(world, skills) if world is not None and (config.repair or config.finish_goals) \
-            and Repairer.fits(world) else None
+        repairer = Repairer(world, skills, stated=goals) if world is not None and (
+            config.repair or config.finish_goals) and Repairer.fits(world) else None
         said = said_of(result.instruction, scene, goals, world.objects() if world is not None else ()) \
             if config.finish_goals else Said()
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,

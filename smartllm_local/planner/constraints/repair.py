@@ -21,13 +21,16 @@ from ...errors import SmartLLMError
 from ...executor.dry_run import DryRun
 from ...scoring import Condition, condition_holds, containment
 from ...skills import Skill, SkillSet
+from ...world.object_types import base_type
 from .candidates import Candidate, Candidates, acts_on
 from .feasibility import WholeTeam
 from .world_check import WorldCheck
 from .written import CALL_LINE, WrittenFunction
 
-#: The most steps a repair writes before the model's call (a hand freed and a knife fetched take five).
+#: The most steps a repair writes before the model's call (a hand freed and a knife fetched take five), and the more
+#: it may write to put what the hand held where a stated goal puts it (go there, open it, put it in).
 MOST_STEPS = 5
+PUT_AWAY_STEPS = 3
 #: Fast Downward's processor time for one search (a repair, or the planner's last sub-task), whole seconds: its
 #: translator and search take 0.15-0.4 s of CPU on the household tasks (measured), so the bound is never reached
 #: there; being processor time, not the wall clock, it ends a search at the same point however loaded the machine
@@ -92,10 +95,12 @@ class Repairer:
         return isinstance(world.run, DryRun)
 
     def __init__(self, world: WorldCheck, skills: SkillSet, time_limit: float = TIME_LIMIT,
-                 cpu_limit: int = CPU_LIMIT):
+                 cpu_limit: int = CPU_LIMIT, stated: Sequence[Condition] = ()):
+        """``stated``: the goals the model stated, whose holders a repair puts the things it frees a hand of in."""
         if not self.fits(world):
             raise ValueError("repair plans in the household world's dry run")
         self.run, self.skills, self.time_limit, self.cpu_limit = world.run, skills, time_limit, cpu_limit
+        self.stated = tuple(stated)
 
     def enable(self, member: int, place: str | None, skill: Skill, objects: Sequence[str],
                allows: Callable[[str, Sequence[str]], bool] | None = None,
@@ -106,10 +111,20 @@ class Repairer:
         goal = effect(skill, objects)
         if goal is None:
             return None
-        call = (skill.name, tuple(objects))
-        found = self._written(member, [goal], place, skills, False, lambda calls: calls[-1] == call and 1 < len(
-            calls) <= MOST_STEPS + 1 and self._usable(member, calls, allows))
+        call, put = (skill.name, tuple(objects)), self._put_where_stated(member, objects)
+        most = MOST_STEPS + PUT_AWAY_STEPS * len(put)
+        found = self._written(member, [goal, *put], place, skills, False, lambda calls: calls[-1] == call
+                              and 1 < len(calls) <= most + 1 and self._usable(member, calls, allows))
         return None if found is None else Repair(tuple(found.calls[:-1]), found.seconds)
+
+    def _put_where_stated(self, member: int, objects: Sequence[str]) -> list[Condition]:
+        """The stated goals that put the thing ``member`` holds somewhere, where the call does not act on it: a
+        repair that frees the hand puts it there (the 0.5B, holding the mug it was to put in the microwave, wrote
+        the egg into the fridge, and the repair put the mug in the fridge to free its hand)."""
+        held = self.run.world.holding(member)
+        if held is None or held["objectType"] in objects:
+            return []
+        return [c for c in self.stated if c.item is not None and base_type(c.item) == base_type(held["objectType"])]
 
     def meet(self, member: int, goals: Sequence[Condition], most: int,
              allows: Callable[[str, Sequence[str]], bool] | None = None,

@@ -49,7 +49,7 @@ def _scripted(lines: list[str]):
 def _decomposer(floor_plan: int, *, repair: bool = True, goals=()) -> PlanConstraint:
     world = WorldCheck(scene_objects(floor_plan), SKILLS, MAX_SUBTASKS)
     return PlanConstraint(scene_objects(floor_plan), SKILLS, world=world, summary=False, comments=False,
-                          repairer=Repairer(world, SKILLS) if repair else None, goals=goals)
+                          repairer=Repairer(world, SKILLS, stated=goals) if repair else None, goals=goals)
 
 
 def _body(text: str, name: str) -> list[str]:
@@ -280,6 +280,20 @@ def test_no_sub_task_is_begun_once_the_stated_goals_hold():
     free = _decomposer(6, repair=False)
     assert "def subtask2_more():" in run_constraint(free, _scripted(script), len, 3000)
     assert not free.ended_at_goals
+
+
+def test_a_repair_that_frees_a_hand_puts_what_it_held_where_the_goals_put_it():
+    """Asked to put the mug in the microwave and the egg in the fridge, the 0.5B carried the mug to the open fridge
+    and wrote the egg into it; the repair put the mug in the fridge to free the hand (dev4-c4). With the goals
+    stated, it goes to the microwave; with none, the fridge beside the robot will do."""
+    script = ["def subtask1_mug_and_egg():\n", "    GoToObject('Mug')\n", "    PickupObject('Mug')\n",
+              "    GoToObject('Fridge')\n", "    OpenObject('Fridge')\n", "    PutObject('Egg', 'Fridge')\n"]
+    goals = [Condition("Microwave", item="Mug"), Condition("Fridge", item="Egg")]
+    stated = _body(run_constraint(_decomposer(14, goals=goals), _scripted(script), len, 3000), "subtask1_mug_and_egg")
+    assert "PutObject('Mug', 'Microwave')" in stated and "PutObject('Mug', 'Fridge')" not in stated, stated
+    assert stated.index("PutObject('Mug', 'Microwave')") < stated.index("PutObject('Egg', 'Fridge')")
+    free = _body(run_constraint(_decomposer(14), _scripted(script), len, 3000), "subtask1_mug_and_egg")
+    assert "PutObject('Mug', 'Microwave')" not in free and "PutObject('Egg', 'Fridge')" in free, free
 
 
 def test_once_the_stated_goals_hold_a_sub_task_makes_no_call_that_undoes_one():
