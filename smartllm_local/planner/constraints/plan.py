@@ -197,6 +197,8 @@ class PlanConstraint(Orchestration, Constraint):
         self.finish = Finish(repairer, self.candidates, self.whole, self.goals, self.max_steps, self.by_name,
                              self.said) \
             if repairer is not None and finish and self.goals and not self.summary else None
+        if self.finish is not None and self.world is not None:  # a robot no sub-task used is left for it
+            self.max_subtasks = min(self.max_subtasks, len(self.world.run.team) - 1)
         self.finish_text = ""  # the planner's last sub-task, once found
 
     def _may_use(self, skill: Skill) -> bool:

@@ -190,6 +190,22 @@ def test_a_state_the_instruction_owes_is_met_though_the_model_acted_on_the_thing
     assert "meet_goals" not in run_constraint(stated, _scripted(lines), len, 3000)
 
 
+def test_a_model_that_writes_sub_tasks_to_the_limit_leaves_a_robot_for_the_planners_last_one():
+    """The 0.5B wrote eight sub-tasks of wandering for "the book, the pen and the pencil go on the bed", one for
+    each notional robot, and none was left for the planner's last sub-task (dev-s3). A model's sub-tasks now stop one
+    short of the limit where the planner may finish."""
+    lines = [line for k in range(1, MAX_SUBTASKS + 1)
+             for line in (f"def subtask{k}_look():\n", "    GoToObject('Bread')\n", "    PushObject('Bread')\n", "\n")]
+    decomposer = _decomposer(1, [Condition("Fridge", item="Apple")])
+    text = run_constraint(decomposer, _scripted(lines), len, 6000)
+    assert f"def subtask{MAX_SUBTASKS - 1}_look():" in text and f"def subtask{MAX_SUBTASKS}_look():" not in text
+    assert decomposer.finish_made["goals"] == ["Apple in Fridge"], text
+    dry, failed = _final_state(text, 1)
+    assert not failed and _met(dry, [Condition("Fridge", item="Apple")])
+    free = _decomposer(1, [Condition("Fridge", item="Apple")], finish=False)
+    assert f"def subtask{MAX_SUBTASKS}_look():" in run_constraint(free, _scripted(lines), len, 6000)
+
+
 def test_the_planners_steps_may_be_more_than_a_model_sub_task_s():
     """Frying the potato in a pan and putting the bread in the fridge, all left to the planner, take more steps than
     a sub-task of the model's may (12): the planner's shortest plan is checked, so it may take twice as many."""
