@@ -173,9 +173,9 @@ def untangle_containment(objects: list[dict[str, Any]]) -> list[dict[str, Any]]:
         (obj["objectId"], parent)
         for obj in objects
         for parent in obj.get("parentReceptacles") or []
-        if parent in by_id and (obj["objectId"] in linked(by_id, [parent], "parentReceptacles")
-                                and not (obj.get("pickupable") and not by_id[parent].get("pickupable"))
-                                or not obj.get("pickupable") and by_id[parent].get("openable"))
+        if parent in by_id and ((obj["objectId"] in linked(by_id, [parent], "parentReceptacles")
+                                 and not (obj.get("pickupable") and not by_id[parent].get("pickupable")))
+                                or (not obj.get("pickupable") and by_id[parent].get("openable")))
     ]
     for child, parent in dropped:
         _unlink(by_id, child, parent)

@@ -257,10 +257,11 @@ def _robots(problem: Problem, v: Vocabulary, dry: DryRun, by_id: Mapping[str, Ma
         if not o.get("pickupable"):
             continue
         mass = _carried_mass(table, o)
-        lifts = [team[i].mass_capacity for i in range(len(robots)) if team[i].mass_capacity + _MASS_TOLERANCE >= mass]
+        lifts = []  # the capacity of each lift of it, alone or by two
         for i, robot in enumerate(robots):
             if team[i].mass_capacity + _MASS_TOLERANCE >= mass:
                 problem.set_initial_value(v.lifts(robot, things[oid]), True)
+                lifts.append(team[i].mass_capacity)
             for j, helper in enumerate(robots):
                 if j != i and team[i].mass_capacity + team[j].mass_capacity + _MASS_TOLERANCE >= mass:
                     problem.set_initial_value(v.lifts_together(robot, helper, things[oid]), True)
