@@ -38,6 +38,7 @@ from smartllm_local.planner.prompting.asked_words import load_state_words
 from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
+from tests.conftest import HOUSEHOLD_SETS
 
 from .fakes import FakeBackend
 
@@ -117,7 +118,7 @@ def test_a_holder_the_model_chose_for_a_named_thing_asks_for_nothing_else_in_it(
     assert unasked("Chill the wine.", chill) == []  # a cold source gives what is in it a state
 
 
-@pytest.mark.parametrize("tasks", ["benchmark", "heldout", "development", "development-3", "development-4"])
+@pytest.mark.parametrize("tasks", HOUSEHOLD_SETS)
 def test_every_household_goal_condition_is_one_the_instruction_asks_for(tasks):
     """So the lines the goal stage leaves out as nobody's asking are never among a task's goals (the goals read
     here to check the reading, never by the stage)."""
@@ -138,7 +139,7 @@ def test_every_household_goal_condition_is_one_the_instruction_asks_for(tasks):
         assert not {c.state for c in truth} & set(asked.withheld), task.id  # no state asked is withheld
 
 
-@pytest.mark.parametrize("tasks", ["benchmark", "heldout", "development", "development-3", "development-4"])
+@pytest.mark.parametrize("tasks", HOUSEHOLD_SETS)
 def test_every_infeasible_household_task_is_still_refused_for_its_own_goals(tasks):
     """On each task's own goals, the goal check names a problem for every infeasible task, and the rule drops none
     of them."""

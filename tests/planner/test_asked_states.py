@@ -33,6 +33,7 @@ from smartllm_local.planner.prompting.asked_words import load_state_words, state
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects, world_of
+from tests.conftest import HOUSEHOLD_SETS
 
 from .test_goal_stage import TASKS, _check_statement
 from .writers import WRITERS, TokenAdversary, writer
@@ -366,7 +367,7 @@ def test_the_statement_kept_leaves_out_a_goal_nobody_asked_for_and_keeps_what_wa
     assert kept("Make it dark.", "LightSwitch off\n\n", nothing) == ("LightSwitch off\n", [])  # nothing asked: kept
 
 
-@pytest.mark.parametrize("tasks", ["benchmark", "heldout", "development", "development-3", "development-4"])
+@pytest.mark.parametrize("tasks", HOUSEHOLD_SETS)
 def test_no_household_goal_puts_a_thing_where_its_scene_has_it_already(tasks):
     """So the lines the goal stage leaves out are never among a task's goals."""
     household = load_domain("household")
@@ -447,7 +448,7 @@ def test_a_thing_in_a_holder_is_not_also_picked_up():
     assert accepts(GoalConstraint(KITCHEN, placed={"Fridge": []}), "Apple picked\n\nEgg in Fridge\n\n")
 
 
-@pytest.mark.parametrize("tasks", ["benchmark", "heldout", "development", "development-3", "development-4"])
+@pytest.mark.parametrize("tasks", HOUSEHOLD_SETS)
 def test_every_household_goal_of_a_thing_asked_into_a_holder_puts_it_there_and_the_grammar_can_state_it(tasks):
     """The owed lines are the tasks' own goals (read here to check the words, never by the stage), and a statement of
     exactly a task's goals is still one the stage's grammar can write."""
