@@ -44,6 +44,10 @@ MOST_SUBSETS = 4
 #: checked in the dry run as written, not a model's that may wander (frying the potato and putting the bread in
 #: the fridge, both left to it, take 14 steps).
 LONGER = 2
+#: The room (in characters) the model's sub-tasks leave for the planner's last one, where the budget has it to spare:
+#: a sub-task of about six steps. Lines the planner took out of the model's text cost tokens all the same, and the
+#: 0.5B's seven sub-tasks of wandering once left too little for the CD its plan had not put on the bed (dev4-c3).
+ROOM = 256
 
 
 @dataclass(frozen=True)

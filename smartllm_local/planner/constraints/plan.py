@@ -45,6 +45,7 @@ from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, Rewr
 from .budget import Budget
 from .candidates import Candidates, wanted_whole
 from .feasibility import Step, WholeTeam
+from .finish import ROOM as FINISH_ROOM
 from .finish import Finish, Said
 from .format import (
     COMMENT_LEN,
@@ -199,6 +200,7 @@ class PlanConstraint(Orchestration, Constraint):
             if repairer is not None and finish and self.goals and not self.summary else None
         if self.finish is not None and self.world is not None:  # a robot no sub-task used is left for it
             self.max_subtasks = min(self.max_subtasks, len(self.world.run.team) - 1)
+        self.finish_room: int | None = None if self.finish is not None else 0  # and room (set from the budget)
         self.finish_text = ""  # the planner's last sub-task, once found
 
     def _may_use(self, skill: Skill) -> bool:
@@ -270,11 +272,13 @@ class PlanConstraint(Orchestration, Constraint):
             return self._finishing(remaining)
         if self.phase == "finish":
             return Forced(self.finish_text)
+        if self.finish_room is None:  # what the model's part leaves for the planner's, where the budget has it
+            self.finish_room = min(FINISH_ROOM, max(0, remaining - self.minimum_budget()))
         handler = {
             "start": self._start, "summary": self._summary, "header": self._header_choice, "body": self._body,
             "orch": self._orch, "threads": self._threads,
         }.get(self.phase)
-        return handler(remaining) if handler else None
+        return handler(remaining - (self.finish_room if self.finish is not None else 0)) if handler else None
 
     def _choose(self, rules: dict[str, Node], options: dict[str, Node]) -> Choose:  # type: ignore[override]
         if self.allocated:

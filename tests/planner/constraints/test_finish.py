@@ -206,6 +206,22 @@ def test_a_model_that_writes_sub_tasks_to_the_limit_leaves_a_robot_for_the_plann
     assert f"def subtask{MAX_SUBTASKS}_look():" in run_constraint(free, _scripted(lines), len, 6000)
 
 
+def test_a_model_that_writes_to_the_end_of_the_budget_leaves_room_for_the_planners_last_sub_task():
+    """The 0.5B's seven sub-tasks of wandering (and the lines taken out of them) used the budget up, and the CD its
+    plan had not put on the bed did not fit (dev4-c3). The model's sub-tasks now leave room for the planner's."""
+    wander = [line for k in range(1, 5) for line in (
+        f"def subtask{k}_look_around_the_kitchen():\n", "    GoToObject('Bread')\n", "    PushObject('Bread')\n",
+        "    GoToObject('Toaster')\n", "    PushObject('Toaster')\n", "\n")]
+    goals = [Condition("Fridge", item="Apple")]
+    budget = len(run_constraint(_decomposer(1, goals, finish=False), _scripted(wander), len, 6000)) + 20
+    decomposer = _decomposer(1, goals)
+    text = run_constraint(decomposer, _scripted(wander), len, budget)
+    assert "def subtask2_look_around_the_kitchen():" in text and "def subtask4_look" not in text, text
+    assert decomposer.finish_made["goals"] == ["Apple in Fridge"], text
+    dry, failed = _final_state(text, 1)
+    assert not failed and _met(dry, goals)
+
+
 def test_the_planners_steps_may_be_more_than_a_model_sub_task_s():
     """Frying the potato in a pan and putting the bread in the fridge, all left to the planner, take more steps than
     a sub-task of the model's may (12): the planner's shortest plan is checked, so it may take twice as many."""
