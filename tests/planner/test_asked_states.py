@@ -394,6 +394,7 @@ def test_a_thing_goes_in_two_holders_at_most_and_the_lines_owed_have_room_at_the
     ("Tidy up: close the laptop and throw out the newspaper.", {"GarbageCan": "out the newspaper"}),
     ("That candle has burnt down; throw it in the bin.", {"GarbageCan": "it in the bin"}),
     ("Please discard the old sponge.", {"GarbageCan": "the old sponge"}),
+    ("Get rid of the CD: it goes in the bin.", {"GarbageCan": "rid of the CD"}),  # the 0.5B: on the desk (dev5-e4)
     ("Throw the ball onto the bed.", {}),  # thrown somewhere else: not into the bin
     ("Take the cloth out of the bathtub.", {}),
     ("Throw the towel out of the window.", {}),  # out of a place, not out
