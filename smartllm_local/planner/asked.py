@@ -31,6 +31,7 @@ from ..world.object_types import (
     COLD_SOURCES,
     HEAT_SOURCES,
     INFORMAL_NAMES,
+    PUT_IN_PART,
     RECEPTACLE_ONLY_ACCEPTS,
     TYPE_PROPERTIES,
     WATER_BASINS,
@@ -215,8 +216,9 @@ def things_named(words: str, types: Sequence[str]) -> list[str]:
 def holder_named(words: str, holders: Collection[str]) -> str | None:
     """The one holder of ``holders`` that ``words`` name ("the dining table", "the couch"), or None where they name
     none or several: the type named as a phrase with the most words, else the one an informal name means; none
-    where another holder's name holds the one named ("the sink" may be its SinkBasin) or an informal name means
-    several ("the table" beside a coffee table and a side table)."""
+    where another holder's name holds the one named ("the desk" beside a desk lamp's) or an informal name means
+    several ("the table" beside a coffee table and a side table). A thing put in the sink goes in its basin
+    (:data:`PUT_IN_PART`)."""
     phrased = [h for h in holders if named_as_phrase(words, h)]
     if phrased:
         most = max(len(_type_words(h)) for h in phrased)
@@ -225,7 +227,8 @@ def holder_named(words: str, holders: Collection[str]) -> str | None:
     else:
         said = _forms(_WORD.findall(words.lower()))
         named = {h for h in holders if _informally(said, h)}
-    return next(iter(named)) if len(named) == 1 else None
+    parts = {PUT_IN_PART.get(h) for h in named} & named
+    return next(iter(named)) if len(named) == 1 else next(iter(parts)) if len(parts) == len(named) - 1 == 1 else None
 
 
 def coverage(named: Sequence[str], stated: Sequence[Condition]) -> float:

@@ -113,6 +113,9 @@ COLD_SOURCES: Final = frozenset({"Fridge"})
 WATER_BASINS: Final = frozenset({"Sink", "SinkBasin", "Bathtub", "BathtubBasin"})
 #: Parts people call by the name of the thing they are part of ("put the soap in the sink": its basin).
 CALLED_BY_WHOLE: Final[dict[str, str]] = {"SinkBasin": "Sink", "BathtubBasin": "Bathtub"}
+#: Wholes a part of which takes what is put in them: "put the soap in the sink" means its basin (a bathtub holds what
+#: is put in it itself; so the benchmark's and the held-out tasks state them).
+PUT_IN_PART: Final[dict[str, str]] = {"Sink": "SinkBasin"}
 
 
 def is_known_type(object_type: str) -> bool:
