@@ -201,14 +201,16 @@ def _phrase(object_type: str) -> re.Pattern[str]:
 
 
 def things_named(words: str, types: Sequence[str]) -> list[str]:
-    """The types ``words`` name as things to move: as a phrase ("the spray bottle") or by an informal name that
-    means the type alone ("the remote"), not where they name where a thing comes from ("from the bowl"); a slice
-    type only where its whole is not among them, and no type whose name is part of another's named ("the wine bottle"
-    is no Bottle). "The soap" names neither the bar nor the bottle so."""
+    """The types ``words`` name as things to move: as a phrase ("the spray bottle") or by an informal name, the
+    likeliest of its meanings among ``types`` ("the remote"; "the soap": the bar beside a soap bottle, as the
+    benchmark means it, the bottle where it is the only soap), not where they name where a thing comes from ("from the
+    bowl"); a slice type only where its whole is not among them, and no type whose name is part of another's named
+    ("the wine bottle" is no Bottle)."""
     text = ORIGIN.sub(" ", words.lower())
     said = _forms(_WORD.findall(text))
-    named = [t for t in types if named_as_phrase(text, t) or
-             any(INFORMAL_NAMES.get(word) == (base_type(t),) for word in said)]
+    kinds = {base_type(t) for t in types}
+    meant = {next((k for k in INFORMAL_NAMES.get(word, ()) if k in kinds), None) for word in said}
+    named = [t for t in types if named_as_phrase(text, t) or base_type(t) in meant]
     named = [t for t in named if not any(set(_type_words(t)) < set(_type_words(n)) for n in named)]  # a wine bottle
     return [t for t in named if base_type(t) == t or base_type(t) not in named]
 

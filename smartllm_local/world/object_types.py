@@ -149,7 +149,7 @@ INFORMAL_NAMES: Final[dict[str, tuple[str, ...]]] = {
     **dict.fromkeys(("plant", "pottedplant"), ("HousePlant",)),
     "sponge": ("DishSponge",),
     "rag": ("Cloth",),
-    "soap": ("SoapBottle", "SoapBar"),
+    "soap": ("SoapBar", "SoapBottle"),
     "salt": ("SaltShaker",),
     "pepper": ("PepperShaker",),
     **dict.fromkeys(("papertowel", "papertowels"), ("PaperTowelRoll",)),
