@@ -8,7 +8,8 @@ robots, the 1.5B wrote the coffee's and the apple's sub-tasks, the planner put t
 third, and the plan met every goal with a transition the reference plan does not make (RU 0). Its steps are
 written instead as the last steps of the model's last sub-task, after a comment naming the goals they meet, where
 the dry run (a notional robot per sub-task, in the order written, as the world check runs a decomposition) shows
-the same outcome: no call fails that did not, and the world ends in the same state. The model's last sub-task
+the same outcome: no call fails that did not, and the world ends in the same state as the goals see it (a room of
+two CDs: the model's robot, standing elsewhere, takes the other one to the bin). The model's last sub-task
 runs last in that order, so its robot takes the steps up from the state the planner planned them from, but for
 where it stands and what it holds; a robot still holding something fails the first pickup, and the plan is left
 as it was. An earlier sub-task takes the steps instead where the dry run ends the same with them there and the
@@ -49,11 +50,11 @@ def fold_finish(text: str, scene: SceneObjects, skills: SkillSet,
         return text, None
     checks_team = 2 <= len(team) <= EXACT_COALITIONS
     first = None  # the latest sub-task where the dry run ends the same, teams apart or not
-    base = text_outcome(lines, scene, skills)
+    base = text_outcome(lines, scene, skills, alike=True)
     for model in reversed(defs[:-1]):
         end = body_end(lines, model)
         folded = lines[:end] + lines[last + 1:body] + lines[end:last - 1]
-        if not ends_as(base, folded, scene, skills):
+        if not ends_as(base, folded, scene, skills, alike=True):
             continue
         if not checks_team or all_apart(folded, skills, team, scene):
             return "".join(folded), function_name(lines[model])

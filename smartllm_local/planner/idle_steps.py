@@ -27,6 +27,7 @@ from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 from ..scene import SceneObjects
+from ..scoring import as_scored
 from ..skills import SkillSet
 from .constraints.format import INDENT, MAX_SUBTASKS
 from .constraints.world_check import WorldCheck
@@ -142,23 +143,28 @@ def dry_run(steps: Sequence[Step], dropped: Collection[int], scene: SceneObjects
 
 
 def dry_outcome(steps: Sequence[Step], dropped: Collection[int], scene: SceneObjects,
-                skills: SkillSet) -> tuple[set[int], str]:
-    """The lines whose calls fail, and the world's end state, with ``dropped`` left out."""
+                skills: SkillSet, *, alike: bool = False) -> tuple[set[int], str]:
+    """The lines whose calls fail, and the world's end state, with ``dropped`` left out (``alike``: as the goals see
+    it, :func:`~smartllm_local.scoring.as_scored`)."""
     failed, world = dry_run(steps, dropped, scene, skills)
+    if alike:
+        return failed, json.dumps(as_scored(world.objects()))
     objects = [{k: _rounded(v) for k, v in o.items() if k not in WHERE_ROBOTS_STAND} for o in world.objects()]
     return failed, json.dumps(objects, sort_keys=True, default=str)
 
 
-def text_outcome(lines: Sequence[str], scene: SceneObjects, skills: SkillSet) -> tuple[set[int], str] | None:
+def text_outcome(lines: Sequence[str], scene: SceneObjects, skills: SkillSet, *,
+                 alike: bool = False) -> tuple[set[int], str] | None:
     """:func:`dry_outcome` of a decomposition's text (None: a text of other lines)."""
     steps = skill_steps(lines, skills)
-    return None if steps is None else dry_outcome(steps, (), scene, skills)
+    return None if steps is None else dry_outcome(steps, (), scene, skills, alike=alike)
 
 
-def ends_as(base: tuple[set[int], str] | None, after: Sequence[str], scene: SceneObjects, skills: SkillSet) -> bool:
+def ends_as(base: tuple[set[int], str] | None, after: Sequence[str], scene: SceneObjects, skills: SkillSet, *,
+            alike: bool = False) -> bool:
     """Whether the text ``after`` fails no more calls in the dry run than the text whose :func:`text_outcome` is
-    ``base`` and leaves the world as it does (its lines are others, so the failures are counted)."""
-    new = None if base is None else text_outcome(after, scene, skills)
+    ``base`` (as ``alike``) and leaves the world as it does (its lines are others, so the failures are counted)."""
+    new = None if base is None else text_outcome(after, scene, skills, alike=alike)
     return new is not None and len(new[0]) <= len(base[0]) and new[1] == base[1]
 
 

@@ -9,6 +9,7 @@ from smartllm_local.scoring import (
     STATES,
     Condition,
     Goal,
+    as_scored,
     condition_holds,
     containment,
     parse_goals,
@@ -289,3 +290,19 @@ def test_parse_goals_errors(data, message):
 def test_parse_goals_errors_name_the_file():
     with pytest.raises(TaskFileError, match=r"^goal\.json\[0\]\.state: "):
         parse_goals([{"name": "Apple", "state": "WARM"}], where="goal.json")
+
+
+def test_two_ends_alike_as_the_goals_see_them_whichever_of_two_things_went_where():
+    """A CD in the bin and a CD on the desk, whichever CD, whatever its coordinates; a state or a holder of another
+    type is another end."""
+    one = [obj("CD|1", parents=["GarbageCan|1"], position={"x": 1}), obj("CD|2", parents=["Desk|1"]),
+           obj("GarbageCan|1", contains=["CD|1"]), obj("Desk|1", contains=["CD|2"])]
+    other = [obj("CD|1", parents=["Desk|1"]), obj("CD|2", parents=["GarbageCan|1"], position={"x": 2}),
+             obj("GarbageCan|1", contains=["CD|2"]), obj("Desk|1", contains=["CD|1"])]
+    assert as_scored(one) == as_scored(other)
+    assert as_scored(one, {"CD"}) == as_scored(other, {"CD"}) and len(as_scored(one, {"CD"})) == 2
+    broken = [*other[:1], obj("CD|2", parents=["GarbageCan|1"], isBroken=True), *other[2:]]
+    assert as_scored(broken) != as_scored(one)
+    moved = [obj("CD|1", parents=["Desk|1"]), obj("CD|2", parents=["Desk|1"]), obj("GarbageCan|1"),
+             obj("Desk|1", contains=["CD|1", "CD|2"])]
+    assert as_scored(moved) != as_scored(one)
