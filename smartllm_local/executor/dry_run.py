@@ -38,9 +38,10 @@ from .team_actions import Outcome, TeamWorld
 _RAISING_CODES = frozenset({"InvalidAction", "MissingArguments", "AmbiguousAction", "InvalidArgument"})
 
 
-def notional_robot(skills: SkillSet = DEFAULT_SKILL_SET) -> Robot:
-    """A robot with every skill and no mass limit: a dry run with it asks what the world allows."""
-    return Robot(id=-1, name="notional robot", skills=frozenset(skills), mass_capacity=math.inf)
+def notional_robot(skills: SkillSet = DEFAULT_SKILL_SET, mass_capacity: float = math.inf) -> Robot:
+    """A robot with every skill and no mass limit (or ``mass_capacity``): a dry run with it asks what the world
+    allows."""
+    return Robot(id=-1, name="notional robot", skills=frozenset(skills), mass_capacity=mass_capacity)
 
 
 class _Metadata(MetadataWrapper):

@@ -38,7 +38,7 @@ from .constraints.format import MAX_SUBTASKS
 from .constraints.plan import PlanConstraint
 from .constraints.repair import Repairer
 from .constraints.restated import RestatedAllocation, restated_bodies
-from .constraints.world_check import WorldCheck
+from .constraints.world_check import WorldCheck, for_decomposition
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
 from .decoding.sampling import Sampling
 from .errands import drop_errands
@@ -219,7 +219,7 @@ class Planner:
         opts = self.config.prompts
         record = StageRecord("decomposition", chat_template=self.chat_status)
         skills = self.catalogue.skills
-        world = WorldCheck(scene, skills, MAX_SUBTASKS) if self.config.world_check else None
+        world = for_decomposition(scene, skills, MAX_SUBTASKS, team) if self.config.world_check else None
         config = self.config
         goals = stated_conditions(result, scene) if config.stop_at_goals or config.finish_goals else []
         repairer = Repairer(world, skills, stated=goals) if world is not None and (

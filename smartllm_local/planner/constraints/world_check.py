@@ -5,7 +5,8 @@ in-process dry run of the scene (the executor's own decisions, see
 :mod:`smartllm_local.executor.dry_run`), and a line is offered only if its call
 succeeds there. A decomposition is checked for notional robots with every skill
 and no mass limit, one per sub-task (a sub-task's robot holds what it picked up
-and nothing another sub-task's robot holds); an allocation for one notional robot
+and nothing another sub-task's robot holds); written for a team, they lift what the whole team lifts together
+(:func:`for_decomposition`: a pot with a cup in it weighs both); an allocation for one notional robot
 per ``robot_list`` slot (whether a robot has the skill and the strength is the
 team feasibility's question). Sub-tasks are checked in the order they are
 written; an allocation's threads started together, as the executor interleaves them (see
@@ -15,9 +16,11 @@ site domain's plan is tried on its site simulator the same way.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from ...executor.dry_run import notional_robot
 from ...robots import Robot
 from ...scene import SceneObjects
 from ...scoring import Condition, condition_holds, containment
@@ -122,3 +125,14 @@ def held(objects: Sequence[Mapping[str, Any]]) -> set[tuple[str, str]]:
     by_id = {o["objectId"]: o for o in objects}
     return {(base_type(by_id[child]["objectType"]), o["objectType"])
             for o in objects for child in o.get("receptacleObjectIds") or () if child in by_id}
+
+
+def for_decomposition(scene: SceneObjects, skills: SkillSet, agents: int,
+                      team: Sequence[Robot] | None = None) -> WorldCheck:
+    """A decomposition's world check: ``agents`` notional robots, each lifting what the robots of the ``team`` that
+    pick things up lift together (no limit without a team). No coalition lifts more, and the world weighs a thing
+    with what it holds: the 0.5B put the cup in a pot, and the planner's last sub-task carried the pot, 0.97 kg, for
+    a robot of 0.9 (dev5-e6)."""
+    pickups = {s.name for s in skills.values() if s.action == "PickupObject"}
+    lift = sum(r.mass_capacity for r in team if r.skills & pickups) if team else math.inf
+    return WorldCheck(scene, skills, robots=[notional_robot(skills, lift)] * agents)

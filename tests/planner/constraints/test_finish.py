@@ -15,7 +15,7 @@ from smartllm_local.planner.constraints.finish import Said
 from smartllm_local.planner.constraints.format import MAX_STEPS, MAX_SUBTASKS
 from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.repair import Repairer
-from smartllm_local.planner.constraints.world_check import WorldCheck
+from smartllm_local.planner.constraints.world_check import WorldCheck, for_decomposition
 from smartllm_local.planner.decoding.writer import run_constraint, run_tokens
 from smartllm_local.planner.errands import drop_errands
 from smartllm_local.planner.finish_fold import fold_finish
@@ -220,6 +220,29 @@ def test_a_model_that_writes_to_the_end_of_the_budget_leaves_room_for_the_planne
     assert decomposer.finish_made["goals"] == ["Apple in Fridge"], text
     dry, failed = _final_state(text, 1)
     assert not failed and _met(dry, goals)
+
+
+SHAKER_IN_POT = ["def subtask1_shaker_in_pot():\n", "    GoToObject('SaltShaker')\n",
+                 "    PickupObject('SaltShaker')\n",
+                 "    GoToObject('Pot')\n", "    PutObject('SaltShaker', 'Pot')\n", "\n", "subtask1_shaker_in_pot()\n"]
+
+
+def test_a_decomposition_for_a_team_lifts_no_more_than_the_whole_team_a_thing_weighed_with_what_it_holds():
+    """The 0.5B put the cup in a pot, and the planner's last sub-task carried the pot with it, 0.97 kg, for a robot of
+    0.9 kg (dev5-e6): the world refused. The decomposition's robots now lift what the whole team lifts together."""
+    scene, goals = scene_objects(9), [Condition("CounterTop", item="Pot")]
+    calls = [("GoToObject", ("SaltShaker",)), ("PickupObject", ("SaltShaker",)), ("GoToObject", ("Pot",)),
+             ("PutObject", ("SaltShaker", "Pot")), ("PickupObject", ("Pot",))]  # 0.57 kg and 0.4 kg
+    for ids, lifted in (([28], False), ([28, 8], True), ([1], True)):
+        world = for_decomposition(scene, SKILLS, MAX_SUBTASKS, CATALOGUE.team(ids))
+        assert [world.run.apply([0], *call).success for call in calls] == [True] * 4 + [lifted], ids
+    for ids, lifted in (([28], False), ([1], True)):
+        team = CATALOGUE.team(ids)
+        world = for_decomposition(scene, SKILLS, MAX_SUBTASKS, team)
+        decomposer = PlanConstraint(scene, SKILLS, world=world, summary=False, comments=False, for_team=team,
+                                    repairer=Repairer(world, SKILLS), goals=goals, finish=True)
+        text = run_constraint(decomposer, _scripted(SHAKER_IN_POT), len, 3000)
+        assert ("PickupObject('Pot')" in text) == lifted, text
 
 
 def test_the_planners_steps_may_be_more_than_a_model_sub_task_s():
