@@ -33,7 +33,7 @@ counts only object interactions as actions for Exe.
 from __future__ import annotations
 
 import json
-from collections.abc import Collection, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
@@ -143,10 +143,10 @@ def _matches(obj: Mapping[str, Any], wanted: str) -> bool:
     return kind.lower() == wanted or base_type(kind).lower() == wanted
 
 
-def as_scored(objects: Sequence[Mapping[str, Any]], kinds: Collection[str] | None = None) -> list[str]:
-    """The objects (those of ``kinds``; all where None) as the goals see them, sorted: each one's type, the states
-    that hold of it and the types of what holds it, whichever of several things of a type it is and wherever it
-    lies. Two ends alike so meet the same goals (in a room of two CDs, a robot standing elsewhere takes the other)."""
+def as_scored(objects: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The objects as the goals see them, sorted: each one's type, the states that hold of it and the types of what
+    holds it, whichever of several things of a type it is and wherever it lies. Two ends alike so meet the same goals
+    (in a room of two CDs, a robot standing elsewhere takes the other)."""
     kind = {o["objectId"]: o["objectType"] for o in objects}
     holders: dict[str, set[str]] = {}
     for holder, things in containment(objects).items():
@@ -154,7 +154,7 @@ def as_scored(objects: Sequence[Mapping[str, Any]], kinds: Collection[str] | Non
             holders.setdefault(thing, set()).add(kind.get(holder, holder))
     return sorted(json.dumps([o["objectType"], bool(o.get("isSliced")), sorted(holders.get(o["objectId"], ())),
                               [state for state, test in _STATE_TESTS.items() if test(o)]])
-                  for o in objects if kinds is None or o["objectType"] in kinds)
+                  for o in objects)
 
 
 def condition_holds(condition: Condition, objects: Sequence[Mapping[str, Any]],

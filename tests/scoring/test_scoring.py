@@ -300,7 +300,7 @@ def test_two_ends_alike_as_the_goals_see_them_whichever_of_two_things_went_where
     other = [obj("CD|1", parents=["Desk|1"]), obj("CD|2", parents=["GarbageCan|1"], position={"x": 2}),
              obj("GarbageCan|1", contains=["CD|2"]), obj("Desk|1", contains=["CD|1"])]
     assert as_scored(one) == as_scored(other)
-    assert as_scored(one, {"CD"}) == as_scored(other, {"CD"}) and len(as_scored(one, {"CD"})) == 2
+    assert len(as_scored(one)) == 4
     broken = [*other[:1], obj("CD|2", parents=["GarbageCan|1"], isBroken=True), *other[2:]]
     assert as_scored(broken) != as_scored(one)
     moved = [obj("CD|1", parents=["Desk|1"]), obj("CD|2", parents=["Desk|1"]), obj("GarbageCan|1"),

@@ -278,7 +278,7 @@ class PlanConstraint(Orchestration, Constraint):
             "start": self._start, "summary": self._summary, "header": self._header_choice, "body": self._body,
             "orch": self._orch, "threads": self._threads,
         }.get(self.phase)
-        return handler(remaining - (self.finish_room if self.finish is not None else 0)) if handler else None
+        return handler(remaining - self.finish_room) if handler else None
 
     def _choose(self, rules: dict[str, Node], options: dict[str, Node]) -> Choose:  # type: ignore[override]
         if self.allocated:
