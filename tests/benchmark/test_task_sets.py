@@ -17,13 +17,12 @@ from smartllm_local.benchmark.tasks import load_tasks
 from smartllm_local.domain import load_domain
 from smartllm_local.scoring import condition_holds
 from smartllm_local.world.scenes import load_scene
-from tests.conftest import benchmark_run
+from tests.conftest import HOUSEHOLD_SETS, benchmark_run
 
 from .test_dataset import MINIMUM, SMARTLLM_SKILLS, needed_skills
 
 ROOT = Path(__file__).parents[2]
-SETS = {name: load_domain().folder / name / "tasks.jsonl"
-        for name in ("heldout", "development", "development-3", "development-4", "development-5")}
+SETS = {name: load_domain().folder / name / "tasks.jsonl" for name in HOUSEHOLD_SETS if name != "benchmark"}
 
 
 @pytest.fixture(scope="module", params=sorted(SETS))
