@@ -134,3 +134,9 @@ def _robot(where: str, entry: Any, skills: SkillSet) -> Robot:
 def team_skills(team: Sequence[Robot]) -> frozenset[str]:
     """What a team can do together: the union of its members' skills."""
     return frozenset().union(*(r.skills for r in team)) if team else frozenset()
+
+
+def team_lift(team: Sequence[Robot]) -> float:
+    """What a team lifts together: every member's mass capacity, as the world pools it (a teammate with a free
+    hand within reach helps lift, whatever its skills)."""
+    return sum(r.mass_capacity for r in team)

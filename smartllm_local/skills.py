@@ -119,6 +119,11 @@ class SkillSet(Mapping[str, Skill]):
     def __repr__(self) -> str:
         return f"SkillSet({list(self._skills)})"
 
+    @property
+    def lifting(self) -> frozenset[str]:
+        """The skills that pick a thing up: a call of one weighs what it lifts."""
+        return frozenset(s.name for s in self._skills.values() if s.action == "PickupObject")
+
 
 def has_affordance(obj: Mapping[str, object], affordance: str) -> bool:
     """Whether an AI2-THOR object (metadata dict) offers an affordance."""

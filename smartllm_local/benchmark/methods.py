@@ -74,11 +74,10 @@ class DecompositionThenRule:
         team = self.catalogue.team(result.robots)
         scene = self.planner.scene(result.floor_plan)
         decomposed = result.stage("decomposition").plan
-        pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
         choose = rule_chooser(team) if self.rule == "rule" else \
             random_chooser(team, self.planner.stage_rng(result, "allocation"))
-        record = StageRecord("allocation", output=allocate_by(decomposed, function_needs(decomposed, scene, pickups),  # type: ignore[arg-type]
-                                                              choose))
+        needs = function_needs(decomposed, scene, self.catalogue.skills.lifting)  # type: ignore[arg-type]
+        record = StageRecord("allocation", output=allocate_by(decomposed, needs, choose))  # type: ignore[arg-type]
         record.seconds = time.perf_counter() - started
         record.plan = parse_plan(record.output, form="allocated", skills=self.catalogue.skills, team_size=len(team),
                                  scene_types=scene.types, name=f"<{self.name} allocation>")

@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from ..robots import Robot
+from ..robots import Robot, team_lift
 from ..scoring import Condition, condition_holds, containment, normalize_name
 from ..skills import SkillSet
 from ..world.object_types import HEAT_SOURCES, base_type
@@ -72,17 +72,17 @@ def _ways(condition: Condition, objects: Sequence[Mapping[str, Any]]) -> tuple[f
 
 def _too_heavy(condition: Condition, team: Sequence[Robot], skills: SkillSet,
                objects: Sequence[Mapping[str, Any]]) -> str:
-    """Why the thing a containment moves is too heavy for all the team's lifters together ("" if it is not)."""
+    """Why the thing a containment moves is too heavy for the whole team together ("" if it is not, or if no robot
+    picks things up: that is a missing skill)."""
     if condition.state is not None or not condition.item:
         return ""
     masses = [float(o.get("mass") or 0.0) for o in objects if _is(o, condition.item)]
-    lifters = [r for r in team if any(s in skills and skills[s].action == "PickupObject" for s in r.skills)]
-    if not masses or not lifters:
+    if not masses or not any(r.skills & skills.lifting for r in team):
         return ""
-    pooled = sum(r.mass_capacity for r in lifters)
+    pooled = team_lift(team)
     if min(masses) > pooled:
-        return (f"{condition.describe()} needs {condition.item} ({min(masses):g} kg) lifted, and the team's lifters "
-                f"carry {pooled:g} kg together")
+        return (f"{condition.describe()} needs {condition.item} ({min(masses):g} kg) lifted, and the team lifts "
+                f"{pooled:g} kg together")
     return ""
 
 

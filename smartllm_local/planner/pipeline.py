@@ -285,8 +285,7 @@ class Planner:
         prompt = fit_prompt(lambda ex: self._coalition_prompt(decomposition, team, scene, ex, shared), examples,
                             self.backend, floor + reserve, self.chat)
         names = [f.name for f in decomposed.functions]
-        pickups = [s.name for s in self.catalogue.skills.values() if s.action == "PickupObject"]
-        needs = function_needs(decomposed, scene, pickups)
+        needs = function_needs(decomposed, scene, self.catalogue.skills.lifting)
         constraint = CoalitionConstraint(names, team, needs=[needs[n] for n in names], free=self.config.free_teams) \
             if self.config.grammar else None
         budget = floor

@@ -74,13 +74,15 @@ def test_a_condition_that_holds_already_needs_nothing():
                         scene) == []
 
 
-def test_a_load_too_heavy_for_every_lifter_together_is_out_of_reach():
+def test_a_load_too_heavy_for_the_whole_team_together_is_out_of_reach():
+    """Every member's capacity counts, a teammate that picks nothing up itself included, as the world pools it."""
     scene = load_scene(1)
     apple = min(float(o["mass"]) for o in scene if o["objectType"] == "Apple")
     on_counter = [Condition("Sink", item="Apple")]
     weak = [_robot(*MOVER, capacity=apple / 3), _robot(*MOVER, capacity=apple / 3)]
     assert "lifted" in unattainable(on_counter, weak, CATALOGUE.skills, scene)[0]
     assert unattainable(on_counter, weak + [_robot(*MOVER, capacity=apple / 2)], CATALOGUE.skills, scene) == []
+    assert unattainable(on_counter, weak + [_robot("GoToObject", capacity=apple / 2)], CATALOGUE.skills, scene) == []
 
 
 def test_a_state_it_does_not_judge_is_never_named():

@@ -106,6 +106,17 @@ def test_robots_7_and_8_lift_it_together_when_both_are_within_reach(c):
     assert (s.Exe, s.GCR) == (1.0, 1.0)
 
 
+def test_a_teammate_without_a_pickup_skill_helps_lift_with_its_free_hands(c):
+    """The world pools every member's capacity within reach, as the coalition and the planner's checks count it
+    (robots.team_lift): robot 24 switches things on and lifts the apple with robot 7."""
+    ex = run("""\
+        GoToObject([robots[0], robots[1]], 'Apple')
+        PickupObject([robots[0], robots[1]], 'Apple')
+        """, [7, 24], c)
+    assert steps(ex) == [(0, "GoToObject", (7, 24), True), (1, "PickupObject", (7, 24), True)]
+    assert c.last_event.events[0].metadata["inventoryObjects"][0]["objectId"] == APPLE
+
+
 def test_a_team_member_that_did_not_come_along_does_not_help(c):
     ex = run("""\
         GoToObject(robots[1], 'Fridge')

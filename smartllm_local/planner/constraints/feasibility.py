@@ -25,7 +25,7 @@ from itertools import combinations, permutations
 from ...domain import pooled
 from ...plan_language import Plan
 from ...plan_language.ir import Call, SkillCall
-from ...robots import Robot, team_skills
+from ...robots import Robot, team_lift, team_skills
 from ...scene import MASS_TOLERANCE, Demand, SceneObjects
 
 EXACT_COALITIONS = 6  # teams up to this size are enumerated
@@ -84,7 +84,7 @@ def function_needs(plan: Plan, scene: SceneObjects,
 
 def can_do(robots: Sequence[Robot], need: Need) -> bool:
     skills = frozenset().union(*(r.skills for r in robots))
-    return need.skills <= skills and sum(r.mass_capacity for r in robots) + MASS_TOLERANCE >= need.mass \
+    return need.skills <= skills and team_lift(robots) + MASS_TOLERANCE >= need.mass \
         and all(d.met_by(robots) for d in need.demands)
 
 
@@ -98,7 +98,7 @@ def shortfall(team: Sequence[Robot], need: Need, lifted: str = "what it picks up
     missing = sorted(need.skills - have)
     if missing:
         reasons.append(f"no robot of the team has {', '.join(missing)}")
-    lift = sum(r.mass_capacity for r in team)
+    lift = team_lift(team)
     if need.mass > lift + MASS_TOLERANCE:
         reasons.append(f"{lifted} weighs {need.mass:g} kg, more than the team lifts together ({lift:g} kg)")
     for d in sorted(need.demands, key=lambda d: (d.place.name, d.skill)):

@@ -156,8 +156,8 @@ class PlanConstraint(Orchestration, Constraint):
         usable = [s for s in skills.values() if all(scene.types_for(a) for a in s.arguments[: s.required])]
         if not _acts(usable):
             raise ValueError("the skills cannot act on any object of this scene")
-        pickups = [s.name for s in skills.values() if s.action == "PickupObject"]
-        self.whole = WholeTeam(for_team, scene, pickups) if for_team is not None else None
+        self.lifting = skills.lifting
+        self.whole = WholeTeam(for_team, scene, self.lifting) if for_team is not None else None
         self.skills = [s for s in usable if self._may_use(s)]
         self.skill_names = [s.name for s in self.skills]
         self.skill_actions = {s.name: s.action for s in self.skills}
@@ -460,8 +460,7 @@ class PlanConstraint(Orchestration, Constraint):
         fn.slots_went |= set(range(self.team_size)) if slot is None else {slot}
 
     def _steps(self, fn: WrittenFunction) -> list[Step]:
-        pickups = {s.name for s in self.skills if s.action == "PickupObject"}
-        return [Step(slot, skill, self.scene.masses.get(objects[0], 0.0) if skill in pickups else 0.0,
+        return [Step(slot, skill, self.scene.masses.get(objects[0], 0.0) if skill in self.lifting else 0.0,
                      self.scene.world.call_demand(skill, objects))
                 for slot, skill, objects in fn.calls]
 

@@ -21,7 +21,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ...executor.dry_run import notional_robot
-from ...robots import Robot
+from ...robots import Robot, team_lift
 from ...scene import SceneObjects
 from ...scoring import Condition, condition_holds, containment
 from ...skills import SkillSet
@@ -129,10 +129,8 @@ def held(objects: Sequence[Mapping[str, Any]]) -> set[tuple[str, str]]:
 
 def for_decomposition(scene: SceneObjects, skills: SkillSet, agents: int,
                       team: Sequence[Robot] | None = None) -> WorldCheck:
-    """A decomposition's world check: ``agents`` notional robots, each lifting what the robots of the ``team`` that
-    pick things up lift together (no limit without a team). No coalition lifts more, and the world weighs a thing
-    with what it holds: the 0.5B put the cup in a pot, and the planner's last sub-task carried the pot, 0.97 kg, for
-    a robot of 0.9 (dev5-e6)."""
-    pickups = {s.name for s in skills.values() if s.action == "PickupObject"}
-    lift = sum(r.mass_capacity for r in team if r.skills & pickups) if team else math.inf
+    """A decomposition's world check: ``agents`` notional robots, each lifting what the whole ``team`` lifts together
+    (no limit without a team). No coalition lifts more, and the world weighs a thing with what it holds: the 0.5B
+    put the cup in a pot, and the planner's last sub-task carried the pot, 0.97 kg, for a robot of 0.9 (dev5-e6)."""
+    lift = team_lift(team) if team else math.inf
     return WorldCheck(scene, skills, robots=[notional_robot(skills, lift)] * agents)

@@ -41,7 +41,6 @@ def check_examples(domain: Domain) -> tuple[int, list[str]]:
     if missing:
         problems.append(f"{folder}/examples.json: no example for the {', '.join(missing)} stage(s)")
     skills = domain.catalogue.skills
-    pickups = [s.name for s in skills.values() if s.action == "PickupObject"]
     world = world_of(domain)
     for ex in examples:
         where = f"{folder}/decomposition/{ex.name}.py"
@@ -61,7 +60,7 @@ def check_examples(domain: Domain) -> tuple[int, list[str]]:
                             "has, a step that fails on the site, a comment too long, a bare move that ends nothing?)")
         names = [f.name for f in plan.functions]
         if ex.coalition is not None:
-            needs = function_needs(plan, scene, pickups)
+            needs = function_needs(plan, scene, skills.lifting)
             coalition = CoalitionConstraint(names, team, needs=[needs[n] for n in names])
             if not accepts(coalition, ex.coalition):
                 problems.append(f"{folder}/coalition/{ex.name}.txt: not in the coalition grammar; each line states "

@@ -229,11 +229,12 @@ SHAKER_IN_POT = ["def subtask1_shaker_in_pot():\n", "    GoToObject('SaltShaker'
 
 def test_a_decomposition_for_a_team_lifts_no_more_than_the_whole_team_a_thing_weighed_with_what_it_holds():
     """The 0.5B put the cup in a pot, and the planner's last sub-task carried the pot with it, 0.97 kg, for a robot of
-    0.9 kg (dev5-e6): the world refused. The decomposition's robots now lift what the whole team lifts together."""
+    0.9 kg (dev5-e6): the world refused. The decomposition's robots now lift what the whole team lifts together, a
+    teammate that picks nothing up itself included (robot 24), as the world pools it."""
     scene, goals = scene_objects(9), [Condition("CounterTop", item="Pot")]
     calls = [("GoToObject", ("SaltShaker",)), ("PickupObject", ("SaltShaker",)), ("GoToObject", ("Pot",)),
              ("PutObject", ("SaltShaker", "Pot")), ("PickupObject", ("Pot",))]  # 0.57 kg and 0.4 kg
-    for ids, lifted in (([28], False), ([28, 8], True), ([1], True)):
+    for ids, lifted in (([28], False), ([28, 8], True), ([28, 24], True), ([1], True)):
         world = for_decomposition(scene, SKILLS, MAX_SUBTASKS, CATALOGUE.team(ids))
         assert [world.run.apply([0], *call).success for call in calls] == [True] * 4 + [lifted], ids
     for ids, lifted in (([28], False), ([1], True)):
