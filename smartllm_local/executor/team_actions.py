@@ -23,7 +23,7 @@ here:
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,6 +38,14 @@ KNIVES = frozenset({"Knife", "ButterKnife"})
 # Scene masses are float32 values (a 0.4 kg cup is 0.4000000059604645): a capacity that equals
 # the mass as written must suffice.
 _MASS_TOLERANCE = 1e-6
+
+#: What an action can change: an instance it cannot (a cabinet open already, to open) is meant only where no other is.
+_CHANGES: dict[str, Callable[[dict[str, Any]], bool]] = {
+    "OpenObject": lambda o: not o.get("isOpen"),
+    "CloseObject": lambda o: bool(o.get("isOpen")),
+    "ToggleObjectOn": lambda o: not o.get("isToggled"),
+    "ToggleObjectOff": lambda o: bool(o.get("isToggled")),
+}
 _HELD_ACTIONS = frozenset({"PutObject", "DropHandObject", "ThrowObject"})
 
 
@@ -150,12 +158,13 @@ class TeamWorld:
         return held
 
     def resolve(self, name: str, affordance: str, near: int, members: Sequence[int], *,
-                going: bool = False) -> dict[str, Any] | None:
-        """The instance a plan's object name means: among usable matches, for a fixture (what is not picked up) the
-        one ``near`` last meant by its type, where it is going there or sees it, else the nearest to ``near``; "the
-        stove burner" a robot switched on is the one it comes back to put the pot on, though another is nearer the
-        sink it comes from, and "the cabinet" it opens by the spray bottle is the one by it, whichever it went to
-        before."""
+                going: bool = False, action: str = "") -> dict[str, Any] | None:
+        """The instance a plan's object name means: among usable matches, one the ``action`` can change (a cabinet
+        to open is a closed one), then for a fixture (what is not picked up) the one ``near`` last meant by its type,
+        where it is going there or sees it, else the nearest to ``near``; "the stove burner" a robot switched on is
+        the one it comes back to put the pot on, though another is nearer the sink it comes from, "the cabinet" it
+        opens by the spray bottle is the one by it, whichever it went to before, and "the cabinet" it opens by the pot
+        is the closed one holding it, not the one beside it the robot opened before (dev6-p1)."""
         if "|" in name:
             return next((o for o in self.objects if o["objectId"] == name.strip()), None)
         wanted = name.strip().lower()
@@ -187,10 +196,13 @@ class TeamWorld:
         # The fixture meant before counts where the robot is going to it or sees it (each asked once, not per match).
         before = {self.meant.get((near, o["objectType"])) for o in matches} - {None}
         meant = {i for i in before if going or self.sees(near, i)}
+        changes = _CHANGES.get(action, lambda o: True)
         # Prefer instances the robots can get at (not in a closed fridge or drawer), then whole ones (a broken
-        # one can be neither picked up nor broken again), then the fixture meant before, then the nearest.
-        chosen = min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")), o["objectId"] not in meant,
-                                             round(Box.of(o).distance(x, z), 6), o["objectId"]))
+        # one can be neither picked up nor broken again), then ones the action changes, then the fixture meant
+        # before, then the nearest.
+        chosen = min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")), not changes(o),
+                                             o["objectId"] not in meant, round(Box.of(o).distance(x, z), 6),
+                                             o["objectId"]))
         if not chosen.get("pickupable"):
             self.meant.update({(m, chosen["objectType"]): chosen["objectId"] for m in {near, *members}})
         return chosen
@@ -362,7 +374,7 @@ class TeamWorld:
         candidates = self._members_by_preference(skill, members, ready) or list(members)
         actor = candidates[0]
         affordance = skill.arguments[0]
-        target = self.resolve(name, affordance, actor, members)
+        target = self.resolve(name, affordance, actor, members, action=skill.action)
         if target is None and affordance == "toggleable":
             target = self._switch_for(name, actor, members)
         if target is None:

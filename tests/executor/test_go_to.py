@@ -89,3 +89,19 @@ def test_a_fixture_meant_before_gives_way_to_one_within_reach():
     first, opened, back = (ex.trace[n].object_id for n in (0, 2, 4))
     bottle = next(o for o in ex.final_objects if o["objectType"] == "SprayBottle")
     assert first != opened and back == opened and bottle["isPickedUp"]
+
+
+def test_a_cabinet_to_open_is_a_closed_one_though_the_one_opened_before_is_within_reach():
+    """dev6-p1: a robot opened the cabinet by the potato in FloorPlan29, then went to the pot in the one beside it and
+    opened "the Cabinet": it meant the closed one holding the pot, not the one it had opened (the allocation took the
+    pot's lines out as failing). The action decides first, then the fixture meant before; going back closes the one
+    opened last, on the real Controller."""
+    steps = ["GoToObject('Potato')", "GoToObject('Cabinet')", "OpenObject('Cabinet')", "GoToObject('Pot')",
+             "OpenObject('Cabinet')", "PickupObject('Pot')", "CloseObject('Cabinet')"]
+    ex = _run_alone(steps, 17, 29)
+    assert [e.success for e in ex.trace] == [True] * len(steps), [e.error for e in ex.trace]
+    first, second, closed = (ex.trace[n].object_id for n in (2, 4, 6))
+    cabinets = {o["objectId"]: o for o in ex.final_objects if o["objectType"] == "Cabinet"}
+    assert first != second and cabinets[first]["isOpen"] and closed in (first, second)
+    pot = next(o for o in ex.final_objects if o["objectType"] == "Pot")
+    assert not cabinets[closed]["isOpen"] and pot["isPickedUp"]
