@@ -168,17 +168,29 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
     the thing no state, is left out too (:func:`.asked.placed_by_model`), as is one put in a holder that gives only
     states nobody asked for (:func:`.asked.gives_nothing_asked`: "open the fridge and cut the apple"). So is a thing
     put in a holder the instruction asks other things into, by words that do not name it (:meth:`Asked.put_elsewhere`:
-    asked to cut the bread and put the apple in the microwave, the 0.5B put the bread in it too)."""
+    asked to cut the bread and put the apple in the microwave, the 0.5B put the bread in it too), and a thing's
+    pieces beside the whole thing where nobody asked it cut (:func:`piece_beside_whole`)."""
     statement = stated.statement
     if statement is None or statement.refusal is not None:
         return stated
     out = {c for c in unasked(asked.naming or instruction, statement.conditions, asked.placements)
            if c.state not in asked.states and c.subject not in asked.placements}
-    out |= {c for c in statement.conditions if asked.put_elsewhere(c)}
+    out |= {c for c in statement.conditions if asked.put_elsewhere(c)
+            or piece_beside_whole(c, statement.conditions, asked.states.get("SLICED", ()))}
     if not asked.moves:  # nothing asked moved: a holder nobody named, or one for a state nobody asked, is the model's
         out |= {c for c in statement.conditions if placed_by_model(instruction, c, asked.placements)
                 or gives_nothing_asked(instruction, c, asked.states, asked.placements)}
     return _leave_out(stated, out, "unasked")
+
+
+def piece_beside_whole(condition: Condition, stated: Collection[Condition], cut: Collection[str]) -> bool:
+    """Whether the condition is about a thing's pieces, the thing not asked cut (``cut``), beside the same condition
+    of the whole thing: the scorer counts a slice in the microwave as the apple, so the pieces' line asks for nothing
+    but a cut. Asked to put the apple, the egg and the potato in the microwave, the 0.5B stated `AppleSliced in
+    Microwave` beside `Apple in Microwave`, for a team that cannot slice, and no plan met either (dev6-s1)."""
+    whole = Condition(base_type(condition.subject), state=condition.state,
+                      item=None if condition.item is None else base_type(condition.item))
+    return whole != condition and whole in stated and not {whole.subject, whole.item} & set(cut)
 
 
 def _without_placed(stated: StatedGoals, placed: Collection[Condition]) -> StatedGoals:
@@ -209,6 +221,8 @@ def _leave_out(stated: StatedGoals, out: Collection[Condition], field: str) -> S
 
 #: The states a switch's verb asks for ("switch", "turn", "power" name nothing).
 SWITCHED = ("ON", "OFF")
+#: Words that ask a state of every thing the word after them names ("turn off every lamp in the room").
+EVERY = re.compile(r"\b(?:every|each|all|both)\s+(?:of\s+)?(?:the\s+)?[a-z]+", re.IGNORECASE)
 #: Words that place a thing where it is ("the lamp on the side table").
 LOCATED = re.compile(r"\b(?:on|in|inside)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?"
                      r"(?P<holder>[a-z]+(?:\s+[a-z]+)?)", re.IGNORECASE)
@@ -261,6 +275,8 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
             apart = [t for t in things_named(said, vocabulary.types) if t in states[state]]
             if len(apart) > 1:  # "the desk lamp and the ceiling light", not "the lamp" beside two
                 each[state] = apart
+            elif len(states[state]) > 1 and EVERY.search(said):  # "every lamp": the desk lamp and the floor lamp
+                each[state] = states[state]
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
     placements, placing = placements_and_words(instruction, vocabulary, words)

@@ -26,6 +26,7 @@ from smartllm_local.planner.goal_stage import (
     _without_unasked,
     asked_of,
     holders_asked,
+    piece_beside_whole,
     placed_now,
     standing,
 )
@@ -115,6 +116,19 @@ def test_things_each_named_for_a_state_are_each_owed_it_and_a_verb_ends_the_word
     lamp = asked_of("Turn off the lamp.", living, WORDS)
     assert lamp.each == {} and sorted(lamp.states["OFF"]) == ["DeskLamp", "FloorLamp"]
     assert accepts(GoalConstraint(living, asked=lamp.states, each=lamp.each), "FloorLamp off\n\n")
+
+
+def test_every_thing_a_word_names_is_owed_where_the_words_ask_it_of_every_one():
+    """Asked to turn off every lamp in the room (a desk lamp and a floor lamp), the 0.5B stated the desk lamp off
+    alone, then switched the floor lamp off and on again (dev6-s2): "every", "all", "each" and "both" before the
+    word owe each thing it names the state, where "the lamp" owes one of them."""
+    living = goal_vocabulary(scene_objects(216))
+    for words in ("Turn off every lamp in the room.", "Switch all the lamps off.", "Turn both lamps off, please."):
+        asked = asked_of(words, living, WORDS)
+        assert {state: sorted(kinds) for state, kinds in asked.each.items()} == {"OFF": ["DeskLamp", "FloorLamp"]}
+        assert not accepts(GoalConstraint(living, asked=asked.states, each=asked.each), "DeskLamp off\n\n")
+        assert accepts(GoalConstraint(living, asked=asked.states, each=asked.each), "DeskLamp off\n\nFloorLamp off\n\n")
+    assert asked_of("Turn off the lamp by the bed.", living, WORDS).each == {}
 
 
 def test_a_state_asked_of_named_things_is_said_of_no_other_and_a_withheld_state_of_nothing():
@@ -365,6 +379,29 @@ def test_the_statement_kept_leaves_out_a_goal_nobody_asked_for_and_keeps_what_wa
     assert kept(boil, "Kettle in StoveBurner\nPot hot\n\n", nothing) == ("Kettle in StoveBurner\n", ["Pot hot"])
     assert kept("Throw it in the bin.", "Apple in GarbageCan\n\n", nothing) == ("Apple in GarbageCan\n", [])
     assert kept("Make it dark.", "LightSwitch off\n\n", nothing) == ("LightSwitch off\n", [])  # nothing asked: kept
+
+
+def test_a_things_pieces_beside_the_whole_thing_are_left_out_where_nobody_asked_it_cut():
+    """Asked to put the apple, the egg and the potato in the microwave, the 0.5B stated `AppleSliced in Microwave`
+    beside `Apple in Microwave` (and the potato's pieces too), for a team that cannot slice; no plan met any goal
+    (dev6-s1). The scorer counts a slice in the microwave as the apple, so the pieces' line asks only for a cut."""
+    vocabulary = goal_vocabulary(scene_objects(29))
+    text = ("Egg in Microwave\nApple in Microwave\nAppleSliced in Microwave\nPotato in Microwave\n"
+            "PotatoSliced in Microwave\n\n")
+    statement = parse_goal_statement(text, types=vocabulary.types)
+    three = "Put the apple, the egg and the potato in the microwave."
+    stated = _without_unasked(StatedGoals(StageRecord("goal", output=text), statement), three,
+                              asked_of(three, vocabulary, WORDS))
+    assert stated.statement.text() == "Egg in Microwave\nApple in Microwave\nPotato in Microwave\n"
+    assert stated.record.unasked == ["AppleSliced in Microwave", "PotatoSliced in Microwave"]
+    cut = "Slice the apple and put it in the microwave."
+    pieces = parse_goal_statement("Apple sliced\nApple in Microwave\nAppleSliced in Microwave\n\n",
+                                  types=vocabulary.types)
+    kept = _without_unasked(StatedGoals(StageRecord("goal", output=pieces.text()), pieces), cut,
+                            asked_of(cut, vocabulary, WORDS))
+    assert "AppleSliced in Microwave" in kept.statement.text()
+    alone = parse_goal_statement("AppleSliced in Microwave\n\n", types=vocabulary.types).conditions
+    assert not piece_beside_whole(alone[0], alone, ())
 
 
 @pytest.mark.parametrize("tasks", HOUSEHOLD_SETS)
