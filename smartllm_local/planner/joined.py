@@ -8,8 +8,11 @@ together, the same. So, in the order written, a sub-task that cannot have a team
 sub-tasks before it (:func:`.in_turn.apart`: a team has every skill its sub-task uses and lifts what it lifts) is
 written at the end of one of them, the latest that then leaves every sub-task a team apart, where the dry run (a
 notional robot per sub-task, in the order written) ends the same: no call fails that did not, and the world ends
-in the same state. A sub-task that joins none starts the sub-tasks after it afresh. Only the model's plan and the
-team are read.
+alike as the goals see it (:func:`~smartllm_local.scoring.as_scored`), or, where the text met stated goals, it
+still meets each: a robot that has carried the watering can to the coffee table and goes on to "the statue" takes
+the one nearest it, not the one the other sub-task's robot took, and the coffee table ends as asked (dev6-c3). A
+sub-task that joins none starts the sub-tasks after it afresh. Only the model's plan, its stated goals and the team
+are read.
 """
 
 from __future__ import annotations
@@ -19,27 +22,29 @@ from dataclasses import replace
 
 from ..robots import Robot
 from ..scene import SceneObjects
+from ..scoring import Condition, as_scored
 from ..skills import SkillSet
 from .constraints.feasibility import EXACT_COALITIONS
 from .constraints.format import INDENT
-from .idle_steps import body_end, dry_outcome, ends_as, function_lines, function_name, skill_steps
+from .idle_steps import Step, body_end, dry_run, function_lines, function_name, skill_steps
 from .in_turn import apart
 
 
-def join_in_turn(text: str, scene: SceneObjects, skills: SkillSet, team: Sequence[Robot]) -> tuple[str, list[str]]:
+def join_in_turn(text: str, scene: SceneObjects, skills: SkillSet, team: Sequence[Robot],
+                 goals: Sequence[Condition] = ()) -> tuple[str, list[str]]:
     """The decomposition with each sub-task that would wait for the robots of one before it written at the end of
     that one, and what was joined ("<later> into <earlier>"); the text as it was and none where nothing is."""
     joined: list[str] = []
     if not 1 <= len(team) <= EXACT_COALITIONS:
         return text, joined
-    while (join := _next_join(text.splitlines(keepends=True), scene, skills, team)) is not None:
+    while (join := _next_join(text.splitlines(keepends=True), scene, skills, team, goals)) is not None:
         text, later, earlier = join
         joined.append(f"{later} into {earlier}")
     return text, joined
 
 
-def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet,
-               team: Sequence[Robot]) -> tuple[str, str, str] | None:
+def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet, team: Sequence[Robot],
+               goals: Sequence[Condition]) -> tuple[str, str, str] | None:
     """The first join the rule makes: the text after it, and the later and the earlier sub-task's names."""
     steps = skill_steps(lines, skills)
     if not steps:
@@ -56,11 +61,28 @@ def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet,
             if not apart(range(start, later), moved, (), actions, team, scene):
                 continue
             after = _joined(lines, defs, earlier, later)
-            base = base or dry_outcome(steps, (), scene, skills)
-            if ends_as(base, after, scene, skills):
+            base = base or _outcome(steps, scene, skills, goals)
+            if _ends_well(base, skill_steps(after, skills), scene, skills, goals):
                 return "".join(after), function_name(lines[defs[later]]), function_name(lines[defs[earlier]])
         start = later
     return None
+
+
+def _outcome(steps: Sequence[Step], scene: SceneObjects, skills: SkillSet,
+             goals: Sequence[Condition]) -> tuple[int, list[str], list[Condition]]:
+    """How many calls fail in the dry run, its end as the goals see it, and the stated goals met."""
+    failed, world = dry_run(steps, (), scene, skills)
+    return len(failed), as_scored(world.objects()), [c for c in goals if world.met([c])]
+
+
+def _ends_well(base: tuple[int, list[str], list[Condition]], steps: Sequence[Step] | None, scene: SceneObjects,
+               skills: SkillSet, goals: Sequence[Condition]) -> bool:
+    """Whether the joined text's ``steps`` fail no more calls than the text's (``base``: its :func:`_outcome`) and
+    end alike, or meet every stated goal it met (where it met any)."""
+    if steps is None:
+        return False
+    failed, end, met = _outcome(steps, scene, skills, goals)
+    return failed <= base[0] and (end == base[1] or bool(base[2]) and all(c in met for c in base[2]))
 
 
 def _joined(lines: list[str], defs: Sequence[int], earlier: int, later: int) -> list[str]:

@@ -63,7 +63,7 @@ from .prompting.prompts import (
     load_examples,
 )
 from .result import PlanResult, StageRecord
-from .stages import Fitted, check_output, fit_prompt, run_stage
+from .stages import Fitted, check_output, fit_prompt, run_stage, spelled_cost
 from .steps import Step, run_steps
 from .verifier import check_decomposition, choose, score
 
@@ -209,7 +209,7 @@ class Planner:
             if into is not None:
                 record.finish = {**record.finish, "into": into}
         if config.together:
-            record.output, record.joined = join_in_turn(record.output, scene, skills, team)
+            record.output, record.joined = join_in_turn(record.output, scene, skills, team, goals)
         if record.errands or record.idle_steps or record.put_away or into is not None or record.joined:
             record.plan = None  # parsed again, from the text the coalition and the allocation read
 
@@ -228,8 +228,8 @@ class Planner:
             if config.finish_goals else Said()
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
                                     for_team=team, goals=goals, said=said, repairer=repairer,
-                                    stop=config.stop_at_goals, repair=config.repair,
-                                    finish=config.finish_goals) if config.grammar else None
+                                    stop=config.stop_at_goals, repair=config.repair, finish=config.finish_goals,
+                                    cost=spelled_cost(backend)) if config.grammar else None
         rng = self.stage_rng(result, record.stage if k == 0 else f"{record.stage} candidate {k}")
         run_stage(record, backend, prompt, constraint, output_budget=self.config.budgets["decomposition"],
                   sampling=self.config.candidates.sampling(self.config.sampling, k), rng=rng, progress=progress)

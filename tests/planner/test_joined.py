@@ -67,6 +67,28 @@ def test_a_join_that_would_end_otherwise_is_not_made():
     assert join_in_turn(held, scene_objects(316), SKILLS, CATALOGUE.team([25])) == (held, [])
 
 
+def test_a_join_that_takes_another_of_two_things_is_made_where_the_stated_goals_still_hold():
+    """FloorPlan223, robots 28 (0.9 kg), 8 (0.4 kg) and 24 (switches): the watering can and a statue, 1 kg each,
+    each need 28 and 8 together, so the 1.5B's two sub-tasks ran in turn (RU 0, dev6-c3). Joined, the robot at the
+    coffee table goes on to the statue nearest it, on the side table rather than the dining table: the world ends
+    otherwise, even as the goals see it, but the coffee table ends as asked, so the join is made where goals are
+    stated, and not where none are."""
+    text = ("def subtask1_can_to_table():\n    GoToObject('WateringCan')\n    PickupObject('WateringCan')\n"
+            "    GoToObject('CoffeeTable')\n    PutObject('WateringCan', 'CoffeeTable')\n\n"
+            "def subtask2_statue_to_table():\n    GoToObject('Statue')\n    PickupObject('Statue')\n"
+            "    GoToObject('CoffeeTable')\n    PutObject('Statue', 'CoffeeTable')\n\n"
+            "subtask1_can_to_table()\nsubtask2_statue_to_table()\n")
+    goals = [Condition("CoffeeTable", item="WateringCan"), Condition("CoffeeTable", item="Statue")]
+    team = CATALOGUE.team([28, 8, 24])
+    assert join_in_turn(text, scene_objects(223), SKILLS, team) == (text, [])
+    joined, names = join_in_turn(text, scene_objects(223), SKILLS, team, goals)
+    assert names == ["subtask2_statue_to_table into subtask1_can_to_table"] and joined.count("def ") == 1
+    dry, failed = _final_state(joined, 223)
+    assert not failed and _met(dry, goals)
+    wrong = [Condition("SideTable", item="Statue"), *goals]  # a goal the join would undo: not made
+    assert join_in_turn(text, scene_objects(223), SKILLS, team, wrong)[1] == []
+
+
 def test_the_planner_hands_the_coalition_the_joined_sub_tasks_and_one_at_a_time_keeps_them_apart(monkeypatch):
     task = ("Switch off the desk lamp and the ceiling light.", "FloorPlan303", [24, 25])
     goals = "DeskLamp off\nLightSwitch off\n\n"

@@ -21,7 +21,7 @@ enough to hold a goal no plan meets holds others as wrong.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from itertools import combinations
 from typing import Any
@@ -77,8 +77,9 @@ class Finish:
         self.said = said
         self.made: dict[str, Any] | None = None
 
-    def text(self, world: WorldCheck, k: int, room: int, acted: set[str], put: set[str]) -> str | None:
-        """Sub-task ``k`` (its definition and its call) within ``room`` characters, or None: no goal left
+    def text(self, world: WorldCheck, k: int, room: int, acted: set[str], put: set[str],
+             cost: Callable[[str], int] = len) -> str | None:
+        """Sub-task ``k`` (its definition and its call) within ``room`` tokens (``cost``), or None: no goal left
         unmet that the instruction owes or the plan left open (a thing's place where none of the types ``put``
         somewhere was it, or where it was put only in holders the instruction does not name for it while the
         goal's holder is named; a state where none ``acted`` on was it), no robot left for it, or no plan that
@@ -96,7 +97,7 @@ class Finish:
         said = [condition_line(c) for c in unmet]
         lines = [self.candidates.line((self.skills[skill], objects)) for skill, objects in found.calls]
         text = f"def {name}():\n{INDENT}# the goals left: {'; '.join(said)}\n{''.join(lines)}\n{name}()\n"
-        if len(text) > room:
+        if cost(text) > room:
             return None
         self.made = {"goals": said, "lines": lines, "seconds": found.seconds}
         return text

@@ -32,7 +32,7 @@ decomposition's.
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from ...robots import Robot
 from ...scene import SceneObjects
@@ -110,6 +110,7 @@ class PlanConstraint(Orchestration, Constraint):
         repair: bool = True,
         finish: bool = False,
         together: bool = False,
+        cost: Callable[[str], int] = len,
     ):
         """``team`` (or ``team_size``) makes it an allocation; ``for_team`` is the team a decomposition is written
         for: it offers only the calls that team can make (see :class:`.feasibility.WholeTeam`), and a refusal only
@@ -120,8 +121,11 @@ class PlanConstraint(Orchestration, Constraint):
         the plan leaves unmet are met by a last sub-task of the planner's (:mod:`.finish`, which reads what the
         instruction ``said`` of them). ``together`` (an allocation's): a function that can join the block of threads
         being written joins it (no direct call, no start, where a thread is offered), and a restated body brings in
-        no robot it can do without, so the plan has as few transitions as the order of its functions allows."""
+        no robot it can do without, so the plan has as few transitions as the order of its functions allows.
+        ``cost``: what the planner's own text costs in tokens (its length where the tokens are unknown: every token
+        spells a character at least)."""
         super().__init__()
+        self.cost = cost
         if team is not None:
             team_size = len(team)
         self.team = list(team) if team is not None else None
@@ -359,7 +363,7 @@ class PlanConstraint(Orchestration, Constraint):
                  for _, skill, objects in fn.calls]
         acted = {thing for action, thing in calls if action}
         put = {thing for action, thing in calls if action == "PutObject"}
-        text = finish.text(self.world, len(self.functions) + 1, remaining - 1, acted, put)
+        text = finish.text(self.world, len(self.functions) + 1, remaining - 1, acted, put, self.cost)
         if text is None:
             return None
         self.finish_made, self.finish_text, self.phase = finish.made, text, "finish"

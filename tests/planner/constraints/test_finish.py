@@ -371,3 +371,22 @@ def test_a_goal_the_planners_steps_meet_as_written_a_burner_switched_by_name_not
     assert "    SwitchOn('StoveBurner')\n" in lines and not any("StoveKnob" in line for line in lines), lines
     dry, failed = _final_state(text, 1)
     assert not failed and _met(dry, goals)
+
+
+def test_the_planners_last_sub_task_is_measured_in_the_tokens_it_costs():
+    """The 1.5B's two long sub-tasks left 608 tokens, and the planner's last sub-task, 620 characters but about 180
+    tokens, was not written where each character was counted a token (dev6-s1). Its cost is the tokens it is forced
+    as (here a third of its characters, as the writer spends them): a budget too small for its characters holds it,
+    and the output stays within the budget."""
+    third = lambda text: -(-len(text) // 3)  # noqa: E731
+    budget = len(run_constraint(_decomposer(6, GOALS), _scripted(SLICE_BREAD), len, 3000)) - 1
+    counted = _decomposer(6, GOALS)
+    text = run_constraint(counted, _scripted(SLICE_BREAD), len, budget)
+    assert counted.finish_made is None and "meet_goals" not in text
+    world = WorldCheck(scene_objects(6), SKILLS, MAX_SUBTASKS)
+    costed = PlanConstraint(scene_objects(6), SKILLS, world=world, summary=False, comments=False,
+                            repairer=Repairer(world, SKILLS), goals=GOALS, finish=True, cost=third)
+    text = run_constraint(costed, _scripted(SLICE_BREAD), third, budget)
+    assert "Apple in Fridge" in costed.finish_made["goals"], text
+    dry, failed = _final_state(text, 6)
+    assert not failed and _met(dry, GOALS)
