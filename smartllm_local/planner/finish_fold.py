@@ -50,11 +50,11 @@ def fold_finish(text: str, scene: SceneObjects, skills: SkillSet,
         return text, None
     checks_team = 2 <= len(team) <= EXACT_COALITIONS
     first = None  # the latest sub-task where the dry run ends the same, teams apart or not
-    base = text_outcome(lines, scene, skills, alike=True)
+    base = text_outcome(lines, scene, skills)
     for model in reversed(defs[:-1]):
         end = body_end(lines, model)
         folded = lines[:end] + lines[last + 1:body] + lines[end:last - 1]
-        if not ends_as(base, folded, scene, skills, alike=True):
+        if not ends_as(base, folded, scene, skills):
             continue
         if not checks_team or all_apart(folded, skills, team, scene):
             return "".join(folded), function_name(lines[model])

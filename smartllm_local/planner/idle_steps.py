@@ -153,18 +153,16 @@ def dry_outcome(steps: Sequence[Step], dropped: Collection[int], scene: SceneObj
     return failed, json.dumps(objects, sort_keys=True, default=str)
 
 
-def text_outcome(lines: Sequence[str], scene: SceneObjects, skills: SkillSet, *,
-                 alike: bool = False) -> tuple[set[int], str] | None:
-    """:func:`dry_outcome` of a decomposition's text (None: a text of other lines)."""
+def text_outcome(lines: Sequence[str], scene: SceneObjects, skills: SkillSet) -> tuple[set[int], str] | None:
+    """:func:`dry_outcome` of a decomposition's text, its end as the goals see it (None: a text of other lines)."""
     steps = skill_steps(lines, skills)
-    return None if steps is None else dry_outcome(steps, (), scene, skills, alike=alike)
+    return None if steps is None else dry_outcome(steps, (), scene, skills, alike=True)
 
 
-def ends_as(base: tuple[set[int], str] | None, after: Sequence[str], scene: SceneObjects, skills: SkillSet, *,
-            alike: bool = False) -> bool:
+def ends_as(base: tuple[set[int], str] | None, after: Sequence[str], scene: SceneObjects, skills: SkillSet) -> bool:
     """Whether the text ``after`` fails no more calls in the dry run than the text whose :func:`text_outcome` is
-    ``base`` (as ``alike``) and leaves the world as it does (its lines are others, so the failures are counted)."""
-    new = None if base is None else text_outcome(after, scene, skills, alike=alike)
+    ``base`` and leaves the world alike (its lines are others, so the failures are counted)."""
+    new = None if base is None else text_outcome(after, scene, skills)
     return new is not None and len(new[0]) <= len(base[0]) and new[1] == base[1]
 
 
