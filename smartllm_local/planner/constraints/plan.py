@@ -122,24 +122,21 @@ class PlanConstraint(Orchestration, Constraint):
         instruction ``said`` of them). ``together`` (an allocation's): a function that can join the block of threads
         being written joins it (no direct call, no start, where a thread is offered), and a restated body brings in
         no robot it can do without, so the plan has as few transitions as the order of its functions allows.
-        ``cost``: what the planner's own text costs in tokens (its length where the tokens are unknown: every token
-        spells a character at least)."""
+        ``cost``: the tokens the planner's own text costs (its length where unknown: a token spells a character)."""
         super().__init__()
-        self.cost = cost
         if team is not None:
             team_size = len(team)
         self.team = list(team) if team is not None else None
         self.allocated = team_size is not None
         self.team_size = team_size or 0
-        self.comments = comments
+        self.comments, self.stop = comments, stop
         self.summary = summary and not self.allocated and not function_names
         self.fixed_names = list(function_names or [])
         self.max_subtasks = len(self.fixed_names) or max_subtasks
         self.max_steps = max(2, max_steps)
         self.allow_refusal = allow_refusal
-        self.scene, self.world = scene, world
+        self.scene, self.world, self.cost = scene, world, cost
         self.goals, self.said = (list(goals), said) if world is not None else ([], Said())
-        self.stop = stop
         self.held_at_start = self._all_held()  # goals the plan did not bring about are not kept from it
         self.joins = together and self.allocated
         self.ended_at_goals = False  # a sub-task was withheld: the goals held
