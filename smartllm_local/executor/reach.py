@@ -3,7 +3,7 @@
 A condition needs certain AI2-THOR actions from the team: a slice needs ``SliceObject`` and a knife picked up,
 an object put in a closed fridge needs ``OpenObject``, ``PickupObject`` and ``PutObject``. Where no way of
 meeting it is within the actions the team's skills perform (or, for an object to be moved, within what the
-team's lifters can carry together), and it does not hold already, no plan of this team meets it. Sound, not
+whole team lifts together), and it does not hold already, no plan of this team meets it. Sound, not
 complete: a condition named here is out of reach; one not named may still be (a state this check does not
 judge, a door the robots cannot get to). What a planner may refuse on before writing a step.
 """

@@ -5,7 +5,7 @@ in-process dry run of the scene (the executor's own decisions, see
 :mod:`smartllm_local.executor.dry_run`), and a line is offered only if its call
 succeeds there. A decomposition is checked for notional robots with every skill
 and no mass limit, one per sub-task (a sub-task's robot holds what it picked up
-and nothing another sub-task's robot holds); written for a team, they lift what its lifters lift together
+and nothing another sub-task's robot holds); written for a team, they lift what the whole team lifts together
 (:func:`for_decomposition`: a pot with a cup in it weighs both); an allocation for one notional robot
 per ``robot_list`` slot (whether a robot has the skill and the strength is the
 team feasibility's question). Sub-tasks are checked in the order they are
