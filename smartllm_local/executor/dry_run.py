@@ -160,6 +160,7 @@ class Snapshot:
     event: Event | MultiAgentEvent
     helping: dict[int, str]
     meant: dict[tuple[int, str], str]
+    gone_to: dict[int, str]
 
 
 class DryRun:
@@ -218,7 +219,7 @@ class DryRun:
             thor.frozen_shared = True
             self._saved = Snapshot(thor.frozen, tuple(vars(a).copy() for a in sim.agents), sim.generation,
                                    tuple(thor.encoder.last_results), thor.last_event, dict(self._world.helping),
-                                   dict(self._world.meant))
+                                   dict(self._world.meant), dict(self._world.gone_to))
         return self._saved
 
     def restore(self, snap: Snapshot) -> None:
@@ -245,4 +246,5 @@ class DryRun:
         thor.last_event = self._world.event = snap.event
         self._world.helping = dict(snap.helping)
         self._world.meant = dict(snap.meant)
+        self._world.gone_to = dict(snap.gone_to)
         self._saved = snap

@@ -81,6 +81,7 @@ class TeamWorld:
         self.cell_y = (reply.metadata["actionReturn"] or [{"y": 0.9}])[0]["y"]
         self.helping: dict[int, str] = {}  # member -> object it helps carry
         self.meant: dict[tuple[int, str], str] = {}  # (member, fixture type) -> the instance it last meant
+        self.gone_to: dict[int, str] = {}  # member -> the object it last went to
         # Target box -> the cells nearest first; the cells are fixed for a TeamWorld, so no ranking goes stale.
         self._ranked_cells: dict[tuple[float, float, float, float], list[tuple[float, float]]] = {}
         self.start = [self.position(m) for m in range(len(self.event.events))]
@@ -164,7 +165,9 @@ class TeamWorld:
         where it is going there or sees it, else the nearest to ``near``; "the stove burner" a robot switched on is
         the one it comes back to put the pot on, though another is nearer the sink it comes from, "the cabinet" it
         opens by the spray bottle is the one by it, whichever it went to before, and "the cabinet" it opens by the pot
-        is the closed one holding it, not the one beside it the robot opened before (dev6-p1)."""
+        is the closed one holding it, not the one beside it the robot opened before (dev6-p1); a holder of the
+        thing ``near`` last went to comes before the fixture meant before and the nearest ("the cabinet" opened
+        by the pan is the one the pan is in, not the wall cabinet nearer the robot: dev6-c2)."""
         if "|" in name:
             return next((o for o in self.objects if o["objectId"] == name.strip()), None)
         wanted = name.strip().lower()
@@ -197,15 +200,19 @@ class TeamWorld:
         before = {self.meant.get((near, o["objectType"])) for o in matches} - {None}
         meant = {i for i in before if going or self.sees(near, i)}
         changes = _CHANGES.get(action, lambda o: True)
+        by_it = self._holders_of(self.gone_to.get(near))
         # Prefer instances the robots can get at (not in a closed fridge or drawer), then whole ones (a broken
-        # one can be neither picked up nor broken again), then ones the action changes, then the fixture meant
-        # before, then the nearest.
+        # one can be neither picked up nor broken again), then ones the action changes, then a holder of what the
+        # robot went to, then the fixture meant before, then the nearest.
         chosen = min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")), not changes(o),
-                                             o["objectId"] not in meant, round(Box.of(o).distance(x, z), 6),
-                                             o["objectId"]))
+                                             o["objectId"] not in by_it, o["objectId"] not in meant,
+                                             round(Box.of(o).distance(x, z), 6), o["objectId"]))
         if not chosen.get("pickupable"):
             self.meant.update({(m, chosen["objectType"]): chosen["objectId"] for m in {near, *members}})
         return chosen
+
+    def _holders_of(self, object_id: str | None) -> set[str]:
+        return next((set(o.get("parentReceptacles") or ()) for o in self.objects if o["objectId"] == object_id), set())
 
     def _shut_away(self) -> set[str]:
         closed = {o["objectId"] for o in self.objects
@@ -280,6 +287,7 @@ class TeamWorld:
                               rotation={"x": 0.0, "y": yaw, "z": 0.0}, horizon=30.0, standing=True)
             if not view["lastActionSuccess"]:
                 return Outcome(False, view["errorMessage"], target["objectId"], "Teleport", member)
+        self.gone_to.update((member, target["objectId"]) for member in members)
         return Outcome(True, object_id=target["objectId"], action="Teleport")
 
     def _cells_nearest(self, box: Box) -> list[tuple[float, float]]:

@@ -105,3 +105,17 @@ def test_a_cabinet_to_open_is_a_closed_one_though_the_one_opened_before_is_withi
     assert first != second and cabinets[first]["isOpen"] and closed in (first, second)
     pot = next(o for o in ex.final_objects if o["objectType"] == "Pot")
     assert not cabinets[closed]["isOpen"] and pot["isPickedUp"]
+
+
+def test_a_holder_opened_by_the_thing_gone_to_is_the_one_that_holds_it():
+    """dev6-c2: by the pan in its shut cabinet in FloorPlan27, a robot holding the egg opened "the Cabinet": a
+    wall cabinet is nearer where it stands, but it meant the one the pan is in, and the egg then goes in the pan,
+    on the real Controller. Without the rule the nearer cabinet opens and the put fails (the pan is shut away)."""
+    steps = ["GoToObject('Egg')", "PickupObject('Egg')", "GoToObject('Pan')", "OpenObject('Cabinet')",
+             "PutObject('Egg', 'Pan')"]
+    ex = _run_alone(steps, 7, 27)
+    assert [e.success for e in ex.trace] == [True] * len(steps), [e.error for e in ex.trace]
+    pan = next(o for o in ex.final_objects if o["objectType"] == "Pan")
+    assert ex.trace[3].object_id in pan["parentReceptacles"]
+    egg = next(o for o in ex.final_objects if o["objectType"] == "Egg")
+    assert pan["objectId"] in egg["parentReceptacles"]

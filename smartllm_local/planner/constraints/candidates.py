@@ -61,8 +61,8 @@ def call_line(skill: str, objects: Sequence[str]) -> str:
 
 def acts_on(candidate: Candidate) -> str | None:
     """Where a call acts: its object, a put's receptacle; None for dropping or throwing what is held.
-    With a world check a call acts only on what the function last went to: where exactly a robot
-    stands depends on where the others stand, and only the object gone to is surely within reach."""
+    With a world check a call acts only on what the function last went to, or a holder of it: where exactly a
+    robot stands depends on where the others stand, and only the object gone to is surely within reach."""
     skill, objects = candidate
     if skill.action == "PutObject":
         return objects[1]
@@ -195,9 +195,11 @@ class Candidates:
         if fn.steps + 1 >= self.max_steps - 1:  # the step after the go-to is the last: as succeeding
             then = [c for c in then if c[0].action != "PickupObject" and (not fn.held or c[0].action in RELEASE)]
         gotos = []
+        holders = self._holder_types()
         for skill, (target,) in self.goto_calls():
             left = room - self.line_len((skill, (target,)))
-            fitting = [(c.name, objs) for c, objs in then if acts_on((c, objs)) in (target, None)
+            by = {target, None} | holders.get(target, set())
+            fitting = [(c.name, objs) for c, objs in then if acts_on((c, objs)) in by
                        and self.line_len((c, objs)) + self.hold_after(fn, (c, objs)) <= left]
             if fitting and self.world.leads_somewhere(members, skill.name, target, fitting):
                 gotos.append((skill, (target,)))
@@ -215,7 +217,8 @@ class Candidates:
             if fn.held:
                 candidates = [c for c in candidates if c[0].action in RELEASE]
         place = self.place(fn)
-        candidates = [c for c in candidates if acts_on(c) in (place, None)]
+        by = {place, None} | (self._holder_types().get(place, set()) if place else set())
+        candidates = [c for c in candidates if acts_on(c) in by]
         return [c for c in candidates if self.world.succeeds(members, c[0].name, c[1])]
 
     def place(self, fn: WrittenFunction, slot: int | None = None) -> str | None:
@@ -231,11 +234,20 @@ class Candidates:
         place = self.place(fn, slot)
         if target in (place, None):
             return True
-        if self.world is None or place is None:
-            return False
+        return self.world is not None and place is not None and target in self._holder_types().get(place, set())
+
+    def _holder_types(self) -> dict[str, set[str]]:
+        """Each type with the types of the holders its things are in, in the dry run now: a call acts on what the
+        function last went to, or on a holder of it (by the pan in its cabinet, "the Cabinet" is the pan's, as the
+        executor resolves it)."""
+        assert self.world is not None
         objects = self.world.objects()
-        holders = {o["objectId"]: o["objectType"] for o in objects if o["objectType"] == target}
-        return any(p in holders for o in objects if o["objectType"] == place for p in o.get("parentReceptacles") or ())
+        kinds = {o["objectId"]: o["objectType"] for o in objects}
+        holders: dict[str, set[str]] = {}
+        for o in objects:
+            holders.setdefault(o["objectType"], set()).update(kinds[p] for p in o.get("parentReceptacles") or ()
+                                                             if p in kinds)
+        return holders
 
     def hold_after(self, fn: WrittenFunction, candidate: Candidate) -> int:
         """With a world check a function ends with empty hands (its robot may do the next function):

@@ -181,9 +181,10 @@ class Repairer:
     def _plan(self, member: int, goals: Sequence[Condition], place: str | None, skills: frozenset[str] | None,
               hands_free: bool = False, leave_out: frozenset[str] = frozenset()) -> Planned | None:
         """Fast Downward's shortest plan for ``member`` from the dry run's state now, as a plan may write it: going
-        to each place it acts at, and then (where that differs) going to the thing it takes out of a shut holder
-        before opening the holder. A type names the instance nearest the robot: by the thing, the holder that holds
-        it; by "the Cabinet", any of four (the spray bottle's cabinet was not the one the plan went to). The
+        to each place it acts at, and then (where that differs) going to the thing it takes out of a shut holder,
+        or puts something in there, before opening the holder. A type names the instance nearest the robot: by the
+        thing, the holder that holds it; by "the Cabinet", any of four (the spray bottle's cabinet was not the one
+        the plan went to). The
         fixtures ``leave_out`` are not the planner's to use (:func:`..classical.problem.planning_task`)."""
         # Unified Planning takes most of a second to import: it loads with the first repair sought, not every plan
         from ..classical.problem import Unreachable, planning_task, with_future_pieces
@@ -228,17 +229,25 @@ class Repairer:
 
     def _taken_out(self, steps: Sequence[tuple[str, tuple[str, ...]]], types: dict[str, str]) -> list[str | None]:
         """For each step that opens a holder, and the step going there just before it, the type of the first thing
-        a later step picks up out of it (where it holds it now); None for every other step."""
+        in it (where it holds it now) that a later step picks up or puts something in: the egg for the pan went in
+        the pan in its shut cabinet, and "the Cabinet" gone to by type was another of eleven; None for every other
+        step."""
         holds = {o["objectId"]: set(o.get("receptacleObjectIds") or ()) for o in self.run.objects}
         where: list[str | None] = [None] * len(steps)
         for n, (name, ids) in reversed(list(enumerate(steps))):
             if self.skills[name].action == "OpenObject" and ids:
-                where[n] = next((types.get(later[0], later[0]) for skill, later in steps[n + 1:]
-                                 if self.skills[skill].action == "PickupObject" and later
-                                 and later[0] in holds.get(ids[0], ())), None)
+                inside = holds.get(ids[0], set())
+                where[n] = next((types.get(used, used) for skill, later in steps[n + 1:]
+                                 if (used := self._used(skill, later)) in inside), None)
             elif self.skills[name].action == "" and n + 1 < len(steps) and steps[n + 1][1][:1] == ids[:1]:
                 where[n] = where[n + 1]
         return where
+
+    def _used(self, name: str, ids: Sequence[str]) -> str | None:
+        """The thing a step takes out of where it is, or puts something in: a pickup's thing, a put's holder."""
+        action = self.skills[name].action
+        return ids[0] if action == "PickupObject" and ids else ids[1] if action == "PutObject" and len(ids) > 1 \
+            else None
 
     def _usable(self, member: int, calls: Sequence[Written], allows: Callable[[str, Sequence[str]], bool] | None,
                 goals: Sequence[Condition] = ()) -> bool:

@@ -88,6 +88,38 @@ def test_without_a_repairer_the_failing_call_is_not_offered():
     assert "SliceObject" not in text and decomposer.repairs is None
 
 
+def test_by_a_thing_in_a_shut_holder_the_holder_is_offered_and_means_the_one_holding_it():
+    """dev6-c2: the 1.5B took the egg to the pan, shut in one of FloorPlan27's eleven cabinets, and wrote that it
+    must be opened; only calls on the pan were offered there, and it threw the egg. By the pan, opening "the
+    Cabinet" is offered (the one holding it, as the executor resolves it), and the egg goes in the pan: no call
+    fails, without any repair."""
+    decomposer = _decomposer(27, repair=False)
+    steps = ["    GoToObject('Egg')\n", "    PickupObject('Egg')\n", "    GoToObject('Pan')\n",
+             "    OpenObject('Cabinet')\n", "    PutObject('Egg', 'Pan')\n"]
+    text = run_constraint(decomposer, _scripted(["def subtask1_egg_in_pan():\n", *steps]), len, 3000)
+    assert _body(text, "subtask1_egg_in_pan")[:5] == [s.strip() for s in steps], text
+    assert not _all_succeed(text, 27)
+
+
+def test_a_holder_the_plan_puts_something_in_a_thing_of_is_gone_to_by_that_thing():
+    """dev6-c2: the planner's plan for the egg in the pan opened "the Cabinet", gone to by type: the nearest of
+    eleven, not the pan's, and the put failed in every way of writing it (the egg was left on the counter). Gone to
+    by the pan, the cabinet opened is the pan's, and the plan meets the goal in the dry run and on the real
+    Controller."""
+    world = WorldCheck(scene_objects(27), SKILLS, MAX_SUBTASKS)
+    found = Repairer(world, SKILLS).meet(2, [Condition("Pan", item="Egg")], 10)
+    assert found is not None
+    assert found.calls[found.calls.index(("OpenObject", ("Cabinet",))) - 1] == ("GoToObject", ("Pan",))
+    plan = "".join(f"{name}(robots[0], {', '.join(repr(o) for o in objects)})\n" for name, objects in found.calls)
+    controller = open_controller(27, agent_count=1)
+    try:
+        ex = run(plan, [7], controller, 27)
+    finally:
+        controller.stop()
+    assert all(e.success for e in ex.trace), [e.error for e in ex.trace]
+    assert scores(ex, [{"name": "Pan", "contains": ["Egg"], "state": None}]).GCR == 1
+
+
 def test_a_call_the_planner_cannot_enable_is_taken_back_and_not_offered_again():
     """A laptop does not go into a mug in this world: no plan enables the put, so the line is taken back, the
     writer writes another line there, and the refused line is remembered for that step."""
