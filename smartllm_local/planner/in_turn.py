@@ -130,14 +130,18 @@ def _teams(steps: Sequence[Step], actions: dict[str, str], team: Sequence[Robot]
     for n in range(1, len(team) + 1):
         for members in combinations(range(len(team)), n):
             robots = [team[i] for i in members]
-            if can_do(robots, need) and all(_held_by_one(o, done, robots, scene) for o, done in held.items()):
+            if can_do(robots, need) and all(_held_by_one(o, done, robots, scene, actions) for o, done in held.items()):
                 able.append(frozenset(members))
     return able
 
 
-def _held_by_one(thing: str, done: set[str], robots: Sequence[Robot], scene: SceneObjects) -> bool:
-    """Whether one of the robots lifts the thing and does all that is ``done`` to it while held; or none lifts it
-    alone, so they lift (and put) it together."""
+def _held_by_one(thing: str, done: set[str], robots: Sequence[Robot], scene: SceneObjects,
+                 actions: dict[str, str]) -> bool:
+    """Whether one of the robots that pick it up lifts the thing alone and does all that is ``done`` to it while
+    held; or none lifts it alone, so they lift (and put) it together. A member that cannot pick it up lifts
+    nothing alone, however strong: it helps lift (``robots.team_lift``), so robot 24, that only switches, and robot
+    8, too weak alone, carry a 1 kg statue together."""
     mass = scene.masses.get(thing, 0.0)
-    lifts = [r for r in robots if r.mass_capacity + MASS_TOLERANCE >= mass]
+    picks = {s for s in done if actions[s] == "PickupObject"}
+    lifts = [r for r in robots if r.mass_capacity + MASS_TOLERANCE >= mass and picks & r.skills]
     return not lifts or any(done <= r.skills for r in lifts)

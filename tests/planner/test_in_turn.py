@@ -5,7 +5,7 @@ in sub-tasks the plan runs in turn anyway, stays."""
 from __future__ import annotations
 
 from smartllm_local.domain import load_domain
-from smartllm_local.planner.in_turn import free_blocks
+from smartllm_local.planner.in_turn import all_apart, free_blocks
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
 
@@ -85,3 +85,32 @@ def test_a_drop_the_sub_task_needs_stays():
     """After laying the knife down the robot picks up a mug: without the drop that pick-up fails."""
     plan = PLAN.replace(DROP, DROP + "    GoToObject('Mug')\n    PickupObject('Mug')\n")
     assert free_blocks(plan, SCENE, SKILLS, TEAM, ASKED, GOALS) == (plan, [])
+
+
+def test_a_strong_member_that_cannot_pick_up_helps_lift_and_leaves_the_other_lifter_free():
+    """FloorPlan223, robots 8 (lifts 0.4 kg), 24 (100 kg, only switches) and 28 (0.9 kg): the 1 kg statue's
+    sub-task and the pillow's run at once. 24 lifts nothing alone (it cannot pick up); with 8 it carries the statue
+    (the executor pools their strength), and 28 carries the pillow: teams apart. Counted as lifting the statue
+    alone, 24 was no team with 8, the statue took 8 and 28, and the pillow had no robot left."""
+    plan = """def subtask1_statue():
+    GoToObject('Statue')
+    PickupObject('Statue')
+    GoToObject('SideTable')
+    PutObject('Statue', 'SideTable')
+
+def subtask2_pillow():
+    GoToObject('Pillow')
+    PickupObject('Pillow')
+    GoToObject('Sofa')
+    PutObject('Pillow', 'Sofa')
+
+t1 = threading.Thread(target=subtask1_statue)
+t2 = threading.Thread(target=subtask2_pillow)
+t1.start()
+t2.start()
+t1.join()
+t2.join()
+""".splitlines(keepends=True)
+    scene = scene_objects(223)
+    assert all_apart(plan, SKILLS, CATALOGUE.team([8, 24, 28]), scene)
+    assert not all_apart(plan, SKILLS, CATALOGUE.team([8, 28]), scene)
