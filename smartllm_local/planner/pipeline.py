@@ -49,6 +49,7 @@ from .idle_steps import drop_idle_steps
 from .in_turn import free_blocks
 from .joined import join_in_turn
 from .kept_in_hand import put_kept_things
+from .opened_for_nothing import drop_opened_for_nothing
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -187,7 +188,8 @@ class Planner:
 
     def _tidy(self, record: StageRecord, result: PlanResult, scene: SceneObjects) -> None:
         """The chosen decomposition without its errands nobody asked for (:mod:`.errands`, and :mod:`.in_turn`'s
-        steps that alone made sub-tasks run in turn) and its idle steps (:mod:`.idle_steps`), things kept in hand
+        steps that alone made sub-tasks run in turn) and its idle steps (:mod:`.idle_steps`, and openings
+        :mod:`.opened_for_nothing`), things kept in hand
         put where the goals want them (:mod:`.kept_in_hand`), the planner's last sub-task folded into the model's
         last (:mod:`.finish_fold`), sub-tasks that could only run in turn joined
         (:mod:`.joined`): the text the coalition and the allocation read."""
@@ -201,6 +203,8 @@ class Planner:
             record.errands += in_turn
         if config.drop_idle:
             record.output, record.idle_steps = drop_idle_steps(record.output, scene, skills)
+            record.output, unused = drop_opened_for_nothing(record.output, scene, skills, result.instruction, goals)
+            record.idle_steps += unused
         if config.finish_goals:
             record.output, record.put_away = put_kept_things(record.output, scene, skills, goals)
         into = None
