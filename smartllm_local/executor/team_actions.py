@@ -163,7 +163,8 @@ class TeamWorld:
         """The instance a plan's object name means: among usable matches, one the ``action`` can change (a cabinet
         to open is a closed one), then for a fixture (what is not picked up) the one ``near`` last meant by its type,
         where it is going there or sees it, else the nearest to ``near``; "the stove burner" a robot switched on is
-        the one it comes back to put the pot on, though another is nearer the sink it comes from, "the cabinet" it
+        the one it comes back to put the pot on, though another is nearer the sink it comes from (the burner its
+        knob controls, where it switched the knob: dev6-p1), "the cabinet" it
         opens by the spray bottle is the one by it, whichever it went to before, and "the cabinet" it opens by the pot
         is the closed one holding it, not the one beside it the robot opened before (dev6-p1); a holder of the
         thing ``near`` last went to comes before the fixture meant before and the nearest ("the cabinet" opened
@@ -209,6 +210,9 @@ class TeamWorld:
                                              round(Box.of(o).distance(x, z), 6), o["objectId"]))
         if not chosen.get("pickupable"):
             self.meant.update({(m, chosen["objectType"]): chosen["objectId"] for m in {near, *members}})
+            for fixture in chosen.get("controlledObjects") or ():  # a knob means its burner too
+                kind = next((o["objectType"] for o in self.objects if o["objectId"] == fixture), None)
+                self.meant.update({(m, kind): fixture for m in {near, *members} if kind is not None})
         return chosen
 
     def _holders_of(self, object_id: str | None) -> set[str]:

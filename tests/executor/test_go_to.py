@@ -10,7 +10,7 @@ from smartllm_local.executor.dry_run import DryRun
 from smartllm_local.world.controller import open_controller
 from smartllm_local.world.navigation import Box
 
-from .helpers import CATALOGUE, run
+from .helpers import CATALOGUE, run, scores
 
 
 def _nearest_free(cells, box: Box, taken) -> tuple[float, float]:
@@ -119,3 +119,16 @@ def test_a_holder_opened_by_the_thing_gone_to_is_the_one_that_holds_it():
     assert ex.trace[3].object_id in pan["parentReceptacles"]
     egg = next(o for o in ex.final_objects if o["objectType"] == "Egg")
     assert pan["objectId"] in egg["parentReceptacles"]
+
+
+def test_the_burner_a_knob_switched_on_controls_is_the_one_the_pot_goes_on():
+    """dev6-p1: the 1.5B's plan switched "the StoveKnob" nearest the robot on, then took the pot from its cabinet to
+    "the StoveBurner": from the cabinet another burner is nearer, and the pot stayed cold. Switching a knob means
+    the burner it controls, the one the robot comes back to, on the real Controller."""
+    steps = ["GoToObject('StoveKnob')", "SwitchOn('StoveKnob')", "GoToObject('Pot')", "OpenObject('Cabinet')",
+             "PickupObject('Pot')", "GoToObject('StoveBurner')", "PutObject('Pot', 'StoveBurner')"]
+    ex = _run_alone(steps, 29, 29)
+    assert [e.success for e in ex.trace] == [True] * len(steps), [e.error for e in ex.trace]
+    knob = next(o for o in ex.final_objects if o["objectId"] == ex.trace[1].object_id)
+    assert ex.trace[5].object_id in knob["controlledObjects"]
+    assert scores(ex, [{"name": "Pot", "contains": [], "state": "HOT"}]).GCR == 1
