@@ -65,6 +65,18 @@ def _all_succeed(text: str, floor_plan: int) -> list[tuple[str, tuple[str, ...]]
             if hasattr(step, "skill") and not dry.apply([k], step.skill, step.objects).success]
 
 
+def _alone_on_the_controller(calls, robot: int, floor_plan: int, goals) -> float:
+    """The GCR of the planner's calls run by one robot on the real Controller, every call succeeding."""
+    plan = "".join(f"{name}(robots[0], {', '.join(repr(o) for o in objects)})\n" for name, objects in calls)
+    controller = open_controller(floor_plan, agent_count=1)
+    try:
+        ex = run(plan, [robot], controller, floor_plan)
+    finally:
+        controller.stop()
+    assert all(e.success for e in ex.trace), [e.error for e in ex.trace]
+    return scores(ex, goals).GCR
+
+
 def test_a_slice_without_a_knife_is_written_after_the_knife_is_fetched():
     """The model goes to the bread and slices it with empty hands: the planner's steps fetch the knife first,
     as the decomposition writes steps (each action where the function last went), and every step succeeds."""
@@ -110,14 +122,7 @@ def test_a_holder_the_plan_puts_something_in_a_thing_of_is_gone_to_by_that_thing
     found = Repairer(world, SKILLS).meet(2, [Condition("Pan", item="Egg")], 10)
     assert found is not None
     assert found.calls[found.calls.index(("OpenObject", ("Cabinet",))) - 1] == ("GoToObject", ("Pan",))
-    plan = "".join(f"{name}(robots[0], {', '.join(repr(o) for o in objects)})\n" for name, objects in found.calls)
-    controller = open_controller(27, agent_count=1)
-    try:
-        ex = run(plan, [7], controller, 27)
-    finally:
-        controller.stop()
-    assert all(e.success for e in ex.trace), [e.error for e in ex.trace]
-    assert scores(ex, [{"name": "Pan", "contains": ["Egg"], "state": None}]).GCR == 1
+    assert _alone_on_the_controller(found.calls, 7, 27, [{"name": "Pan", "contains": ["Egg"], "state": None}]) == 1
 
 
 def test_a_call_the_planner_cannot_enable_is_taken_back_and_not_offered_again():
@@ -183,14 +188,8 @@ def test_a_thing_in_a_shut_holder_of_several_is_gone_to_before_its_holder_is_ope
     assert found is not None
     assert found.calls[:3] == (("GoToObject", ("SprayBottle",)), ("OpenObject", ("Cabinet",)),
                                ("PickupObject", ("SprayBottle",)))
-    plan = "".join(f"{name}(robots[0], {', '.join(repr(o) for o in objects)})\n" for name, objects in found.calls)
-    controller = open_controller(412, agent_count=1)
-    try:
-        ex = run(plan, [1], controller, 412)
-    finally:
-        controller.stop()
-    assert all(e.success for e in ex.trace), [e.error for e in ex.trace]
-    assert scores(ex, [{"name": "CounterTop", "contains": ["SprayBottle"], "state": None}]).GCR == 1
+    goals = [{"name": "CounterTop", "contains": ["SprayBottle"], "state": None}]
+    assert _alone_on_the_controller(found.calls, 1, 412, goals) == 1
 
 
 #: A first robot's calls, and the goals a second robot's plan is sought for, where the planner's first plan counts
