@@ -80,6 +80,7 @@ def vocabulary(skills: SkillSet) -> Vocabulary:
         "inside": Fluent("inside", b, t=THING, receptacle=THING),  # directly inside or on it
         "lifts": Fluent("lifts", b, r=ROBOT, t=THING),  # the robot's capacity holds the thing's mass
         "lifts_together": Fluent("lifts_together", b, r=ROBOT, helper=ROBOT, t=THING),
+        "lifts_by_three": Fluent("lifts_by_three", b, r=ROBOT, helper=ROBOT, helper2=ROBOT, t=THING),
         "at": Fluent("at", b, r=ROBOT, t=THING),  # the robot went to the thing
         "holding": Fluent("holding", b, r=ROBOT, t=THING),
         "helping": Fluent("helping", b, r=ROBOT, t=THING),  # the robot helps carry the thing
@@ -173,22 +174,32 @@ def go_to(skill: Skill, v: Vocabulary) -> InstantaneousAction:
     return action
 
 
-def pick_up(skill: Skill, v: Vocabulary, together: bool) -> InstantaneousAction:
-    """PickupObject, by one robot or (``together``) with a helper whose capacity the lift needs."""
-    params = {"r": ROBOT, "helper": ROBOT, "t": ITEM} if together else {"r": ROBOT, "t": ITEM}
-    action, p = _action(skill, v, f"{skill.name}_together" if together else "", **params)
+def pick_up(skill: Skill, v: Vocabulary, helpers: int) -> InstantaneousAction:
+    """PickupObject, by one robot or with one or two helpers whose capacity the lift needs (any teammate with a free
+    hand by the thing helps, whatever its skills, as in the executor: three robots of 0.9, 0.4 and 0.02 kg together
+    lift what no two of them do)."""
+    names = ("helper", "helper2")[:helpers]
+    suffix = ("", "_together", "_together3")[helpers]
+    action, p = _action(skill, v, f"{skill.name}{suffix}" if helpers else "", r=ROBOT, **dict.fromkeys(names, ROBOT),
+                        t=ITEM)
     r, t = p["r"], p["t"]
     action.add_precondition(within_reach(v, r, t))
     action.add_precondition(v.free(r))
     action.add_precondition(Not(v.broken(t)))
-    if together:
-        helper = p["helper"]
-        action.add_precondition(And(Not(Equals(r, helper)), v.at(helper, t), v.free(helper),
-                                    Not(v.lifts(r, t)), v.lifts_together(r, helper, t)))
+    lifters = [r, *(p[n] for n in names)]
+    for helper in lifters[1:]:
+        action.add_precondition(And(v.at(helper, t), v.free(helper)))
         action.add_effect(v.free(helper), False)
         action.add_effect(v.helping(helper, t), True)
-    else:
+    for k, first in enumerate(lifters):
+        for second in lifters[k + 1:]:
+            action.add_precondition(Not(Equals(first, second)))
+    if helpers == 0:
         action.add_precondition(v.lifts(r, t))
+    elif helpers == 1:
+        action.add_precondition(And(Not(v.lifts(r, t)), v.lifts_together(*lifters, t)))
+    else:
+        action.add_precondition(v.lifts_by_three(*lifters, t))
     action.add_precondition(Not(v.weighed_down(t)))
     c = Variable("c", THING)
     action.add_effect(v.inside(t, c), False, forall=[c])
@@ -330,13 +341,13 @@ def clean(skill: Skill, v: Vocabulary) -> InstantaneousAction:
 
 def skill_actions(skill: Skill, v: Vocabulary, team_size: int) -> list[InstantaneousAction]:
     """The actions for one skill: none for a skill whose outcome depends on positions (see the module's
-    docstring); where the team has two robots or more, a second PickupObject (a lift shared) and a
-    second SliceObject (the skill lent)."""
+    docstring); where the team has two robots or more, more PickupObject actions (a lift shared by two, or by
+    three) and a second SliceObject (the skill lent)."""
     kind = skill.action
     if kind == "":
         return [go_to(skill, v)]
     if kind == "PickupObject":
-        return [pick_up(skill, v, False)] + ([pick_up(skill, v, True)] if team_size > 1 else [])
+        return [pick_up(skill, v, helpers) for helpers in range(min(team_size, 3))]
     if kind == "PutObject":
         return [put(skill, v)]
     if kind in ("OpenObject", "CloseObject"):

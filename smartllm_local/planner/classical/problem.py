@@ -12,6 +12,7 @@ from __future__ import annotations
 import re
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
+from itertools import permutations
 from typing import Any
 
 from unified_planning.model import Object, Problem, Variable
@@ -257,17 +258,31 @@ def _robots(problem: Problem, v: Vocabulary, dry: DryRun, by_id: Mapping[str, Ma
         if not o.get("pickupable"):
             continue
         mass = _carried_mass(table, o)
-        lifts = []  # the capacity of each lift of it, alone or by two
-        for i, robot in enumerate(robots):
-            if team[i].mass_capacity + _MASS_TOLERANCE >= mass:
-                problem.set_initial_value(v.lifts(robot, things[oid]), True)
-                lifts.append(team[i].mass_capacity)
-            for j, helper in enumerate(robots):
-                if j != i and team[i].mass_capacity + team[j].mass_capacity + _MASS_TOLERANCE >= mass:
-                    problem.set_initial_value(v.lifts_together(robot, helper, things[oid]), True)
-                    lifts.append(team[i].mass_capacity + team[j].mass_capacity)
+        lifts = _lifts(problem, v, robots, team, things[oid], mass)
         if any(capacity < mass + movable for capacity in lifts):  # a lift that every other thing put in could stop
             problem.set_initial_value(v.tight(things[oid]), True)
+
+
+def _lifts(problem: Problem, v: Vocabulary, robots: Sequence[Object], team: Sequence[Robot], thing: Object,
+           mass: float) -> list[float]:
+    """Set who lifts the thing, alone, by two or (where no two do) by three, and give the capacity of each lift."""
+    capacity = [r.mass_capacity for r in team]
+    lifts: list[float] = []
+    for i, robot in enumerate(robots):
+        if capacity[i] + _MASS_TOLERANCE >= mass:
+            problem.set_initial_value(v.lifts(robot, thing), True)
+            lifts.append(capacity[i])
+        for j, helper in enumerate(robots):
+            if j != i and capacity[i] + capacity[j] + _MASS_TOLERANCE >= mass:
+                problem.set_initial_value(v.lifts_together(robot, helper, thing), True)
+                lifts.append(capacity[i] + capacity[j])
+    if lifts:
+        return lifts
+    for i, j, k in permutations(range(len(robots)), 3):
+        if j < k and capacity[i] + capacity[j] + capacity[k] + _MASS_TOLERANCE >= mass:
+            problem.set_initial_value(v.lifts_by_three(robots[i], robots[j], robots[k], thing), True)
+            lifts.append(capacity[i] + capacity[j] + capacity[k])
+    return lifts
 
 
 def _stands(problem: Problem, v: Vocabulary, dry: DryRun, member: int, robot: Object,

@@ -143,7 +143,8 @@ def search(task: PlanningTask, time_limit: float, *, cpu_limit: int | None = Non
 
 
 def _step(task: PlanningTask, action: ActionInstance) -> Step:
-    """A planner action as a skill call: PickupObject_together(r, helper, t) is one call by both robots,
+    """A planner action as a skill call: PickupObject_together(r, helper, t) is one call by both robots (and
+    PickupObject_together3 by all three),
     the first of whom acts (the executor's choice: the free hand with the skill, the hand with the knife);
     a site's Patrol(team, region) is one call by the team's members."""
     names = [str(p) for p in action.actual_parameters]

@@ -116,6 +116,23 @@ def test_a_lift_beyond_one_robot_is_a_call_by_two():
     assert lifts and all(len(s.robots) == 2 for s in lifts)
 
 
+def test_a_lift_beyond_any_two_robots_is_a_call_by_three():
+    """Robots of 0.9, 0.4 and 1.0 kg and FloorPlan221's 2.3 kg laptop: no two lift it, the three do (the executor
+    pools every helper within reach). Planned with lifts by two at most, there was no plan; with three, the plan
+    runs with every step succeeding and meets the goal."""
+    team = CATALOGUE.team([28, 8, 5])
+    dry = DryRun(221, team, SKILLS)
+    goal = Condition("CoffeeTable", item="Laptop")
+    found = search(planning_task(dry, team, SKILLS, [goal], name="t"), LIMIT)
+    assert found.found, found.log[-3000:]
+    lifts = [s for s in found.steps if s.skill == "PickupObject"]
+    assert [len(s.robots) for s in lifts] == [3]
+    for step in found.steps:
+        outcome = dry.apply(list(step.robots), step.skill, list(step.objects))
+        assert outcome.success, f"{step}: {outcome.error}"
+    assert condition_holds(goal, dry.objects)
+
+
 def test_independent_parts_of_a_goal_are_separate_sub_tasks():
     # kitchen-08: slice the lettuce, switch off the light: nothing in common, so two parts
     record = plan_to_goal(statement_of(TASKS["kitchen-08"].goals).conditions, 1, CATALOGUE.team([11, 20]), SKILLS,
