@@ -218,14 +218,14 @@ def things_named(words: str, types: Sequence[str]) -> list[str]:
 def holder_named(words: str, holders: Collection[str]) -> str | None:
     """The one holder of ``holders`` that ``words`` name ("the dining table", "the couch"), or None where they name
     none or several: the type named as a phrase with the most words, else the one an informal name means; none
-    where another holder's name holds the one named ("the desk" beside a desk lamp's) or an informal name means
-    several ("the table" beside a coffee table and a side table). A thing put in the sink goes in its basin
-    (:data:`PUT_IN_PART`)."""
+    where another holder whose name holds the one named may be what it means (:func:`_may_be`: "the chair" beside
+    an armchair; "the toilet" is no toilet paper hanger) or an informal name means several ("the table" beside a
+    coffee table and a side table). A thing put in the sink goes in its basin (:data:`PUT_IN_PART`)."""
     phrased = [h for h in holders if named_as_phrase(words, h)]
     if phrased:
         most = max(len(_type_words(h)) for h in phrased)
         named = {h for h in phrased if len(_type_words(h)) == most}
-        named |= {h for h in holders for n in named if set(_type_words(n)) < set(_type_words(h))}
+        named |= {h for h in holders for n in named if set(_type_words(n)) < set(_type_words(h)) and _may_be(h, n)}
     else:
         said = _forms(_WORD.findall(words.lower()))
         named = {h for h in holders if _informally(said, h)}
