@@ -220,8 +220,12 @@ def holder_named(words: str, holders: Collection[str]) -> str | None:
     none or several: the type named as a phrase with the most words, else the one an informal name means; none
     where another holder whose name holds the one named may be what it means (:func:`_may_be`: "the chair" beside
     an armchair; "the toilet" is no toilet paper hanger) or an informal name means several ("the table" beside a
-    coffee table and a side table). A thing put in the sink goes in its basin (:data:`PUT_IN_PART`)."""
+    coffee table and a side table). A thing put in the sink goes in its basin (:data:`PUT_IN_PART`), whether or
+    not the scene's sink is a holder of its own ("put the mug in the sink": the 0.5B put it in the fridge named for
+    the apple, and nothing was owed; dev7-c5)."""
     phrased = [h for h in holders if named_as_phrase(words, h)]
+    phrased += [part for whole, part in PUT_IN_PART.items()
+                if part in holders and whole not in holders and named_as_phrase(words, whole)]
     if phrased:
         most = max(len(_type_words(h)) for h in phrased)
         named = {h for h in phrased if len(_type_words(h)) == most}

@@ -527,7 +527,7 @@ def test_every_household_goal_of_a_thing_asked_into_a_holder_puts_it_there_and_t
     ("Put the bread and the wine bottle in the fridge.", {"Fridge": ["Bread", "WineBottle"]}),
     ("Put the salt in a cabinet.", {"Cabinet": ["SaltShaker"]}),  # an informal name of it alone
     ("Put the soap in the cabinet.", {"Cabinet": ["SoapBottle"]}),  # the one soap of this kitchen
-    ("Put the apple in the sink.", {}),  # the sink or its basin: no one holder named
+    ("Put the apple in the sink.", {"SinkBasin": ["Apple"]}),  # its basin, the sink no holder of its own here
     ("Put the apple on the table.", {}),  # no table of this scene is "the table" alone
     ("Put it in the fridge.", {}),  # nothing named
     ("Pick up the apple and put it in the fridge.", {"Fridge": ["Apple"]}),  # the one thing named before
@@ -552,6 +552,17 @@ def test_the_toilet_is_no_toilet_paper_hanger():
                      goal_vocabulary(scene_objects(424)), WORDS)
     assert asked.placements == {"Toilet": ["Candle", "SoapBar"]}
     assert holder_named("chair", ["Chair", "ArmChair"]) is None  # "the chair" may be the armchair
+
+
+def test_a_thing_put_in_the_sink_goes_in_its_basin_where_the_sink_holds_nothing_itself():
+    """Asked to put the mug in the sink and the apple in the fridge (FloorPlan30, whose sink is no holder), nothing
+    was owed, and the 0.5B put the mug in the fridge (dev7-c5). "The sink" means its basin, as where the sink is a
+    holder too."""
+    for floor_plan in (30, 6):
+        vocabulary = goal_vocabulary(scene_objects(floor_plan))
+        assert ("Sink" in vocabulary.holder_types()) == (floor_plan == 6)
+        asked = asked_of("Put the mug in the sink and the apple in the fridge.", vocabulary, WORDS)
+        assert asked.placements["SinkBasin"] == ["Mug"]
 
 
 def test_the_soap_is_the_bar_beside_a_soap_bottle():

@@ -10,8 +10,8 @@ on the safe side (a plan it finds stays valid in the world):
 - containment and enclosure are followed two levels deep (an egg in a pan on a burner), the
   simulator follows them to any depth;
 - a robot lifts what its own capacity allows, or with one teammate that stands by the object, or two where no
-  one teammate is enough (the executor pools any number of free-handed teammates); a thing the plan put something in is lifted
-  again only where every lift of it could carry every movable thing besides;
+  one teammate is enough (the executor pools any number of free-handed teammates); a thing the plan put
+  something in is lifted again only where every lift of it could carry every movable thing besides;
 - DropHandObject and ThrowObject land wherever the robot's heading leads, and PushObject and
   PullObject move an object by a distance: the model has no positions, so it has no action for them.
 
