@@ -290,12 +290,17 @@ def checked_against_team(record: StageRecord, instruction: str, scene: SceneObje
     reach that nobody asked for (:func:`.asked.invented`), which leave the record's output for its
     ``dropped_goals``: a task is refused for what it asks, not for the model's invention. A state the instruction
     has no words for, of a thing it puts somewhere or of the holder it puts things in, is the model's: asked to put
-    three things on the bed, the 0.5B stated `Bed clean` too, for a team that cannot clean."""
+    three things on the bed, the 0.5B stated `Bed clean` too, for a team that cannot clean. So is one of any thing
+    where the words ask for other states: asked to switch the desk lamp off before bed, the 0.5B stated `Bed clean`
+    too, for a robot that only switches (dev7-e2); "freshen up the bed" asks for no state in so many words, and its
+    bed's `clean` is asked."""
     problems = {c: scene.world.unattainable([as_goal(c)], team, skills, scene.floor_plan) for c in conditions}
     words = load_state_words(scene.world.examples_dir())
     placed = placements_asked(instruction, goal_vocabulary(scene), words)
     unsaid = {(kind, state) for holder, things in placed.items() for kind in (holder, *things)
               for state in words.unsaid(instruction)}
+    if states_asked(instruction, words.asked, words.verbs):  # words ask for states: the others are the model's
+        unsaid |= {(base_type(c.subject), c.state) for c in conditions if c.state in words.unsaid(instruction)}
     dropped = invented(instruction, [c for c, why in problems.items() if why], conditions, list(placed), unsaid)
     if dropped:
         record.dropped_goals = [condition_line(c) for c in dropped]

@@ -178,6 +178,18 @@ def test_a_state_the_instruction_has_no_words_for_of_a_thing_it_puts_somewhere_i
     assert record.refusal is None and record.dropped_goals == ["Bed clean"]
 
 
+def test_a_state_the_instruction_has_no_words_for_beside_states_it_asks_for_is_the_model_s_choice(monkeypatch):
+    """Asked to switch the desk lamp off before bed, the 0.5B stated `Bed clean` too, for robot 24, which only
+    switches: the task was refused (dev7-e2). Where the words ask for a state (off), a state they have no words for
+    is the model's; "freshen up the bed" asks for none in so many words, and is still refused (above)."""
+    instruction = "Switch the desk lamp off before bed."
+    _, record = _checked(monkeypatch, instruction, "DeskLamp off\nBed clean\n\n", floor_plan=329, robots=[24])
+    assert record.refusal is None and record.dropped_goals == ["Bed clean"]
+    _, record = _checked(monkeypatch, "Switch the desk lamp off and clean the bed.", "DeskLamp off\nBed clean\n\n",
+                         floor_plan=329, robots=[24])
+    assert record.refused_by == GOAL_CHECK and "CleanObject" in record.refusal
+
+
 def _checked(monkeypatch, instruction: str, statement: str, floor_plan: int = 6,
              robots: list[int] | None = None) -> tuple[PlanResult, StageRecord]:
     """The goal check of a statement the model is made to write, by default for robot 13 (switches things on, opens

@@ -49,6 +49,7 @@ SKILLS = load_domain("household").catalogue.skills
     ("Fry the potato in a pan, and put the bread in the fridge.", {"COOKED": "the potato in a pan, and"}),
     ("Switch off the lamp on the side table.", {"OFF": "off the lamp on the side table"}),
     ("Move the laptop onto the bed and turn the desk lamp off.", {"OFF": "the desk lamp off"}),
+    ("Switch the desk lamp off before bed.", {"OFF": "the desk lamp off before bed"}),  # a time after it
     ("Turn on the TV, then shut the laptop.", {"CLOSED": "the laptop", "ON": "on the TV"}),
     ("Leave the remote on the sofa and put the TV on.", {"ON": "the TV on"}),  # a thing put on a sofa is no state
     ("Put the telly on, the match is about to start.", {"ON": "the telly on, the match is about to start"}),
