@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import re
 import string
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 
 from ...robots import Robot
 from ..decoding.grammar import Node, Ref, alt, chars, opt, rep, seq
@@ -25,6 +25,8 @@ from .format import REASON_CHARS, refusal_line, robot_list, text_run
 # A word of free text: letters and punctuation, never the ";" that ends a part of the line.
 WORD_CHARS = REASON_CHARS - {" ", ";"}
 #: A coalition line's shape (for text written without the grammar): prefix, needs, analysis, team.
+#: The team a written line ends with.
+_TEAM = re.compile(r"; so (robots\[\d+\](?: and robots\[\d+\])*)\n?$")
 LINE = re.compile(r"^(# SubTask \d+ \(\w+\): )needs ([^;\n]+); ([^;\n]+); so (robots\[\d+\](?: and robots\[\d+\])*)$",
                   re.M)
 
@@ -64,7 +66,10 @@ class CoalitionConstraint(Constraint):
     MAX_NEED_WORDS = 12
 
     def __init__(self, function_names: Sequence[str], team: Sequence[Robot] | int, *,
-                 needs: Sequence[Need] | None = None, free: bool = False, allow_refusal: bool = True):
+                 needs: Sequence[Need] | None = None, free: bool = False, allow_refusal: bool = True,
+                 blocks: Sequence[Collection[int]] = ()):
+        """``blocks``: the sub-tasks (by index) the plan starts at once, each block's teams kept apart where they
+        can be (:meth:`_apart`)."""
         super().__init__()
         self.names = list(function_names)
         self.team_size = team if isinstance(team, int) else len(team)
@@ -75,6 +80,8 @@ class CoalitionConstraint(Constraint):
         known = needs is not None and not free and not isinstance(team, int)
         if known:
             teams = [minimal_teams(feasible_teams(team, need)) for need in needs]  # type: ignore[arg-type, union-attr]
+        self.teams, self.blocks = teams, [set(b) for b in blocks]
+        self.chosen: dict[int, frozenset[int]] = {}
         # The model states the needs unless every sub-task's teams are known.
         self.free = any(t is None for t in teams)
         # With the needs known, whether some sub-task has no team is known too, and why (the refusal says
@@ -138,13 +145,37 @@ class CoalitionConstraint(Constraint):
             options["line"] = seq(self.heads[k], _words(Ref("need-word"), need_words), ";", *tail)
         else:
             options["line"] = seq(*tail)
+        apart = self._apart(k)
+        rules = {**self.rules, f"team-{k}": alt(*(" and ".join(f"robots[{i}]" for i in c) for c in apart))} \
+            if apart else self.rules
         # Another line follows (its "# SubTask"), or the output ends.
-        return self._choose(self.rules, options, {"line": COMMENT_NEXT} if k + 1 < len(self.names) else {})
+        return self._choose(rules, options, {"line": COMMENT_NEXT} if k + 1 < len(self.names) else {})
+
+    def _apart(self, k: int) -> list[tuple[int, ...]]:
+        """Sub-task ``k``'s teams that leave the others its block starts at once a team each, no robot in two, with
+        the teams chosen before (none where there are no such teams, or no block: every team of it is offered).
+        Asked to put a 1 kg statue and an alarm clock on the bed with robots of 0.9 and 0.4 kg and one that only
+        helps lift, the 1.5B gave the statue the two that pick up, and the clock's sub-task waited for them (RU 0;
+        dev7-c3): robots 8 and 24 lift the statue while robot 28 carries the clock."""
+        block = next((b for b in self.blocks if k in b), None)
+        teams = self.teams
+        if block is None or any(teams[j] is None for j in block):
+            return []
+        taken = frozenset().union(*(self.chosen.get(j, frozenset()) for j in block))
+        later = [teams[j] for j in sorted(block) if j > k]
+
+        def fits(used: frozenset[int], rest: list) -> bool:
+            return not rest or any(not used & set(t) and fits(used | set(t), rest[1:]) for t in rest[0])
+
+        return [t for t in teams[k] or () if not taken & set(t) and fits(taken | set(t), later)]
 
     def _advance(self, kind: str, piece: str) -> None:
         if kind == "forced":
             self.head_written = True
         elif kind == "line":
+            team = _TEAM.search(piece)
+            if team is not None:
+                self.chosen[self.lines] = frozenset(int(i) for i in re.findall(r"\d+", team.group(1)))
             self.lines += 1
             self.head_written = False
 

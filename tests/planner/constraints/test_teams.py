@@ -77,6 +77,28 @@ def test_a_coalition_names_no_robot_the_sub_task_can_do_without():
     assert not accepts(CoalitionConstraint(["f"], weak, needs=[lettuce]), _coalition_line(lettuce, "robots[0]"))
 
 
+def test_the_sub_tasks_started_at_once_are_given_teams_that_leave_each_other_robots():
+    """dev7-c3: a 1 kg statue and a 0.8 kg alarm clock for the bed, started at once, with robots 28 (0.9 kg), 8
+    (0.4 kg) and 24 (only switches, but helps lift). The 1.5B gave the statue robots 28 and 8, the only robot that
+    lifts the clock alone, and the clock waited (RU 0). Of the statue's teams, only 8 and 24 leave the clock one:
+    the coalition offers no other, and the clock's line then has robot 28. Not started at once, any team goes."""
+    statue = Need(frozenset({"GoToObject", "PickupObject", "PutObject"}), 1.0)
+    clock = Need(frozenset({"GoToObject", "PickupObject", "PutObject"}), 0.8)
+    team = CATALOGUE.team([28, 8, 24])
+
+    def lines(first: str, second: str) -> str:
+        return (f"# SubTask 1 (s): {needs_clause(statue)} they lift it; so {first}\n"
+                f"# SubTask 2 (c): {needs_clause(clock)} it lifts it; so {second}\n")
+
+    def coalition(blocks=()):
+        return CoalitionConstraint(["s", "c"], team, needs=[statue, clock], blocks=blocks)
+
+    assert accepts(coalition([{0, 1}]), lines("robots[1] and robots[2]", "robots[0]"))
+    assert not accepts(coalition([{0, 1}]), lines("robots[0] and robots[1]", "robots[0]"))
+    assert not accepts(coalition([{0, 1}]), lines("robots[0] and robots[2]", "robots[1] and robots[2]"))
+    assert accepts(coalition(), lines("robots[0] and robots[1]", "robots[0]"))
+
+
 def test_threads_of_one_block_get_robots_of_their_own_while_some_are_free():
     assert accepts(_allocator(1, 2, 3), _allocated(["robots[0]", "robots[1]", "robots[2]"]))
     assert not accepts(_allocator(1, 2, 3), _allocated(["robots[0]", "robots[0]", "robots[2]"]))
