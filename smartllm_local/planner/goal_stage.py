@@ -297,10 +297,10 @@ def checked_against_team(record: StageRecord, instruction: str, scene: SceneObje
     problems = {c: scene.world.unattainable([as_goal(c)], team, skills, scene.floor_plan) for c in conditions}
     words = load_state_words(scene.world.examples_dir())
     placed = placements_asked(instruction, goal_vocabulary(scene), words)
-    unsaid = {(kind, state) for holder, things in placed.items() for kind in (holder, *things)
-              for state in words.unsaid(instruction)}
+    not_said = words.unsaid(instruction)
+    unsaid = {(kind, state) for holder, things in placed.items() for kind in (holder, *things) for state in not_said}
     if states_asked(instruction, words.asked, words.verbs):  # words ask for states: the others are the model's
-        unsaid |= {(base_type(c.subject), c.state) for c in conditions if c.state in words.unsaid(instruction)}
+        unsaid |= {(base_type(c.subject), c.state) for c in conditions if c.state in not_said}
     dropped = invented(instruction, [c for c, why in problems.items() if why], conditions, list(placed), unsaid)
     if dropped:
         record.dropped_goals = [condition_line(c) for c in dropped]

@@ -45,12 +45,9 @@ def drop_opened_for_nothing(text: str, scene: SceneObjects, skills: SkillSet, in
     if not steps:
         return text, []
     actions = {name: s.action for name, s in skills.items()}
-    unused = _unused_openings(steps, scene, skills, actions)
-    if not unused:
-        return text, []
-    failed, world = dry_run(steps, set(), scene, skills)
-    if failed:  # a dry run that fails already is no picture of the plan (a sub-task gone shifts the robots)
-        return text, []
+    unused, failed, world = _unused_openings(steps, scene, skills, actions)
+    if not unused or failed:  # a dry run that fails already is no picture of the plan (a sub-task gone shifts
+        return text, []       # the robots)
     met = [c for c in goals if world.met([c])]
     dropped: set[int] = set()
     gone: set[int] = set()
@@ -80,17 +77,22 @@ def _openness_asked(instruction: str, scene: SceneObjects, goals: Sequence[Condi
 
 
 def _unused_openings(steps: Sequence[Step], scene: SceneObjects, skills: SkillSet,
-                     actions: dict[str, str]) -> list[Step]:
-    """The OpenObject steps whose holder ends open holding what it held once opened, in the dry run."""
+                     actions: dict[str, str]) -> tuple[list[Step], set[int], WorldCheck]:
+    """The OpenObject steps whose holder ends open holding what it held once opened, the lines whose calls fail and
+    the world left, in one dry run (:func:`.idle_steps.dry_run`'s)."""
     world = WorldCheck(scene, skills, MAX_SUBTASKS)
     opened: list[tuple[Step, str, list[str]]] = []
+    failed: set[int] = set()
     for step in steps:
         outcome = world.run.apply([min(step.function, MAX_SUBTASKS - 1)], step.skill, step.objects)
-        if actions[step.skill] == "OpenObject" and outcome.success and outcome.object_id:
-            opened.append((step, outcome.object_id, _holds(world.objects(), outcome.object_id)))
-    by_id = {o["objectId"]: o for o in world.objects()}
-    return [step for step, holder, held in opened
-            if by_id[holder].get("isOpen") and _holds(world.objects(), holder) == held]
+        if not outcome.success:
+            failed.add(step.line)
+        elif actions[step.skill] == "OpenObject" and outcome.object_id:
+            opened.append((step, outcome.object_id, _holds(world.run.objects, outcome.object_id)))
+    by_id = {o["objectId"]: o for o in world.run.objects}
+    unused = [step for step, holder, held in opened
+              if by_id[holder].get("isOpen") and sorted(by_id[holder].get("receptacleObjectIds") or []) == held]
+    return unused, failed, world
 
 
 def _holds(objects: Sequence[Mapping[str, Any]], holder: str) -> list[str]:
