@@ -50,6 +50,12 @@ SKILLS = load_domain("household").catalogue.skills
     ("Switch off the lamp on the side table.", {"OFF": "off the lamp on the side table"}),
     ("Move the laptop onto the bed and turn the desk lamp off.", {"OFF": "the desk lamp off"}),
     ("Switch the desk lamp off before bed.", {"OFF": "the desk lamp off before bed"}),  # a time after it
+    ("Turn the floor lamp and the desk lamp off.", {"OFF": "the floor lamp and the desk lamp off"}),  # two named
+    ("Put the potato in the fridge and make sure the light is off.", {"OFF": "the light is off"}),  # made sure of
+    ("Make sure the lamp is on the desk.", {}),  # a place, not a switch
+    ("Put the cup away and make sure the tap is off.", {"OFF": "the tap is off"}),
+    ("Switch off the lamp on the side table by the window in the hall.",
+     {"OFF": "off the lamp on the side table by the window in the hall"}),
     ("Turn on the TV, then shut the laptop.", {"CLOSED": "the laptop", "ON": "on the TV"}),
     ("Leave the remote on the sofa and put the TV on.", {"ON": "the TV on"}),  # a thing put on a sofa is no state
     ("Put the telly on, the match is about to start.", {"ON": "the telly on, the match is about to start"}),
@@ -256,11 +262,13 @@ def test_domain_check_reports_a_goal_example_that_leaves_out_a_thing_its_instruc
 
 
 def test_domain_check_reports_a_goal_example_that_states_empty_where_its_instruction_does_not_ask(tmp_path: Path):
+    """"... and make sure the tap is off": the example's ``Faucet off`` is asked for; its ``SinkBasin empty`` is not."""
     from smartllm_local.planner.prompting.example_check import check_goal_examples
 
     copy = tmp_path / "household"
     shutil.copytree(load_domain("household").folder, copy)
-    (copy / "prompts" / "goal" / "dishes_away.txt").write_text("Bowl in Cabinet\nCup in Cabinet\nSinkBasin empty\n")
+    statement = "Bowl in Cabinet\nCup in Cabinet\nFaucet off\nSinkBasin empty\n"
+    (copy / "prompts" / "goal" / "dishes_away.txt").write_text(statement)
     problems = check_goal_examples(load_domain(str(copy)))[1]
     assert len(problems) == 1 and "dishes_away.txt: states EMPTY, which the goal stage offers only where" in \
         problems[0]
