@@ -161,6 +161,7 @@ class Snapshot:
     helping: dict[int, str]
     meant: dict[tuple[int, str], str]
     gone_to: dict[int, str]
+    put_in: frozenset[str]
 
 
 class DryRun:
@@ -219,7 +220,7 @@ class DryRun:
             thor.frozen_shared = True
             self._saved = Snapshot(thor.frozen, tuple(vars(a).copy() for a in sim.agents), sim.generation,
                                    tuple(thor.encoder.last_results), thor.last_event, dict(self._world.helping),
-                                   dict(self._world.meant), dict(self._world.gone_to))
+                                   dict(self._world.meant), dict(self._world.gone_to), self._world.put_in)
         return self._saved
 
     def restore(self, snap: Snapshot) -> None:
@@ -247,4 +248,5 @@ class DryRun:
         self._world.helping = dict(snap.helping)
         self._world.meant = dict(snap.meant)
         self._world.gone_to = dict(snap.gone_to)
+        self._world.put_in = snap.put_in
         self._saved = snap

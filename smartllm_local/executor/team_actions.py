@@ -82,6 +82,7 @@ class TeamWorld:
         self.helping: dict[int, str] = {}  # member -> object it helps carry
         self.meant: dict[tuple[int, str], str] = {}  # (member, fixture type) -> the instance it last meant
         self.gone_to: dict[int, str] = {}  # member -> the object it last went to
+        self.put_in: frozenset[str] = frozenset()  # the holders the team has put something in
         # Target box -> the cells nearest first; the cells are fixed for a TeamWorld, so no ranking goes stale.
         self._ranked_cells: dict[tuple[float, float, float, float], list[tuple[float, float]]] = {}
         self.start = [self.position(m) for m in range(len(self.event.events))]
@@ -168,7 +169,9 @@ class TeamWorld:
         opens by the spray bottle is the one by it, whichever it went to before, and "the cabinet" it opens by the pot
         is the closed one holding it, not the one beside it the robot opened before (dev6-p1); a holder of the
         thing ``near`` last went to comes before the fixture meant before and the nearest ("the cabinet" opened
-        by the pan is the one the pan is in, not the wall cabinet nearer the robot: dev6-c2)."""
+        by the pan is the one the pan is in, not the wall cabinet nearer the robot: dev6-c2); then one ready for
+        another: the empty burner a switched-on knob heats, the knob of a burner holding something (one robot
+        switched a knob on while another took the pot to "the StoveBurner" nearest it, which stayed cold: dev6-p1)."""
         if "|" in name:
             return next((o for o in self.objects if o["objectId"] == name.strip()), None)
         wanted = name.strip().lower()
@@ -204,16 +207,32 @@ class TeamWorld:
         by_it = self._holders_of(self.gone_to.get(near))
         # Prefer instances the robots can get at (not in a closed fridge or drawer), then whole ones (a broken
         # one can be neither picked up nor broken again), then ones the action changes, then a holder of what the
-        # robot went to, then the fixture meant before, then the nearest.
+        # robot went to, then the fixture meant before, then one ready for another, then the nearest.
+        paired = self._paired()
         chosen = min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")), not changes(o),
                                              o["objectId"] not in by_it, o["objectId"] not in meant,
-                                             round(Box.of(o).distance(x, z), 6), o["objectId"]))
+                                             o["objectId"] not in paired, round(Box.of(o).distance(x, z), 6),
+                                             o["objectId"]))
         if not chosen.get("pickupable"):
             self.meant.update({(m, chosen["objectType"]): chosen["objectId"] for m in {near, *members}})
             for fixture in chosen.get("controlledObjects") or ():  # a knob means its burner too
                 kind = next((o["objectType"] for o in self.objects if o["objectId"] == fixture), None)
                 self.meant.update({(m, kind): fixture for m in {near, *members} if kind is not None})
         return chosen
+
+    def _paired(self) -> set[str]:
+        """Fixtures ready for each other: an empty one a switched-on control works (a burner its knob heats), and a
+        control whose fixture the team put something in (the knob of the burner the pot went on, not of the one a
+        kettle stood on from the start)."""
+        by_id = {o["objectId"]: o for o in self.objects}
+        paired = set()
+        for control in self.objects:
+            for fixture in (by_id[f] for f in control.get("controlledObjects") or () if f in by_id):
+                if fixture["objectId"] in self.put_in and fixture.get("receptacleObjectIds"):
+                    paired.add(control["objectId"])
+                elif control.get("isToggled") and not fixture.get("receptacleObjectIds"):
+                    paired.add(fixture["objectId"])
+        return paired
 
     def _holders_of(self, object_id: str | None) -> set[str]:
         return next((set(o.get("parentReceptacles") or ()) for o in self.objects if o["objectId"] == object_id), set())
@@ -373,6 +392,8 @@ class TeamWorld:
         for member, carried in list(self.helping.items()):
             if carried == held_id:
                 del self.helping[member]
+        if target_id is not None:
+            self.put_in |= {target_id}
         return Outcome(True, object_id=target_id or held_id, action=skill.action, actor=holder)
 
     def _object_action(self, skill: Skill, name: str, members: Sequence[int]) -> Outcome:

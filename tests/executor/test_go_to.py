@@ -132,3 +132,42 @@ def test_the_burner_a_knob_switched_on_controls_is_the_one_the_pot_goes_on():
     knob = next(o for o in ex.final_objects if o["objectId"] == ex.trace[1].object_id)
     assert ex.trace[5].object_id in knob["controlledObjects"]
     assert scores(ex, [{"name": "Pot", "contains": [], "state": "HOT"}]).GCR == 1
+
+
+_POT_TO_BURNER = """def pot_on_burner(robot_list):
+    GoToObject(robot_list[0], 'Pot')
+    OpenObject(robot_list[0], 'Cabinet')
+    PickupObject(robot_list[0], 'Pot')
+    GoToObject(robot_list[0], 'StoveBurner')
+    PutObject(robot_list[0], 'Pot', 'StoveBurner')
+
+def knob_on(robot_list):
+    GoToObject(robot_list[0], 'StoveKnob')
+    SwitchOn(robot_list[0], 'StoveKnob')
+
+"""
+
+
+@pytest.mark.parametrize("orchestration", [
+    # dev6-p1, as the 1.5B allocated it: robot 24 switches the knob nearest it while robot 17 fetches the pot
+    "t1 = threading.Thread(target=knob_on, args=([robots[1]],))\n"
+    "t2 = threading.Thread(target=pot_on_burner, args=([robots[0]],))\nt1.start()\nt2.start()\nt1.join()\nt2.join()\n",
+    # the other way round: the pot is on a burner first, and robot 24 comes to "the StoveKnob" from where it stands
+    "pot_on_burner([robots[0]])\nknob_on([robots[1]])\n",
+], ids=["knob-first", "pot-first"])
+def test_a_burner_and_a_knob_two_robots_see_to_are_a_pair(orchestration):
+    """One robot switches "the StoveKnob" on, another puts the pot on "the StoveBurner": the burner is the one the
+    switched knob heats (not the burner nearest the pot's robot, which stayed cold: dev6-p1), and the knob is the
+    one of the burner the pot went on (not the knob nearest the other robot), on the real Controller (FloorPlan29,
+    where a kettle stands on one burner from the start)."""
+    controller = open_controller(29, agent_count=2)
+    try:
+        ex = run(_POT_TO_BURNER + orchestration, [17, 24], controller, 29)
+    finally:
+        controller.stop()
+    assert [e.success for e in ex.trace] == [True] * 7, [e.error for e in ex.trace]
+    knob = next(o for o in ex.final_objects if o["objectId"] == next(e.object_id for e in ex.trace
+                                                                       if e.skill == "SwitchOn"))
+    burner = next(e.object_id for e in ex.trace if e.skill == "PutObject")
+    assert knob["controlledObjects"] == [burner]
+    assert scores(ex, [{"name": "Pot", "contains": [], "state": "HOT"}]).GCR == 1
