@@ -23,6 +23,7 @@ from ..scoring import Condition, condition_holds, containment
 from ..skills import SkillSet
 from ..world.object_types import base_type
 from .asked import (
+    GIVES,
     as_goal,
     coverage,
     gives_nothing_asked,
@@ -293,15 +294,23 @@ def checked_against_team(record: StageRecord, instruction: str, scene: SceneObje
     three things on the bed, the 0.5B stated `Bed clean` too, for a team that cannot clean. So is one of any thing
     where the words ask for other states: asked to switch the desk lamp off before bed, the 0.5B stated `Bed clean`
     too, for a robot that only switches (dev7-e2); "freshen up the bed" asks for no state in so many words, and its
-    bed's `clean` is asked."""
+    bed's `clean` is asked. Such a state within reach goes too, where another goal is left: asked to put the
+    racket and the bat on the bed, the 0.5B stated `Bed clean`, and a robot cleaned the bed (dev7-s2); not one of
+    a holder that gives a state the words ask for (toasted, `Toaster on` is the means). A liquid named is a thing
+    filled ("boil some water in the pot")."""
     problems = {c: scene.world.unattainable([as_goal(c)], team, skills, scene.floor_plan) for c in conditions}
     words = load_state_words(scene.world.examples_dir())
     placed = placements_asked(instruction, goal_vocabulary(scene), words)
-    not_said = words.unsaid(instruction)
+    not_said = words.unsaid(instruction) - set(words.filled_by(instruction))
     unsaid = {(kind, state) for holder, things in placed.items() for kind in (holder, *things) for state in not_said}
-    if states_asked(instruction, words.asked, words.verbs):  # words ask for states: the others are the model's
+    asked = set(states_asked(instruction, words.asked, words.verbs))
+    if asked:  # words ask for states: the others are the model's
         unsaid |= {(base_type(c.subject), c.state) for c in conditions if c.state in not_said}
     dropped = invented(instruction, [c for c, why in problems.items() if why], conditions, list(placed), unsaid)
+    within = [c for c in conditions if c not in dropped and (base_type(c.subject), c.state) in unsaid
+              and not GIVES.get(base_type(c.subject), frozenset()) & asked]
+    if any(c not in within and c not in dropped for c in conditions):
+        dropped += within
     if dropped:
         record.dropped_goals = [condition_line(c) for c in dropped]
         record.output = "".join(line for line in record.output.splitlines(keepends=True)

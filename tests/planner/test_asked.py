@@ -190,6 +190,29 @@ def test_a_state_the_instruction_has_no_words_for_beside_states_it_asks_for_is_t
     assert record.refused_by == GOAL_CHECK and "CleanObject" in record.refusal
 
 
+def test_a_state_the_instruction_has_no_words_for_is_dropped_within_reach_too(monkeypatch):
+    """Asked to put the racket and the bat on the bed, the 0.5B stated `Bed clean`, and robot 25 cleaned the bed, a
+    sub-task nobody asked for (RU 0; dev7-s2). The state goes where the words have none for it, reachable or not;
+    a state they ask for stays ("start the microwave": on), and so do a thing filled with a liquid named and a
+    state of a holder that gives the state asked for."""
+    bed = "Put the tennis racket and the baseball bat on the bed."
+    _, record = _checked(monkeypatch, bed, "TennisRacket in Bed\nBed clean\nBaseballBat in Bed\n\n",
+                         floor_plan=326, robots=[25, 30])
+    assert record.refusal is None and record.dropped_goals == ["Bed clean"]
+    assert record.output == "TennisRacket in Bed\nBaseballBat in Bed\n\n"
+    _, record = _checked(monkeypatch, bed, "Bed clean\n\n", floor_plan=326, robots=[25, 30])
+    assert record.refusal is None and not record.dropped_goals  # nothing else left: the statement stands
+    started = "Put the cup in the microwave and start the microwave."
+    _, record = _checked(monkeypatch, started, "Cup in Microwave\nMicrowave on\n\n", floor_plan=30, robots=[3])
+    assert record.refusal is None and not record.dropped_goals
+    toast = "Toast the bread, please."  # the toaster on is the means to the toast
+    _, record = _checked(monkeypatch, toast, "BreadSliced cooked\nToaster on\n\n", floor_plan=6, robots=[3, 4])
+    assert record.refusal is None and not record.dropped_goals
+    boil = "Boil some water in the pot."
+    _, record = _checked(monkeypatch, boil, "Pot filled\nPot hot\n\n", floor_plan=20, robots=[3, 4])
+    assert record.refusal is None and not record.dropped_goals
+
+
 def _checked(monkeypatch, instruction: str, statement: str, floor_plan: int = 6,
              robots: list[int] | None = None) -> tuple[PlanResult, StageRecord]:
     """The goal check of a statement the model is made to write, by default for robot 13 (switches things on, opens

@@ -54,6 +54,8 @@ SKILLS = load_domain("household").catalogue.skills
     ("Put the potato in the fridge and make sure the light is off.", {"OFF": "the light is off"}),  # made sure of
     ("Make sure the lamp is on the desk.", {}),  # a place, not a switch
     ("Put the cup away and make sure the tap is off.", {"OFF": "the tap is off"}),
+    ("Put the cup in the microwave and start the microwave.", {"ON": "the microwave"}),  # started
+    ("Start by putting the apple in the fridge.", {}),
     ("Switch off the lamp on the side table by the window in the hall.",
      {"OFF": "off the lamp on the side table by the window in the hall"}),
     ("Turn on the TV, then shut the laptop.", {"CLOSED": "the laptop", "ON": "on the TV"}),
