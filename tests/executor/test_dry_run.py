@@ -104,6 +104,25 @@ def test_snapshots_branch_both_ways():
     assert _scene(dry.objects) == start_state
 
 
+def test_a_snapshot_restores_the_holders_the_team_put_things_in():
+    """The knob of the burner the team put the pot on is "the StoveKnob" (FloorPlan29); back at a snapshot from
+    before the put, it is the knob nearest the robot again, another one."""
+    dry = DryRun(29, CATALOGUE.team([17, 24]), CATALOGUE.skills)
+    start = dry.snapshot()
+    nearest = dry.apply([1], "GoToObject", ["StoveKnob"]).object_id
+    dry.restore(start)
+    for call in [("GoToObject", ["Pot"]), ("OpenObject", ["Cabinet"]), ("PickupObject", ["Pot"]),
+                 ("GoToObject", ["StoveBurner"]), ("PutObject", ["Pot", "StoveBurner"])]:
+        burner = dry.apply([0], *call).object_id
+    put = dry.snapshot()
+    knob = dry.apply([1], "GoToObject", ["StoveKnob"]).object_id
+    assert knob != nearest and next(o for o in dry.objects if o["objectId"] == knob)["controlledObjects"] == [burner]
+    dry.restore(start)
+    assert dry.apply([1], "GoToObject", ["StoveKnob"]).object_id == nearest
+    dry.restore(put)
+    assert dry.apply([1], "GoToObject", ["StoveKnob"]).object_id == knob
+
+
 def test_a_notional_robot_can_do_what_the_world_allows():
     robot = notional_robot(CATALOGUE.skills)
     assert robot.skills == set(CATALOGUE.skills)
