@@ -170,8 +170,9 @@ class TeamWorld:
         is the closed one holding it, not the one beside it the robot opened before (dev6-p1); a holder of the
         thing ``near`` last went to comes before the fixture meant before and the nearest ("the cabinet" opened
         by the pan is the one the pan is in, not the wall cabinet nearer the robot: dev6-c2); then one ready for
-        another: the empty burner a switched-on knob heats, the knob of a burner holding something (one robot
-        switched a knob on while another took the pot to "the StoveBurner" nearest it, which stayed cold: dev6-p1)."""
+        another: the empty burner a switched-on knob heats, the knob of the burner the team put something in (one
+        robot switched a knob on while another took the pot to "the StoveBurner" nearest it, which stayed cold:
+        dev6-p1)."""
         if "|" in name:
             return next((o for o in self.objects if o["objectId"] == name.strip()), None)
         wanted = name.strip().lower()
