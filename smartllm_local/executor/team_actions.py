@@ -163,16 +163,14 @@ class TeamWorld:
                 going: bool = False, action: str = "") -> dict[str, Any] | None:
         """The instance a plan's object name means: among usable matches, one the ``action`` can change (a cabinet
         to open is a closed one), then for a fixture (what is not picked up) the one ``near`` last meant by its type,
-        where it is going there or sees it, else the nearest to ``near``; "the stove burner" a robot switched on is
-        the one it comes back to put the pot on, though another is nearer the sink it comes from (the burner its
-        knob controls, where it switched the knob: dev6-p1), "the cabinet" it
-        opens by the spray bottle is the one by it, whichever it went to before, and "the cabinet" it opens by the pot
-        is the closed one holding it, not the one beside it the robot opened before (dev6-p1); a holder of the
-        thing ``near`` last went to comes before the fixture meant before and the nearest ("the cabinet" opened
-        by the pan is the one the pan is in, not the wall cabinet nearer the robot: dev6-c2); then one ready for
-        another: the empty burner a switched-on knob heats, the knob of the burner the team put something in (one
-        robot switched a knob on while another took the pot to "the StoveBurner" nearest it, which stayed cold:
-        dev6-p1)."""
+        where it is going there or sees it, else the nearest to ``near``; "the stove burner" a robot switched on, or
+        whose knob it switched, is the one it comes back to put the pot on, though another is nearer the sink it
+        comes from (dev6-p1), "the cabinet" it opens by the spray bottle is the one by it, and "the cabinet" it opens
+        by the pot the closed one holding it, not the one beside it the robot opened before (dev6-p1); a holder of
+        the thing ``near`` last went to comes before the fixture meant before ("the cabinet" opened by the pan is the
+        pan's, not the wall cabinet nearer the robot: dev6-c2); then one ready for another: the empty burner a
+        switched-on knob heats, the knob of the burner the team put something in (the knob one robot switched and
+        the burner another put the pot on did not match, and the pot stayed cold: dev6-p1)."""
         if "|" in name:
             return next((o for o in self.objects if o["objectId"] == name.strip()), None)
         wanted = name.strip().lower()
