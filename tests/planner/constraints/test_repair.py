@@ -208,11 +208,11 @@ OTHER_FIXTURE = {
 @pytest.mark.parametrize("floor_plan", sorted(OTHER_FIXTURE))
 def test_where_the_robot_goes_to_another_fixture_than_planned_it_is_planned_again_with_that_one(
         floor_plan, monkeypatch):
-    """Written as types, the planner's first plan puts the spray bottle in the drawer another robot opened, or the
-    pot on the burner it switched on; the second robot, going to "the Drawer" or "the StoveBurner", reaches the
-    nearest, shut or cold: with one plan sought there is none. Planned again with the fixtures it goes to, it
-    opens that drawer or switches that burner on, and the calls meet the goals in the dry run and on the real
-    Controller."""
+    """Written as types, the planner's first plan puts the spray bottle in the drawer another robot opened; the
+    second robot, going to "the Drawer", reaches the nearest, shut: with one plan sought there is none. Planned again
+    with the fixture it goes to, it opens that drawer, and the calls meet the goals in the dry run and on the real
+    Controller. The pot goes on the burner whose knob the other robot switched on: "the StoveBurner" is the empty
+    one a switched-on knob heats (the pair rule), so the first plan switches no burner on."""
     first, goals = OTHER_FIXTURE[floor_plan]
     conditions = [Condition(g["name"], state=g["state"], item=(g["contains"] or [None])[0]) for g in goals]
 
@@ -222,12 +222,13 @@ def test_where_the_robot_goes_to_another_fixture_than_planned_it_is_planned_agai
         return Repairer(world, SKILLS).meet(1, conditions, 20)
 
     monkeypatch.setattr(repair_module, "ROUNDS", 1)
-    assert second_robots_plan() is None
+    once = second_robots_plan()
     monkeypatch.undo()
-    found = second_robots_plan()
-    assert found is not None
+    found = second_robots_plan() if floor_plan == 410 else once
+    assert found is not None and (once is None) == (floor_plan == 410)
     acted = {(name, objects[0]) for name, objects in found.calls}
-    assert ("OpenObject", "Drawer") in acted if floor_plan == 410 else ("SwitchOn", "StoveBurner") in acted
+    assert ("OpenObject", "Drawer") in acted if floor_plan == 410 else \
+        not {("SwitchOn", "StoveBurner"), ("SwitchOn", "StoveKnob")} & acted
     plan = "".join(f"{name}(robots[{k}], {', '.join(repr(o) for o in objects)})\n"
                    for k, calls in enumerate((first, found.calls)) for name, objects in calls)
     controller = open_controller(floor_plan, agent_count=2)
