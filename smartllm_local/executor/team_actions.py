@@ -83,6 +83,9 @@ class TeamWorld:
         self.meant: dict[tuple[int, str], str] = {}  # (member, fixture type) -> the instance it last meant
         self.gone_to: dict[int, str] = {}  # member -> the object it last went to
         self.put_in: frozenset[str] = frozenset()  # the holders the team has put something in
+        # control -> the fixtures it works (a knob's burner): fixed for a scene, so read once, before any filter
+        self.controls = {o["objectId"]: tuple(o["controlledObjects"]) for o in self.objects
+                         if o.get("controlledObjects")}
         # Target box -> the cells nearest first; the cells are fixed for a TeamWorld, so no ranking goes stale.
         self._ranked_cells: dict[tuple[float, float, float, float], list[tuple[float, float]]] = {}
         self.start = [self.position(m) for m in range(len(self.event.events))]
@@ -207,7 +210,7 @@ class TeamWorld:
         # Prefer instances the robots can get at (not in a closed fridge or drawer), then whole ones (a broken
         # one can be neither picked up nor broken again), then ones the action changes, then a holder of what the
         # robot went to, then the fixture meant before, then one ready for another, then the nearest.
-        paired = self._paired()
+        paired = self._paired(matches)
         chosen = min(matches, key=lambda o: (o["objectId"] in shut, bool(o.get("isBroken")), not changes(o),
                                              o["objectId"] not in by_it, o["objectId"] not in meant,
                                              o["objectId"] not in paired, round(Box.of(o).distance(x, z), 6),
@@ -219,18 +222,22 @@ class TeamWorld:
                 self.meant.update({(m, kind): fixture for m in {near, *members} if kind is not None})
         return chosen
 
-    def _paired(self) -> set[str]:
-        """Fixtures ready for each other: an empty one a switched-on control works (a burner its knob heats), and a
-        control whose fixture the team put something in (the knob of the burner the pot went on, not of the one a
-        kettle stood on from the start)."""
-        by_id = {o["objectId"]: o for o in self.objects}
+    def _paired(self, matches: Sequence[dict[str, Any]]) -> set[str]:
+        """Among ``matches``, fixtures ready for each other: an empty one a switched-on control works (a burner its
+        knob heats), and a control whose fixture the team put something in (the knob of the burner the pot went on,
+        not of the one a kettle stood on from the start). Read only where the matches take part in a control."""
+        ids = {o["objectId"] for o in matches}
+        pairs = [(c, f) for c, fixtures in self.controls.items() for f in fixtures if c in ids or f in ids]
+        if len(matches) < 2 or not pairs:
+            return set()
+        involved = {i for pair in pairs for i in pair}
+        now = {o["objectId"]: o for o in self.objects if o["objectId"] in involved}
         paired = set()
-        for control in self.objects:
-            for fixture in (by_id[f] for f in control.get("controlledObjects") or () if f in by_id):
-                if fixture["objectId"] in self.put_in and fixture.get("receptacleObjectIds"):
-                    paired.add(control["objectId"])
-                elif control.get("isToggled") and not fixture.get("receptacleObjectIds"):
-                    paired.add(fixture["objectId"])
+        for control, fixture in ((now[c], now[f]) for c, f in pairs if c in now and f in now):
+            if fixture["objectId"] in self.put_in and fixture.get("receptacleObjectIds"):
+                paired.add(control["objectId"])
+            elif control.get("isToggled") and not fixture.get("receptacleObjectIds"):
+                paired.add(fixture["objectId"])
         return paired
 
     def _holders_of(self, object_id: str | None) -> set[str]:

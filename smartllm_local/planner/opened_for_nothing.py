@@ -81,19 +81,19 @@ def _unused_openings(steps: Sequence[Step], scene: SceneObjects, skills: SkillSe
     """The OpenObject steps whose holder ends open holding what it held once opened, the lines whose calls fail and
     the world left, in one dry run (:func:`.idle_steps.dry_run`'s)."""
     world = WorldCheck(scene, skills, MAX_SUBTASKS)
-    opened: list[tuple[Step, str, list[str]]] = []
+    opened: list[tuple[Step, str, tuple[bool, list[str]]]] = []
     failed: set[int] = set()
     for step in steps:
         outcome = world.run.apply([min(step.function, MAX_SUBTASKS - 1)], step.skill, step.objects)
         if not outcome.success:
             failed.add(step.line)
         elif actions[step.skill] == "OpenObject" and outcome.object_id:
-            opened.append((step, outcome.object_id, _holds(world.run.objects, outcome.object_id)))
-    by_id = {o["objectId"]: o for o in world.run.objects}
-    unused = [step for step, holder, held in opened
-              if by_id[holder].get("isOpen") and sorted(by_id[holder].get("receptacleObjectIds") or []) == held]
+            opened.append((step, outcome.object_id, _open_holding(world.run.objects, outcome.object_id)))
+    unused = [step for step, holder, once_opened in opened if _open_holding(world.run.objects, holder) == once_opened]
     return unused, failed, world
 
 
-def _holds(objects: Sequence[Mapping[str, Any]], holder: str) -> list[str]:
-    return sorted(next((o.get("receptacleObjectIds") or [] for o in objects if o["objectId"] == holder), []))
+def _open_holding(objects: Sequence[Mapping[str, Any]], holder: str) -> tuple[bool, list[str]]:
+    """Whether ``holder`` is open, and what it holds (sorted): the same read once opened and at the end."""
+    obj = next(o for o in objects if o["objectId"] == holder)
+    return bool(obj.get("isOpen")), sorted(obj.get("receptacleObjectIds") or [])
