@@ -203,11 +203,13 @@ def _phrase(object_type: str) -> re.Pattern[str]:
 def things_named(words: str, types: Sequence[str]) -> list[str]:
     """The types ``words`` name as things to move: as a phrase ("the spray bottle") or by an informal name, the
     likeliest of its meanings among ``types`` ("the remote"; "the soap": the bar beside a soap bottle, as the
-    benchmark means it, the bottle where it is the only soap), not where they name where a thing comes from ("from the
-    bowl"); a slice type only where its whole is not among them, and no type whose name is part of another's named
-    ("the wine bottle" is no Bottle)."""
+    benchmark means it, the bottle where it is the only soap; two words as one, "the paper towels": the roll), not
+    where they name where a thing comes from ("from the bowl"); a slice type only where its whole is not among them,
+    and no type whose name is part of another's named ("the wine bottle" is no Bottle, "the paper towels" no Towel:
+    dev8-p4)."""
     text = ORIGIN.sub(" ", words.lower())
-    said = _forms(_WORD.findall(text))
+    spoken = _WORD.findall(text)
+    said = _forms(spoken) | _forms(a + b for a, b in zip(spoken, spoken[1:]))  # "paper towels": "papertowels"
     kinds = {base_type(t) for t in types}
     meant = {next((k for k in INFORMAL_NAMES.get(word, ()) if k in kinds), None) for word in said}
     named = [t for t in types if named_as_phrase(text, t) or base_type(t) in meant]

@@ -1,7 +1,7 @@
 """The household's task sets beside the benchmark, in the paper's style, with teams of few skills, in scenes no
 benchmark task, no worked example and no other set uses: the held-out tasks (``heldout/tasks.jsonl``), never used to
 choose anything, only to measure; and the extra development tasks (``development/tasks.jsonl``, then
-``development-3/tasks.jsonl`` to ``development-6/tasks.jsonl``), each written to
+``development-3/tasks.jsonl`` to ``development-8/tasks.jsonl``), each written to
 choose on once the set before it was spent. Here: that they are what the docs say; the heavy suite proves every
 feasible one reachable and every infeasible one refused (the planner, given the tasks' goals)."""
 
