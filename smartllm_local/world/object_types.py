@@ -158,6 +158,7 @@ INFORMAL_NAMES: Final[dict[str, tuple[str, ...]]] = {
     **dict.fromkeys(("bat", "baseball"), ("BaseballBat",)),
     "racket": ("TennisRacket",),
     "tap": ("Faucet",),
+    "shower": ("ShowerHead", "ShowerCurtain", "ShowerDoor"),  # "turn on the shower and the tap" (dev8-s3)
     "wine": ("WineBottle",),
 }
 

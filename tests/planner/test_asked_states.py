@@ -133,6 +133,10 @@ def test_things_each_named_for_a_state_are_each_owed_it_and_a_verb_ends_the_word
     lamp = asked_of("Turn off the lamp.", living, WORDS)
     assert lamp.each == {} and sorted(lamp.states["OFF"]) == ["DeskLamp", "FloorLamp"]
     assert accepts(GoalConstraint(living, asked=lamp.states, each=lamp.each), "FloorLamp off\n\n")
+    bathroom = goal_vocabulary(scene_objects(426))  # "the shower" is its head where it is switched (dev8-s3)
+    shower = asked_of("Turn on the shower and the tap.", bathroom, WORDS)
+    assert {state: sorted(kinds) for state, kinds in shower.each.items()} == {"ON": ["Faucet", "ShowerHead"]}
+    assert not accepts(GoalConstraint(bathroom, asked=shower.states, each=shower.each), "ShowerHead on\n\n")
 
 
 def test_every_thing_a_word_names_is_owed_where_the_words_ask_it_of_every_one():
