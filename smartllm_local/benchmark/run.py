@@ -78,7 +78,7 @@ class TaskOutcome:
                                             "ended_at_goals": r.ended_at_goals, "finished": r.finish is not None,
                                             "folded": bool(r.finish and r.finish.get("into")),
                                             "errands": len(r.errands), "idle_steps": len(r.idle_steps),
-                                            "joined": len(r.joined), "put_away": len(r.put_away)}
+                                            "joined": len(r.joined), "put_away": len(r.put_away), "moved": len(r.moved)}
                                            if r.stage == "decomposition" else {}),
                                         **({"executable": len(r.executable)} if r.stage == "allocation" else {})}
                               for r in self.result.stages.values()}

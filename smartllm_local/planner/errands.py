@@ -15,7 +15,9 @@ where it only wants it cut: :func:`asked_types`). A thing is named by words that
 name ("get the spray bottle" names no SoapBottle: the 1.5B carried the soap bottle beside it to the counter, and
 the sub-task that did held a robot). On a thing nobody named that is a thing nobody asked for; on a
 named one, steps that change nothing of how it ends (the cloth pushed in the bathtub before another sub-task
-carries it to the counter: the push needed a robot that pushes, and the carrying sub-task waited for it). A
+carries it to the counter: the push needed a robot that pushes, and the carrying sub-task waited for it); where the
+GoToObject steps that led to them lead on to a step on another thing too, the steps alone (the cloth pushed after its
+cabinet was opened from beside it: dev8-c5). A
 sub-task whose every action is an errand goes whole (its definition, and its thread or its call) where another
 sub-task still acts. A knife fetched for a slice stays (the slice fails without it), as does a faucet that fills a
 mug the instruction names (the mug would end empty). The fridge opened and closed for the cup alone ends as it was
@@ -77,6 +79,9 @@ def drop_errands(text: str, scene: SceneObjects, skills: SkillSet, instruction: 
         if unneeded(taken):
             dropped = taken
             gone |= {function} if whole else set()
+        elif not whole and (acting := {s.line for s in steps if s.line in errand and actions[s.skill]}) \
+                and unneeded(dropped | acting):  # a go-to to the thing may lead to the next step too
+            dropped |= acting
     if not dropped:
         return text, []
     dropped |= sleeps_after(lines, steps, dropped, actions)

@@ -50,6 +50,7 @@ from .in_turn import blocks, free_blocks
 from .joined import join_in_turn
 from .kept_in_hand import put_kept_things
 from .opened_for_nothing import drop_opened_for_nothing
+from .opening_moved import move_openings
 from .progress import SILENT, StageProgress
 from .prompting.chat import chat_format, prompt_tokens
 from .prompting.prompts import (
@@ -191,8 +192,9 @@ class Planner:
         steps that alone made sub-tasks run in turn) and its idle steps (:mod:`.idle_steps`, and openings
         :mod:`.opened_for_nothing`), things kept in hand
         put where the goals want them (:mod:`.kept_in_hand`), the planner's last sub-task folded into the model's
-        last (:mod:`.finish_fold`), sub-tasks that could only run in turn joined
-        (:mod:`.joined`): the text the coalition and the allocation read."""
+        last (:mod:`.finish_fold`), an opening made for another sub-task moved into it (:mod:`.opening_moved`),
+        sub-tasks that could only run in turn joined (:mod:`.joined`): the text the coalition and the allocation
+        read."""
         if not (self.config.world_check and isinstance(record.plan, Plan) and not record.plan.is_refusal):
             return
         skills, config, team = self.catalogue.skills, self.config, self.catalogue.team(result.robots)
@@ -213,8 +215,9 @@ class Planner:
             if into is not None:
                 record.finish = {**record.finish, "into": into}
         if config.together:
+            record.output, record.moved = move_openings(record.output, scene, skills)
             record.output, record.joined = join_in_turn(record.output, scene, skills, team, goals)
-        if record.errands or record.idle_steps or record.put_away or into is not None or record.joined:
+        if record.errands or record.idle_steps or record.put_away or into is not None or record.joined or record.moved:
             record.plan = None  # parsed again, from the text the coalition and the allocation read
 
     def _decomposition(self, result: PlanResult, scene: SceneObjects, team: Sequence[Robot], prompt: Fitted,

@@ -47,6 +47,7 @@ class StageRecord:
     errands: list[str] = field(default_factory=list)  # lines taken out as errands (errands.py, in_turn.py)
     idle_steps: list[str] = field(default_factory=list)  # a decomposition's lines taken out as idle (idle_steps.py)
     joined: list[str] = field(default_factory=list)  # sub-tasks written into one before them ("b into a"; joined.py)
+    moved: list[str] = field(default_factory=list)  # openings moved into the sub-task they serve (opening_moved.py)
     put_away: list[str] = field(default_factory=list)  # lines putting a thing kept in hand where a goal wants it
     executable: list[str] = field(default_factory=list)  # an allocation's changes for its run to fail no call
     dropped_goals: list[str] = field(default_factory=list)  # stated goals out of reach nobody asked for (asked.py)
