@@ -226,9 +226,11 @@ class TeamWorld:
         """Among ``matches``, fixtures ready for each other: an empty one a switched-on control works (a burner its
         knob heats), and a control whose fixture the team put something in (the knob of the burner the pot went on,
         not of the one a kettle stood on from the start). Read only where the matches take part in a control."""
+        if len(matches) < 2:
+            return set()
         ids = {o["objectId"] for o in matches}
         pairs = [(c, f) for c, fixtures in self.controls.items() for f in fixtures if c in ids or f in ids]
-        if len(matches) < 2 or not pairs:
+        if not pairs:
             return set()
         involved = {i for pair in pairs for i in pair}
         now = {o["objectId"]: o for o in self.objects if o["objectId"] in involved}

@@ -23,8 +23,9 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from ..scene import SceneObjects
 from ..scoring import as_scored
@@ -140,6 +141,13 @@ def dry_run(steps: Sequence[Step], dropped: Collection[int], scene: SceneObjects
     failed = {s.line for s in steps if s.line not in dropped
               and not world.perform([(None, s.skill, s.objects)], [min(s.function, MAX_SUBTASKS - 1)])}
     return failed, world
+
+
+def outcomes(world: WorldCheck, steps: Sequence[Step]) -> Iterator[tuple[Step, Any]]:
+    """Each step with the outcome of performing it in ``world`` (a notional robot per function, in the order
+    written), as the executor's TeamWorld gives it: the holder an opening opened is its ``object_id``."""
+    for step in steps:
+        yield step, world.run.apply([min(step.function, MAX_SUBTASKS - 1)], step.skill, step.objects)
 
 
 def dry_outcome(steps: Sequence[Step], dropped: Collection[int], scene: SceneObjects,

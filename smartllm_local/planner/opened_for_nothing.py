@@ -28,7 +28,7 @@ from ..scoring import Condition
 from ..skills import SkillSet
 from .constraints.format import MAX_SUBTASKS
 from .constraints.world_check import WorldCheck
-from .idle_steps import Step, acts, comments_above, dry_run, function_lines, gotos_before, skill_steps
+from .idle_steps import Step, acts, comments_above, dry_run, function_lines, gotos_before, outcomes, skill_steps
 from .prompting.asked_words import load_state_words, states_asked
 
 #: The states that say a holder is to be open or shut.
@@ -83,8 +83,7 @@ def _unused_openings(steps: Sequence[Step], scene: SceneObjects, skills: SkillSe
     world = WorldCheck(scene, skills, MAX_SUBTASKS)
     opened: list[tuple[Step, str, tuple[bool, list[str]]]] = []
     failed: set[int] = set()
-    for step in steps:
-        outcome = world.run.apply([min(step.function, MAX_SUBTASKS - 1)], step.skill, step.objects)
+    for step, outcome in outcomes(world, steps):
         if not outcome.success:
             failed.add(step.line)
         elif actions[step.skill] == "OpenObject" and outcome.object_id:

@@ -7,9 +7,10 @@ the robot that takes the cloth opens the cabinet itself, does not make (RU 0 for
 
 So where a sub-task's last action is an OpenObject, and another sub-task of its block (started at once, written after
 it) then takes a thing out of that holder or puts one in it (in the dry run: a notional robot per sub-task, in the
-order written), the opening, with the GoToObject steps right before it and the comments above them, moves to just
-before that other sub-task's first step on the holder or on a thing in it, where the text so made fails no more
-calls and leaves the world alike as the goals see it. An opening its own sub-task goes on to use stays.
+order written), the opening moves to just before that other sub-task's first step on the holder or on a thing in it
+(and the comments that say that step), and the GoToObject steps right before it where it was, with the comments
+above them, go, where the text so made fails no more calls and leaves the world alike as the goals see it. An
+opening its own sub-task goes on to use stays.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from ..scene import SceneObjects
 from ..skills import SkillSet
 from .constraints.format import MAX_SUBTASKS
 from .constraints.world_check import WorldCheck
-from .idle_steps import Step, acts, comments_above, ends_as, gotos_before, skill_steps, text_outcome
+from .idle_steps import Step, acts, comments_above, ends_as, gotos_before, outcomes, skill_steps, text_outcome
 from .in_turn import blocks
 
 #: How many openings one decomposition may have moved (each move is checked in a dry run of its own).
@@ -70,8 +71,7 @@ def _candidates(steps: Sequence[Step], lines: Sequence[str], scene: SceneObjects
     world = WorldCheck(scene, skills, MAX_SUBTASKS)
     opened: list[tuple[Step, str, set[str]]] = []
     found: dict[int, tuple[Step, Step]] = {}  # an opening's line -> it and the first step it serves
-    for step in steps:
-        outcome = world.run.apply([min(step.function, MAX_SUBTASKS - 1)], step.skill, step.objects)
+    for step, outcome in outcomes(world, steps):
         if not outcome.success or not actions[step.skill]:
             continue
         if actions[step.skill] == "OpenObject" and outcome.object_id and step.function in started and not any(
