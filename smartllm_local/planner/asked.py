@@ -59,9 +59,9 @@ def names(instruction: str, object_type: str) -> bool:
     plural's ending aside), an informal name ("the TV": the Television) or a word sharing the first letters of a word
     of its name that names no type of its own ("the telly"; "the stove" names no Stool, "the pot" no Potato)."""
     said = set(_WORD.findall(instruction.lower()))
-    own = _type_words(object_type)
+    own = type_words(object_type)
     for word in said:
-        forms = _forms([word])
+        forms = word_forms([word])
         if forms.intersection(own) or not forms & _own_words() and any(
                 min(len(word), len(w)) >= PREFIX and word[:PREFIX] == w[:PREFIX] for w in own):
             return True
@@ -71,14 +71,14 @@ def names(instruction: str, object_type: str) -> bool:
 @cache
 def _own_words() -> frozenset[str]:
     """The words of every known type's name, and every informal name: each names its own types."""
-    return frozenset(w for t in TYPE_PROPERTIES for w in _type_words(t)) | frozenset(INFORMAL_NAMES)
+    return frozenset(w for t in TYPE_PROPERTIES for w in type_words(t)) | frozenset(INFORMAL_NAMES)
 
 
 def names_a_word(instruction: str, object_type: str) -> bool:
     """Whether the instruction says a word of the type's name or an informal name of it (a plural's ending aside):
     read strictly, with no shared first letters ("potato" names the Potato, not the Pot; "for" not the Fork)."""
-    said = _forms(_WORD.findall(instruction.lower()))
-    return bool(set(_type_words(object_type)) & said) or _informally(said, object_type)
+    said = word_forms(_WORD.findall(instruction.lower()))
+    return bool(set(type_words(object_type)) & said) or _informally(said, object_type)
 
 
 def asks_for(instruction: str, condition: Condition) -> bool:
@@ -140,10 +140,10 @@ def named_in_full(instruction: str, types: Sequence[str]) -> list[str]:
     the SoapBottle; a plural's ending aside), less those it names only as where a thing comes from ("move the
     laptop from the coffee table"): the things a goal statement should say something of."""
     text = instruction.lower()
-    said = _forms(_WORD.findall(text))
-    origin = _forms(w for match in ORIGIN.finditer(text) for w in match.group(1).split())
-    rest = _forms(_WORD.findall(ORIGIN.sub(" ", text)))
-    return [t for t in types if ((words := set(_type_words(t))) <= said or _informally(said, t, in_full=True))
+    said = word_forms(_WORD.findall(text))
+    origin = word_forms(w for match in ORIGIN.finditer(text) for w in match.group(1).split())
+    rest = word_forms(_WORD.findall(ORIGIN.sub(" ", text)))
+    return [t for t in types if ((words := set(type_words(t))) <= said or _informally(said, t, in_full=True))
             and not (words <= origin and not words <= rest)]
 
 
@@ -154,13 +154,13 @@ def outnamed(instruction: str, types: Sequence[str]) -> set[str]:
     name is not outnamed by it where it is a kind of the other, its name ending as the other's does ("the chair"
     may be the ArmChair), or a part people call by the other's name ("the sink" may be the SinkBasin)."""
     phrases = [t for t in types if named_as_phrase(instruction, t)]
-    said = _forms(_WORD.findall(instruction.lower()))
+    said = word_forms(_WORD.findall(instruction.lower()))
     out = set()
     for t in types:
-        words = set(_type_words(t))
+        words = set(type_words(t))
         spoken = words & said
-        if spoken and not any(words == set(_type_words(p)) for p in phrases) and \
-                spoken <= set().union(*(set(_type_words(p)) for p in phrases if not _may_be(t, p))):
+        if spoken and not any(words == set(type_words(p)) for p in phrases) and \
+                spoken <= set().union(*(set(type_words(p)) for p in phrases if not _may_be(t, p))):
             out.add(t)
     return out
 
@@ -168,7 +168,7 @@ def outnamed(instruction: str, types: Sequence[str]) -> set[str]:
 def _may_be(kind: str, named: str) -> bool:
     """Whether a thing of ``kind`` may be what the name of ``named`` means: a kind of it ("the chair": an ArmChair;
     not "the desk": a DeskLamp) or a part called by its name (a SinkBasin)."""
-    words, whole = _type_words(kind), _type_words(named)
+    words, whole = type_words(kind), type_words(named)
     return set(whole) <= set(words) and (words[-1] == whole[-1] or CALLED_BY_WHOLE.get(base_type(kind)) == named)
 
 
@@ -183,17 +183,17 @@ def named_apart(instruction: str, object_type: str, types: Sequence[str]) -> boo
     """Whether the instruction names the type (:func:`names`) in words that are not part of the phrase of another
     name among ``types`` not within its own ("switch off the desk lamp" names no Desk, "the coffee machine" no
     CoffeeTable; "the sink" may be the SinkBasin)."""
-    words = set(_type_words(object_type))
+    words = set(type_words(object_type))
     text = instruction.lower()
     for other in types:
-        if not set(_type_words(other)) <= words:
+        if not set(type_words(other)) <= words:
             text = _phrase(other).sub(" ", text)
     return names(text, object_type)
 
 
 @cache
 def _phrase(object_type: str) -> re.Pattern[str]:
-    words = [re.escape(w) for w in _type_words(object_type)]
+    words = [re.escape(w) for w in type_words(object_type)]
     phrase = r"\s+".join(f"{w}(?:e?s)?" for w in words)
     if len(words) == 2:
         phrase += rf"|{words[0]}{words[1]}s?|{words[1]}s?\s+of\s+(?:the\s+|a\s+)?{words[0]}s?"
@@ -209,11 +209,11 @@ def things_named(words: str, types: Sequence[str]) -> list[str]:
     dev8-p4)."""
     text = ORIGIN.sub(" ", words.lower())
     spoken = _WORD.findall(text)
-    said = _forms(spoken) | _forms(a + b for a, b in zip(spoken, spoken[1:]))  # "paper towels": "papertowels"
+    said = word_forms(spoken) | word_forms(a + b for a, b in zip(spoken, spoken[1:]))  # "paper towels": "papertowels"
     kinds = {base_type(t) for t in types}
     meant = {next((k for k in INFORMAL_NAMES.get(word, ()) if k in kinds), None) for word in said}
     named = [t for t in types if named_as_phrase(text, t) or base_type(t) in meant]
-    named = [t for t in named if not any(set(_type_words(t)) < set(_type_words(n)) for n in named)]  # a wine bottle
+    named = [t for t in named if not any(set(type_words(t)) < set(type_words(n)) for n in named)]  # a wine bottle
     return [t for t in named if base_type(t) == t or base_type(t) not in named]
 
 
@@ -229,11 +229,11 @@ def holder_named(words: str, holders: Collection[str]) -> str | None:
     phrased += [part for whole, part in PUT_IN_PART.items()
                 if part in holders and whole not in holders and named_as_phrase(words, whole)]
     if phrased:
-        most = max(len(_type_words(h)) for h in phrased)
-        named = {h for h in phrased if len(_type_words(h)) == most}
-        named |= {h for h in holders for n in named if set(_type_words(n)) < set(_type_words(h)) and _may_be(h, n)}
+        most = max(len(type_words(h)) for h in phrased)
+        named = {h for h in phrased if len(type_words(h)) == most}
+        named |= {h for h in holders for n in named if set(type_words(n)) < set(type_words(h)) and _may_be(h, n)}
     else:
-        said = _forms(_WORD.findall(words.lower()))
+        said = word_forms(_WORD.findall(words.lower()))
         named = {h for h in holders if _informally(said, h)}
     parts = {PUT_IN_PART.get(h) for h in named} & named
     return next(iter(named)) if len(named) == 1 else next(iter(parts)) if len(parts) == len(named) - 1 == 1 else None
@@ -278,7 +278,7 @@ def _objects(condition: Condition) -> list[str]:
     return [condition.subject] + ([condition.item] if condition.item else [])
 
 
-def _forms(words: Iterable[str]) -> set[str]:
+def word_forms(words: Iterable[str]) -> set[str]:
     """The words, and each as it would be without a plural's ending ("glasses": glasse, glass)."""
     forms = set()
     for w in words:
@@ -293,9 +293,10 @@ def _informally(said: set[str], object_type: str, *, in_full: bool = False) -> b
     kind = base_type(object_type)
     names = informal_names(kind)
     if in_full:
-        names = tuple(n for n in names if INFORMAL_NAMES[n] == (kind,) and n not in _type_words(kind))
+        names = tuple(n for n in names if INFORMAL_NAMES[n] == (kind,) and n not in type_words(kind))
     return bool(said.intersection(names))
 
 
-def _type_words(object_type: str) -> list[str]:
+def type_words(object_type: str) -> list[str]:
+    """The lowercase words of a type's name (of the type it is a slice of)."""
     return [w.lower() for w in name_words(base_type(object_type))]

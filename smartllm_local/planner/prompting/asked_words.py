@@ -20,7 +20,7 @@ from ...errors import UserError
 from ...goal_language import STATE_WORDS
 from ...scene import GoalVocabulary
 from ...world.object_types import base_type
-from ..asked import holder_named, names_a_word, things_named
+from ..asked import holder_named, named_as_phrase, names_a_word, things_named, type_words, word_forms
 from .goal_prompt import GOAL_FOLDER
 
 ASKED_STATES = "asked_states.toml"
@@ -229,7 +229,21 @@ def _placed(instruction: str, vocabulary: GoalVocabulary,
 
 def named_for(words: str, able: Callable[[str], bool], vocabulary: GoalVocabulary) -> list[str]:
     """The types a word of the words names (:func:`.asked.names_a_word`) that are ``able`` (can be in the state,
-    or go in the holder, asked for); a slice type only where its whole is not among them ("the potato" is the
-    Potato, not its slices)."""
+    or go in the holder, asked for); none named only by words of another's name said as a phrase ("the bottle" is
+    the Bottle, not the soap bottle, where the scene has one; "the wine bottle" no Bottle: dev9-p2); a slice type
+    only where its whole is not among them ("the potato" is the Potato, not its slices)."""
     named = [t for t in vocabulary.types if able(t) and names_a_word(words, t)]
+    phrased = [t for t in named if named_as_phrase(words, t)]
+    named = [t for t in named if not _within(t, phrased, words)]
     return [t for t in named if base_type(t) == t or base_type(t) not in named]
+
+
+def _within(kind: str, phrased: Sequence[str], words: str) -> bool:
+    """Whether the words name ``kind`` only by words of other types' names said as phrases (``phrased``); one said
+    as a phrase itself, only where it is within another's ("the wine bottle": no Bottle)."""
+    own = set(type_words(kind))
+    wholes = [set(type_words(p)) for p in phrased if p != kind]
+    if kind in phrased:
+        return any(own < whole for whole in wholes)
+    said = own & word_forms(re.findall(r"[a-z]+", words.lower()))
+    return bool(said) and said <= set().union(*wholes)
