@@ -574,6 +574,11 @@ def test_every_household_goal_of_a_thing_asked_into_a_holder_puts_it_there_and_t
     ("Your lunch: take the potato and put it in the microwave.", {"Microwave": ["Potato"]}),
     ("Put the telly on, the match is about to start.", {}),
     ("Slice the apple and keep the slices in the fridge.", {}),  # "keep" puts nothing that is not there
+    ("The apple and the egg both go in the fridge.", {"Fridge": ["Apple", "Egg"]}),  # the things first (dev9-e4)
+    ("Clear up: the mug belongs in the sink.", {"SinkBasin": ["Mug"]}),
+    ("The apple should be in the fridge, not on the counter.", {"Fridge": ["Apple"]}),
+    ("The apple does not belong in the fridge; put it on the counter.", {"CounterTop": ["Apple"]}),
+    ("The apple doesn't go in the fridge.", {}),
 ])
 def test_the_things_an_instruction_puts_in_a_holder_it_names_are_owed_there(instruction, placed):
     vocabulary = goal_vocabulary(scene_objects(1))
@@ -649,6 +654,18 @@ def test_a_switch_s_verb_names_no_light_switch():
     lights = asked_of("Switch off the lamp and the light switch.", vocabulary, WORDS)
     stated = _without_unasked(StatedGoals(StageRecord("goal", output=statement.text()), statement), "", lights)
     assert stated.record.unasked == []  # the light switch named as a thing
+
+
+@pytest.mark.parametrize("instruction, moves", [
+    ("The watch goes in the box.", True),
+    ("The apple and the lettuce belong in the fridge.", True),
+    ("The candle does not belong on the toilet.", False),
+    ("The apple doesn't go in the fridge.", False),
+    ("Go to the fridge and switch off the light.", False),
+])
+def test_a_thing_that_goes_or_belongs_somewhere_is_asked_moved(instruction, moves):
+    """Nothing said "put", so the 0.5B's line putting the watch in the box was taken for its own idea (dev9-e4)."""
+    assert WORDS.asks_to_move(instruction) is moves
 
 
 def test_a_put_pattern_without_its_two_groups_is_a_clear_error(tmp_path: Path):
