@@ -99,6 +99,28 @@ def blocks(lines: Sequence[str]) -> Iterator[set[int]]:
             started = set()  # a direct call waits for nothing it does not follow
 
 
+def calls_in_a_row(lines: Sequence[str]) -> Iterator[set[int]]:
+    """The functions (by order written) of each run of two or more direct calls in a row: the allocation starts
+    them at once where their teams are apart (``together``), so the coalition keeps their teams apart where it can.
+    The 1.5B called its plunger's sub-task, then the one of the soap bottle and the light, and gave the plunger
+    robots 28 and 8; the other waited for robot 8 (RU 0; dev9-c6): robot 28, helped by robot 24, lifts the plunger
+    while robot 8 carries the soap bottle and switches the light off."""
+    order = {function_name(line): k for k, line in enumerate(line for line in lines if line.startswith("def "))}
+    run: set[int] = set()
+    for line in lines:
+        if line.startswith((" ", "\t", "#", "def ")) or not line.strip():
+            continue
+        called = _CALL.match(line.rstrip("\n"))
+        if called is not None and called.group(1) in order:
+            run.add(order[called.group(1)])
+            continue
+        if len(run) > 1:
+            yield run
+        run = set()
+    if len(run) > 1:
+        yield run
+
+
 def apart(block: Collection[int], steps: Sequence[Step], dropped: Collection[int], actions: dict[str, str],
           team: Sequence[Robot], scene: SceneObjects) -> bool:
     """Whether each function of the block, its ``dropped`` steps left out, has a team of its own, no robot in two."""

@@ -4,8 +4,13 @@ in sub-tasks the plan runs in turn anyway, stays."""
 
 from __future__ import annotations
 
+import pytest
+
 from smartllm_local.domain import load_domain
-from smartllm_local.planner.in_turn import all_apart, free_blocks
+from smartllm_local.planner.constraints.coalition import CoalitionConstraint, needs_clause
+from smartllm_local.planner.constraints.feasibility import Need
+from smartllm_local.planner.decoding.writer import accepts
+from smartllm_local.planner.in_turn import all_apart, calls_in_a_row, free_blocks
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
 
@@ -114,3 +119,76 @@ t2.join()
     scene = scene_objects(223)
     assert all_apart(plan, SKILLS, CATALOGUE.team([8, 24, 28]), scene)
     assert not all_apart(plan, SKILLS, CATALOGUE.team([8, 28]), scene)
+
+
+PLUNGER = """def subtask1_plunger_in_garbage_can():
+    GoToObject('Plunger')
+    PickupObject('Plunger')
+    GoToObject('GarbageCan')
+    PutObject('Plunger', 'GarbageCan')
+
+def subtask2_soap_bottle_in_sink():
+    GoToObject('SoapBottle')
+    PickupObject('SoapBottle')
+    GoToObject('SinkBasin')
+    PutObject('SoapBottle', 'SinkBasin')
+    GoToObject('LightSwitch')
+    SwitchOff('LightSwitch')
+
+subtask1_plunger_in_garbage_can()
+subtask2_soap_bottle_in_sink()
+"""
+PLUNGER_NEED = Need(frozenset({"GoToObject", "PickupObject", "PutObject"}), 1.0)
+BOTTLE_NEED = Need(frozenset({"GoToObject", "PickupObject", "PutObject", "SwitchOff"}), 0.4)
+
+
+def test_sub_tasks_called_in_a_row_are_ones_the_allocation_may_start_at_once():
+    assert list(calls_in_a_row(PLUNGER.splitlines(keepends=True))) == [{0, 1}]
+    threads = PLUNGER.replace("subtask1_plunger_in_garbage_can()\n", "t1 = threading.Thread(target=subtask1_"
+                              "plunger_in_garbage_can)\nt1.start()\nt1.join()\n")
+    assert list(calls_in_a_row(threads.splitlines(keepends=True))) == []  # one call left in a row
+    twice = PLUNGER + "subtask1_plunger_in_garbage_can()\n"
+    assert list(calls_in_a_row(twice.splitlines(keepends=True))) == [{0, 1}]
+
+
+def test_the_coalition_keeps_apart_the_teams_of_sub_tasks_called_in_a_row(monkeypatch):
+    """dev9-c6: a 1 kg plunger for the garbage can, then a 0.4 kg soap bottle for the sink and the light switched
+    off, with robots 28 (0.9 kg), 8 (0.4 kg) and 24 (only switches, but helps lift). The 1.5B called the two
+    sub-tasks in a row and gave the plunger robots 28 and 8; the soap bottle's sub-task waited for robot 8 (RU 0).
+    The coalition the planner forms offers the plunger only teams that leave the other a robot (28 and 24, or 8 and
+    24); one at a time, any team."""
+    from smartllm_local.planner import pipeline
+    from smartllm_local.planner.pipeline import Planner, PlannerConfig
+    from smartllm_local.planner.result import PlanResult
+
+    from .fakes import FakeBackend
+    from .test_idle_steps import decomposed
+
+    made = []
+
+    class Made(Exception):
+        pass
+
+    def capture(*args, **kwargs):
+        made.append(lambda: CoalitionConstraint(*args, **kwargs))
+        raise Made
+
+    task = ("Put the plunger in the garbage can and the soap bottle in the sink, then turn off the light.",
+            "FloorPlan412", [28, 8, 24])
+    for together in (True, False):
+        config = PlannerConfig(together=together)
+        result = PlanResult(*task)
+        result.add(decomposed(monkeypatch, PLUNGER, config, task=task))
+        monkeypatch.setattr(pipeline, "CoalitionConstraint", capture)
+        with pytest.raises(Made):
+            Planner(FakeBackend(), CATALOGUE, config).form_coalition(result)
+    apart, anyhow = made  # each makes the constraint afresh: one is spent once it has read an output
+    plunger, bottle = needs_clause(PLUNGER_NEED), needs_clause(BOTTLE_NEED)
+
+    def lines(first: str, second: str) -> str:
+        return (f"# SubTask 1 (subtask1_plunger_in_garbage_can): {plunger} they lift it; so {first}\n"
+                f"# SubTask 2 (subtask2_soap_bottle_in_sink): {bottle} it does it; so {second}\n")
+
+    assert accepts(apart(), lines("robots[0] and robots[2]", "robots[1]"))
+    assert not accepts(apart(), lines("robots[0] and robots[1]", "robots[1]"))
+    assert accepts(anyhow(), lines("robots[0] and robots[1]", "robots[1]"))
