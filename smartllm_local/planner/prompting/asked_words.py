@@ -245,5 +245,5 @@ def _within(kind: str, phrased: Sequence[str], words: str) -> bool:
     wholes = [set(type_words(p)) for p in phrased if p != kind]
     if kind in phrased:
         return any(own < whole for whole in wholes)
-    said = own & word_forms(re.findall(r"[a-z]+", words.lower()))
+    said = own & word_forms(_WORD.findall(words.lower()))
     return bool(said) and said <= set().union(*wholes)
