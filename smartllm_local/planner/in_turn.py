@@ -81,7 +81,7 @@ def all_apart(lines: Sequence[str], skills: SkillSet, team: Sequence[Robot], sce
 def blocks(lines: Sequence[str]) -> Iterator[set[int]]:
     """The functions (by order written) each block of the orchestration starts at once, where there are two or
     more: the threads started before a join."""
-    order = {function_name(line): k for k, line in enumerate(line for line in lines if line.startswith("def "))}
+    order = _function_order(lines)
     targets: dict[str, str] = {}
     started: set[int] = set()
     for line in lines:
@@ -105,7 +105,7 @@ def calls_in_a_row(lines: Sequence[str]) -> Iterator[set[int]]:
     The 1.5B called its plunger's sub-task, then the one of the soap bottle and the light, and gave the plunger
     robots 28 and 8; the other waited for robot 8 (RU 0; dev9-c6): robot 28, helped by robot 24, lifts the plunger
     while robot 8 carries the soap bottle and switches the light off."""
-    order = {function_name(line): k for k, line in enumerate(line for line in lines if line.startswith("def "))}
+    order = _function_order(lines)
     run: set[int] = set()
     for line in lines:
         if line.startswith((" ", "\t", "#", "def ")) or not line.strip():
@@ -119,6 +119,11 @@ def calls_in_a_row(lines: Sequence[str]) -> Iterator[set[int]]:
         run = set()
     if len(run) > 1:
         yield run
+
+
+def _function_order(lines: Sequence[str]) -> dict[str, int]:
+    """Each function the text defines, by name, with its place in the order written."""
+    return {function_name(line): k for k, line in enumerate(line for line in lines if line.startswith("def "))}
 
 
 def apart(block: Collection[int], steps: Sequence[Step], dropped: Collection[int], actions: dict[str, str],
