@@ -198,8 +198,9 @@ _PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
     "off keeps them for this run only. llama.cpp only."))
 _PARALLEL = typer.Option(1, "--parallel", "--workers", metavar="K", help=(
     "Plan K tasks at once (default 1). --backend llamacpp: on one model in this process, their tokens "
-    "evaluated in shared batches (worth it on a GPU; greedy plans as with 1); --backend server: K requests "
-    "at once, spread over the endpoints and their slots (llama-server -np K has K; vLLM batches them all). "
+    "evaluated in shared batches (worth it on a GPU, not on a few cores; greedy plans as with 1 where the model's "
+    "logits do not change with the batch, as SmolLM2's; Qwen2.5-Coder's part at near-ties); --backend server: K "
+    "requests at once, spread over the endpoints and their slots (llama-server -np K has K; vLLM batches them all). "
     "--workers is its former name. See docs/servers-and-gpus.md."))
 
 _CANDIDATES = typer.Option(DEFAULT_CANDIDATES, "--candidates", envvar="SMARTLLM_CANDIDATES", help=(

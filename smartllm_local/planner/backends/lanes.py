@@ -10,9 +10,10 @@ runs the n sequences one after another through itself. The llama.cpp backend's l
 
 - a second llama.cpp context on the model's weights holds the n sequences, each in key/value cells of its own
   (n_ctx each: a sequence's cells lie as they would in the backend's own cache, so that where the model's logits do
-  not change with batching, SmolLM2's, a greedy lane writes exactly what the backend writes alone); or, with
-  ``unified``, all in one cache of n_ctx cells, where a prefix they share is held once but their cells interleave,
-  and the order in which llama.cpp sums over them moves logits in their last bits (measured: on kitchen-01's
+  not change with batching, SmolLM2's, a greedy lane writes exactly what the backend writes alone; Qwen2.5-Coder's
+  do: a shorter lane batched with a longer one attends over as many cells as the longer, which moves its logits);
+  or, with ``unified``, all in one cache of n_ctx cells, where a prefix they share is held once but their cells
+  interleave, and the order in which llama.cpp sums over them moves logits in their last bits (measured: on kitchen-01's
   decomposition SmolLM2 wrote `Put` where it writes `put` alone);
 - each view (:class:`LaneView`) is a whole backend, its ``generate`` the backend's own decoding loop
   (:mod:`..decoding.loop`: the same token choice, loop guard, end of sequence and grammar cross-check), driven
