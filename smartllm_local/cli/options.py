@@ -64,7 +64,7 @@ class ModelOptions:
                  goal_check: bool = DEFAULT_GOAL_CHECK, no_stop_at_goals: bool = False,
                  no_repair: bool = False, no_finish_goals: bool = False,
                  one_at_a_time: bool = False, keep_idle_steps: bool = False, finish_apart: bool = False,
-                 keep_errands: bool = False):
+                 keep_errands: bool = False, no_drafts: bool = False):
         _check_ranges(backend=backend, temperature=temperature, seed=seed, candidates=candidates,
                       goal_candidates=goal_candidates, candidate_temperature=candidate_temperature, select=select,
                       n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers)
@@ -79,7 +79,7 @@ class ModelOptions:
         self.parallel, self.server_timeout = parallel, server_timeout
         self.model, self.backend, self.threads = model, backend, threads
         self.n_ctx, self.n_ctx_given = (n_ctx if n_ctx is not None else DEFAULT_N_CTX), n_ctx is not None
-        self.n_gpu_layers = n_gpu_layers
+        self.n_gpu_layers, self.drafts = n_gpu_layers, not no_drafts
         if prefix_cache is not None and not prefix_cache.strip():
             raise UserError("--prefix-cache needs a folder, or off (an empty one would fill the current folder)")
         self.prefix_cache = prefix_cache
@@ -119,7 +119,8 @@ class ModelOptions:
     def _backends(self, workers: int, prefix_cache: str | None) -> list[Backend]:
         return load_backends(self.backend, self.model, workers=workers, endpoints=self.endpoints,
                              server_timeout=self.server_timeout, n_ctx=self.n_ctx, threads=self.threads,
-                             n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=prefix_cache)
+                             n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=prefix_cache,
+                             **({} if self.drafts else {"drafts": False}))
 
     def as_arguments(self) -> list[str]:
         """The model's options as ``plan`` and ``benchmark run`` take them on the command line."""
@@ -128,7 +129,8 @@ class ModelOptions:
                 *(["--server-timeout", str(self.server_timeout)] if self.server_timeout else []),
                 *(["--n-ctx", str(self.n_ctx)] if self.n_ctx_given else []), "--n-gpu-layers", str(self.n_gpu_layers),
                 "--chat-template", self.config.chat_template,
-                *(["--threads", str(self.threads)] if self.threads else [])]
+                *(["--threads", str(self.threads)] if self.threads else []),
+                *([] if self.drafts else ["--no-drafts"])]
 
     def planners(self, catalogue, domain: Domain | None = None) -> list[Planner]:
         """One planner (a server backend's first slot), for ``domain``'s tasks."""
@@ -192,6 +194,11 @@ _NO_TOKEN_ALIGNMENT = typer.Option(False, "--no-token-alignment", help=(
     "Write text the grammar forces whole, end each line at its newline and let the model end only where the "
     "grammar may, rather than leave forced text's last token, line ends and the end of sequence to the model "
     "(for measuring what that changes; see docs/planner.md, \"Line ends and forced text\")."))
+_NO_DRAFTS = typer.Option(False, "--no-drafts", help=(
+    "Evaluate each token as the model chooses it or the grammar forces it, rather than when its logits are next "
+    "needed, in one batch with drafts from the context (faster on a CPU; a model whose logits move with the batch, "
+    "as Qwen2.5-Coder's and SmolLM2's do, parts at near-ties; lanes evaluate so: see docs/planner.md, \"One "
+    "decoding loop\"). llama.cpp only."))
 _PREFIX_CACHE = typer.Option(None, "--prefix-cache", metavar="DIR|off", help=(
     "Where the examples' key/value states are kept between runs, so a later run on the same model starts "
     "from them (default: the user's cache, $XDG_CACHE_HOME/smartllm-local/prefix-states, at most 4 GiB); "
@@ -263,7 +270,8 @@ MODEL_PARAMETERS = [
         ("no_grammar", bool, _NO_GRAMMAR), ("free_teams", bool, _FREE_TEAMS),
         ("chat_template", str, _CHAT_TEMPLATE), ("free_allocation", bool, _FREE_ALLOCATION),
         ("no_world_check", bool, _NO_WORLD_CHECK), ("no_loop_guard", bool, _NO_LOOP_GUARD),
-        ("no_token_alignment", bool, _NO_TOKEN_ALIGNMENT), ("prefix_cache", str | None, _PREFIX_CACHE),
+        ("no_token_alignment", bool, _NO_TOKEN_ALIGNMENT), ("no_drafts", bool, _NO_DRAFTS),
+        ("prefix_cache", str | None, _PREFIX_CACHE),
         ("endpoint", str | None, _ENDPOINT), ("parallel", int, _PARALLEL),
         ("server_timeout", float | None, _SERVER_TIMEOUT), ("candidates", int, _CANDIDATES),
         ("candidate_temperature", float, _CANDIDATE_TEMPERATURE), ("select", str, _SELECT),

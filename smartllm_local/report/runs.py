@@ -21,6 +21,7 @@ _VARIANTS = (
     ("no_comments", "no comments"), ("no_summary", "no summary"), ("no_coalition", "no coalition"),
     ("free_allocation", "free allocation"), ("no_world_check", "no world check"), ("no_grammar", "no grammar"),
     ("free_teams", "free teams"), ("no_loop_guard", "no loop guard"), ("no_token_alignment", "no token alignment"),
+    ("no_drafts", "no drafts"),
 )
 ABLATIONS = ("no_comments", "no_summary", "no_coalition")
 

@@ -28,11 +28,13 @@ def load_backend(
     n_gpu_layers: int = 0,
     seed: int = 0,
     prefix_cache: str | Path | None = None,
+    drafts: bool = True,
 ) -> Backend:
     """Load a model in a backend; ``model`` is a path or an embedded model name (None: the default).
 
     ``prefix_cache``: the folder keeping the examples' key/value states for later processes (None: the
-    user's cache; "off": none). llama.cpp only: transformers keeps them for its own process.
+    user's cache; "off": none). llama.cpp only: transformers keeps them for its own process. ``drafts``: llama.cpp
+    evaluates drafts from the context with the loop's tokens (see :mod:`.drafts`); off, each as the loop adds it.
 
     ``n_gpu_layers``: layers to offload to a GPU (llama.cpp, -1 for all); for transformers it is
     all-or-nothing: 0 runs on the CPU, any other value puts the whole model on the CUDA GPU.
@@ -46,7 +48,7 @@ def load_backend(
         from .prefix_cache import open_store
 
         return LlamaCppBackend(resolve_gguf(model), n_ctx=n_ctx, threads=threads, n_gpu_layers=n_gpu_layers, seed=seed,
-                               prefix_store=open_store(prefix_cache))
+                               prefix_store=open_store(prefix_cache), drafts=drafts)
     if name == "transformers":
         from .transformers import TransformersBackend
 

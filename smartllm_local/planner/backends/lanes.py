@@ -17,7 +17,9 @@ runs the n sequences one after another through itself. The llama.cpp backend's l
   decomposition SmolLM2 wrote `Put` where it writes `put` alone);
 - each view (:class:`LaneView`) is a whole backend, its ``generate`` the backend's own decoding loop
   (:mod:`..decoding.loop`: the same token choice, loop guard, end of sequence and grammar cross-check), driven
-  from a thread of its own; only evaluating tokens differs: it is a request to the engine;
+  from a thread of its own; only evaluating tokens differs: it is a request to the engine, made when the loop
+  asks for logits, carrying the drafts the backend's own batch would carry (:mod:`.drafts`), so that a lane's
+  pieces are the backend's;
 - the engine's thread evaluates, in ONE ``llama_decode``, what every lane that is inside a call (generate,
   prefill) has asked for, as soon as each of them has asked. A lane between calls (the stage code between
   lines, a world check) holds no one up, and one that returns or raises is no longer waited for: continuous
@@ -49,7 +51,8 @@ from ...errors import ModelError
 from ..decoding.first_bytes import FirstBytes
 from ..decoding.grammar import Grammar
 from ..decoding.sampling import Generated, Sampling
-from .base import Backend
+from .base import Backend, shared_prefix
+from .drafts import draft_size, lookup
 from .llamacpp_decoding import LlamaDecoding
 
 _ONE_STREAM = struct.pack("<I", 1)  # the stream count of a state from a cache of one stream of cells
@@ -92,14 +95,24 @@ class _Lane:
     that thread waits)."""
 
     seq: int
-    tokens: list[int] = field(default_factory=list)  # what its sequence holds
-    logits: np.ndarray | None = None  # of its last token, where evaluated last
+    tokens: list[int] = field(default_factory=list)  # the context its sequence holds
+    rows: np.ndarray | None = None  # the logits after its last token, then after each of ``ahead``
+    ahead: list[int] = field(default_factory=list)  # drafts its sequence holds after the context
     evaluated: int = 0
     target: list[int] | None = None  # a context the sequence is to hold (else the request extends it)
     state: tuple[list[int], bytes] | None = None  # a prefix of the target and its state, kept by the backend
-    todo: list[int] | None = None  # of the request, the tokens still to evaluate (None: not started)
+    todo: list[int] | None = None  # of the request, the tokens still to evaluate (None: not started), drafts last
+    real: int = 0  # of those, how many are the context's (the rest are drafts)
+    drafts: bool = False  # whether the request is to carry drafts (see .drafts)
+    trim: bool = False  # whether drafts left in its sequence are to be taken out before the request's tokens
     done: bool = True
     error: str = ""
+
+    def draft(self, context: Sequence[int], todo: list[int], room: int) -> None:
+        """Set the request's tokens: ``todo`` (the last of ``context``), and drafts after them where it carries
+        any (at most ``room``)."""
+        self.ahead = lookup(context, min(draft_size(len(todo)), room)) if self.drafts else []
+        self.todo, self.real = todo + self.ahead, len(todo)
 
 
 class LaneEngine:
@@ -110,7 +123,7 @@ class LaneEngine:
         if n < 1:
             raise ValueError(f"lanes: n must be 1 or more, not {n}")
         self._lib = lib = parent._lib
-        self.n_vocab = parent.n_vocab
+        self.n_vocab, self.n_ctx = parent.n_vocab, parent.n_ctx  # a lane's drafts fit as the backend's do
         self.unified = unified
         self._streams = 1 if unified else n
         self.ctx = parent._new_context("lanes", n_ctx=n_ctx * self._streams, n_seq_max=n, kv_unified=unified)
@@ -143,16 +156,22 @@ class LaneEngine:
                 self._inside -= 1
                 self._cond.notify_all()
 
-    def ask(self, lane: _Lane, tokens: list[int], *, extend: bool,
+    def ask(self, lane: _Lane, tokens: list[int], *, extend: bool, drafts: bool,
             state: tuple[list[int], bytes] | None = None) -> None:
         """Make ``lane``'s sequence hold ``tokens`` (or hold them after what it holds: ``extend``), with the logits
-        of the last; returns once a batch has evaluated them. ``state``: a prefix of ``tokens`` and its kept state,
-        loaded where no sequence holds as much."""
+        of the last, and ``drafts`` after them as the backend would evaluate them (see :mod:`.drafts`); returns once
+        a batch has evaluated them. ``state``: a prefix of ``tokens`` and its kept state, loaded where no sequence
+        holds as much."""
         with self._cond:
             if self._closed:
                 raise ModelError("the lanes were closed: a lane was used after its lanes' context ended")
-            lane.target, lane.todo = (None, list(tokens)) if extend else (list(tokens), None)
-            lane.done, lane.error, lane.state = False, "", state
+            lane.drafts, lane.state, lane.rows = drafts, state, None
+            if extend:
+                lane.target, lane.trim = None, True
+                lane.draft(lane.tokens + tokens, list(tokens), self.n_ctx - 1 - len(lane.tokens) - len(tokens))
+            else:
+                lane.target, lane.todo = list(tokens), None
+            lane.done, lane.error = False, ""
             self._pending.append(lane)
             self._cond.notify_all()
             while not lane.done:
@@ -184,11 +203,19 @@ class LaneEngine:
                     self._pending.remove(lane)
                 self._cond.notify_all()
 
+    def accept(self, lane: _Lane, tokens: list[int]) -> None:
+        """Make drafts ``lane``'s sequence holds the context's (under the lock: another lane's request may be reading
+        what this one's sequence holds, to copy it)."""
+        with self._cond:
+            lane.tokens.extend(tokens)
+            lane.ahead = lane.ahead[len(tokens):]
+            lane.evaluated += len(tokens)
+
     def _fail(self, lanes: list[_Lane], why: str) -> None:
         """Fail requests (called with the lock held): their sequences are emptied, their threads raise ``why``."""
         for lane in lanes:
             self._lib.llama_memory_seq_rm(self._memory, lane.seq, -1, -1)
-            lane.tokens, lane.logits, lane.target, lane.todo, lane.state = [], None, None, None, None
+            lane.tokens, lane.rows, lane.ahead, lane.target, lane.todo, lane.state = [], None, [], None, None, None
             lane.error, lane.done = why, True
             if lane in self._pending:
                 self._pending.remove(lane)
@@ -208,9 +235,14 @@ class LaneEngine:
                 break
             if lane.todo is None and not self._start(lane, waiting):
                 continue
+            if self.unified and len(lane.todo) > room >= lane.real:  # drafts go in the batch of the context's end
+                lane.todo, lane.ahead = lane.todo[:lane.real], []
             chunk = lane.todo[:room] if self.unified else lane.todo[:self.n_batch]
             if not self.unified and (len(chunk) > room or size not in (None, len(chunk))):
                 continue
+            if lane.trim:  # the drafts of its last request, where the model chose otherwise
+                self._lib.llama_memory_seq_rm(self._memory, lane.seq, len(lane.tokens), -1)
+                lane.trim = False
             size = len(chunk)
             chunks.append((lane, chunk))
             room -= len(chunk)
@@ -219,10 +251,11 @@ class LaneEngine:
         outputs = self._decode(chunks)
         finished = []
         for lane, chunk in chunks:
-            lane.tokens.extend(chunk)
-            lane.todo = lane.todo[len(chunk):]
-            lane.evaluated += len(chunk)
-            lane.logits = outputs.get(lane.seq)
+            context = min(len(chunk), lane.real)
+            lane.tokens.extend(chunk[:context])
+            lane.todo, lane.real = lane.todo[len(chunk):], lane.real - context
+            lane.evaluated += context
+            lane.rows = outputs.get(lane.seq)
             if not lane.todo:
                 lane.target = lane.todo = None
                 finished.append(lane)
@@ -258,7 +291,8 @@ class LaneEngine:
             lib.llama_memory_seq_rm(self._memory, lane.seq, -1, -1)
             lib.llama_memory_seq_cp(self._memory, source.seq, lane.seq, -1, -1)
             lib.llama_memory_seq_rm(self._memory, lane.seq, kept, -1)
-        lane.tokens, lane.todo, lane.logits, lane.state = target[:kept], target[kept:], None, None
+        lane.tokens, lane.state = target[:kept], None
+        lane.draft(target, target[kept:], self.n_ctx - 1 - len(target))
         return True
 
     def _load(self, lane: _Lane, state: bytes) -> bool:
@@ -283,18 +317,18 @@ class LaneEngine:
             yield state[:8] + struct.pack("<I", self._streams) + state[12:] + bytes(4 * (self._streams - 1))
 
     def _decode(self, chunks: list[tuple[_Lane, list[int]]]) -> dict[int, np.ndarray]:
-        """Evaluate the chunks in one call; the logits of each lane whose chunk ends its request, by sequence."""
+        """Evaluate the chunks in one call; for each lane whose chunk ends its request, by sequence, the logits after
+        the context's last token and after each draft."""
         lib, batch = self._lib, self._batch
         at, wanted = 0, {}
         for lane, chunk in chunks:
-            start = len(lane.tokens)
+            start, ends = len(lane.tokens), len(chunk) == len(lane.todo)
             for i, token in enumerate(chunk):
                 batch.token[at], batch.pos[at], batch.n_seq_id[at] = token, start + i, 1
-                batch.seq_id[at][0], batch.logits[at] = lane.seq, False
+                batch.seq_id[at][0], batch.logits[at] = lane.seq, ends and i >= lane.real - 1
                 at += 1
-            if len(chunk) == len(lane.todo):
-                batch.logits[at - 1] = True
-                wanted[lane.seq] = at - 1
+            if ends:
+                wanted[lane.seq] = range(at - len(chunk) + lane.real - 1, at)
         batch.n_tokens = at
         status = lib.llama_decode(self.ctx, batch)
         if status != 0:
@@ -305,8 +339,8 @@ class LaneEngine:
         lib.llama_synchronize(self.ctx)
         self.evaluated_tokens += at
         self.decodes += 1
-        return {seq: np.ctypeslib.as_array(lib.llama_get_logits_ith(self.ctx, i), shape=(self.n_vocab,)).copy()
-                for seq, i in wanted.items()}
+        return {seq: np.stack([np.ctypeslib.as_array(lib.llama_get_logits_ith(self.ctx, i), shape=(self.n_vocab,))
+                               for i in rows]) for seq, rows in wanted.items()}
 
     def close(self) -> None:
         """Stop the engine's thread (a lane still waiting raises) and free the lanes' context."""
@@ -329,6 +363,9 @@ class LaneView(LlamaDecoding):
         self.chat_template, self.bos_token, self.eos_token = parent.chat_template, parent.bos_token, parent.eos_token
         self.trained_context, self.n_gpu_layers = parent.trained_context, parent.n_gpu_layers
         self._lib, self._vocab, self.n_vocab = parent._lib, parent._vocab, parent.n_vocab
+        self._drafting = parent._drafting  # lanes evaluate as their backend does
+        self._pending: list[int] = []  # the context's tokens after the sequence's, not evaluated yet
+        self._rows: np.ndarray | None = None  # the logits after the context's last token, then after each draft
         self._init_decoding(parent.end_tokens)
 
     @property
@@ -383,20 +420,51 @@ class LaneView(LlamaDecoding):
                                     rng=rng, lines=lines)
 
     def sync(self, context: Sequence[int], state: tuple[list[int], bytes] | None = None) -> None:
+        """As the backend's :meth:`~.LlamaCppBackend.sync`: a context that goes on from the lane's is evaluated after
+        it, with drafts; another, or one with a kept ``state`` to start from, is a request for a whole context (see
+        :meth:`LaneEngine._start`)."""
         if not context:
             raise ModelError("a lane was given an empty context: there is no token to go on from")
         if len(context) >= self.n_ctx:
             raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
-        lane = self._lane
-        if lane.logits is None or len(lane.tokens) != len(context) or lane.tokens != list(context):
-            self._engine.ask(lane, list(context), extend=False, state=state)
+        lane, context = self._lane, list(context)
+        common = shared_prefix(lane.tokens, context)
+        if state is None and 0 < common == len(lane.tokens) and (len(context) > common or self._rows is not None):
+            self._pending = self._pending[:shared_prefix(self._pending, context[common:])]
+            self.evaluate(context[common + len(self._pending):])
+            if self._pending:
+                self._flush()
+            return
+        self._pending = []
+        self._engine.ask(lane, context, extend=False, drafts=self._drafting, state=state)
+        self._rows = lane.rows
 
     def evaluate(self, tokens: list[int]) -> None:
+        """As the backend's :meth:`~.LlamaCppBackend.evaluate`: drafts the lane's sequence holds are kept where
+        ``tokens`` follow them, the rest are evaluated when logits are next asked for (at once without drafts)."""
+        lane = self._lane
+        if lane.ahead and not self._pending and self._rows is not None:
+            kept = shared_prefix(lane.ahead, tokens)
+            self._engine.accept(lane, tokens[:kept])
+            self._rows, tokens = self._rows[kept:], tokens[kept:]
         if tokens:
-            self._engine.ask(self._lane, tokens, extend=True)
+            lane.ahead = []
+            self._rows = None if self._rows is None else self._rows[:1]
+            self._pending.extend(tokens)
+            if not self._drafting:
+                self._flush()
+
+    def _flush(self) -> None:
+        pending, self._pending = self._pending, []
+        self._engine.ask(self._lane, pending, extend=True, drafts=self._drafting)
+        self._rows = self._lane.rows
 
     def next_logits(self) -> np.ndarray:
-        return self._lane.logits
+        if self._pending:
+            self._flush()
+        if self._rows is None:
+            raise ModelError("no logits: nothing was evaluated since the lane's context last changed")
+        return self._rows[0].copy()
 
     def close(self) -> None:
         """Nothing: the lanes' context is freed when the lanes end."""

@@ -1,7 +1,9 @@
 """The llama.cpp backend (llama-cpp-python), decoding with the planner's loop (:mod:`..decoding.loop`).
 
 The key/value cache holds the last context; a new context that shares a
-prefix with it only evaluates the rest. A stage's prompt begins with its
+prefix with it only evaluates the rest. Tokens the decoding loop adds are evaluated when their logits are
+asked for, so a token the model chose and the text the grammar forces after it go into one batch, and each batch
+carries drafts from the context (:mod:`.drafts`), kept where the model chooses them. A stage's prompt begins with its
 examples, whose state (one sequence's key/value cells, llama.cpp's
 ``llama_state_seq_*``: no logits) is kept in memory and in an optional
 :class:`PrefixStore` on disk, and the rest of a prompt is always evaluated on a
@@ -27,6 +29,7 @@ import numpy as np
 from ...errors import BackendUnavailableError, ModelError
 from .amx import amx_runs, without_extra_buffers
 from .base import continuation_tokens, keep_whole, shared_prefix
+from .drafts import draft_size, lookup
 from .llamacpp_decoding import LlamaDecoding
 from .prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
 
@@ -107,11 +110,14 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         n_batch: int | None = None,
         vocab_only: bool = False,
         prefix_store: PrefixStore | None = None,
+        drafts: bool = True,
     ):
         """``vocab_only`` loads the tokenizer alone (llama.cpp's vocabulary files): it tokenizes but cannot generate.
         ``prefix_store`` keeps the examples' states for later processes (None: this process only). ``n_batch``
         (tokens per evaluation call) follows the device unless given: llama.cpp's own 2,048 where layers are on a
-        GPU, 512 on the CPU (whose speed it does not change); either way llama.cpp computes 512 at a time."""
+        GPU, 512 on the CPU (whose speed it does not change); either way llama.cpp computes 512 at a time. ``drafts``:
+        evaluate the tokens the loop adds when logits are asked for, with drafts from the context (see
+        :mod:`.drafts`); off, each as it is added, alone or with those added with it (as lanes do)."""
         n_batch = n_batch or (GPU_BATCH if n_gpu_layers else CPU_BATCH)
         self._threads = threads or max(1, os.cpu_count() or 1)
         llama_cpp, self.llm, plain = _open(model_path, n_ctx=n_ctx, threads=self._threads, n_gpu_layers=n_gpu_layers,
@@ -123,8 +129,12 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         self.n_vocab = self.llm.n_vocab()
         self._vocab = self.llm._model.vocab
         self._ctx = self.llm._ctx.ctx
-        self._tokens: list[int] = []  # what the key/value cache holds
+        self._tokens: list[int] = []  # the context the key/value cache holds
         self._alone: list[bool] = []  # which of them were evaluated alone (a lone token computes otherwise)
+        self._pending: list[int] = []  # the context's tokens after those, not evaluated yet
+        self._ahead: list[int] = []  # drafted tokens the cache holds after the context (none while any is pending)
+        self._rows: np.ndarray | None = None  # logits after the context's last token, then after each of _ahead
+        self.drafted_tokens = self.kept_drafts = 0  # drafts evaluated, and those the model then chose
         self._states = MemoryStates()
         self.prefix_store = prefix_store
         if not n_gpu_layers:  # on the CPU keeping states always pays (see PrefixReuse): measured on a GPU only
@@ -134,8 +144,9 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
                           "flash_attn": "auto" if n_gpu_layers else "off"}
         if plain:  # weights in plain buffers compute otherwise: their states are not AMX's
             self._settings["extra_buffers"] = False
-        self.evaluated_tokens = 0  # tokens run through the model so far (prefix reuse keeps this low)
-        self._fresh = False  # whether the logits belong to the last token of _tokens
+        self.evaluated_tokens = 0  # context tokens run through the model so far (prefix reuse keeps this low)
+        self._batch = self._lib.llama_batch_init(n_batch, 0, 1) if not vocab_only else None
+        self._n_batch, self._drafting = n_batch, drafts
         self._pieces: dict[tuple[int, bool], bytes] = {}
         # The texts a grammar forces recur (`GoToObject(robot_list[`, a line's end): each spelled once.
         self._continuations = functools.lru_cache(maxsize=1024)(
@@ -192,21 +203,23 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         if len(context) >= self.n_ctx:
             raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
         common = shared_prefix(self._tokens, context)
-        if common == len(context) == len(self._tokens) and self._fresh:
-            return
-        # Re-evaluate at least one token for its logits, and no part of a batch alone.
-        self._truncate(keep_whole(self._alone, min(common, len(context) - 1)))
-        self.evaluate(context[len(self._tokens):])
+        if common == len(self._tokens) and (len(context) > common or self._rows is not None):
+            self._pending = self._pending[:shared_prefix(self._pending, context[common:])]
+            self.evaluate(context[common + len(self._pending):])
+        else:  # re-evaluate at least one token for its logits, and no part of a batch alone
+            self._truncate(keep_whole(self._alone, min(common, len(context) - 1)))
+            self.evaluate(context[len(self._tokens):])
+        if self._pending:
+            self._flush(drafts=True)
 
     def _truncate(self, size: int) -> None:
         """Keep the first ``size`` tokens of the cache; the logits are stale until the next evaluation."""
-        self.llm.n_tokens = size
         if size == 0:  # as new: a cache whose cells are laid out afresh computes as a new context does
             self._lib.llama_memory_clear(self._lib.llama_get_memory(self._ctx), True)
         else:
             self.llm._ctx.kv_cache_seq_rm(-1, size, -1)
         self._tokens, self._alone = self._tokens[:size], self._alone[:size]
-        self._fresh = False
+        self._pending, self._ahead, self._rows = [], [], None
 
     # -------------------------------------------------------------- prefixes
 
@@ -219,6 +232,8 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         return int(self._lib.llama_state_seq_get_size(self._ctx, 0))
 
     def _snapshot(self) -> bytes:
+        self._settle()
+        self._drop_ahead()
         size = self._state_bytes()
         buffer = (ctypes.c_uint8 * size)()
         written = self._lib.llama_state_seq_get_data(self._ctx, buffer, size, 0)
@@ -230,8 +245,6 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         if not self._lib.llama_state_seq_set_data(self._ctx, source, len(state), 0):
             self._truncate(0)
             return False
-        self.llm.input_ids[: len(prefix)] = prefix
-        self.llm.n_tokens = len(prefix)
         self._tokens, self._alone = list(prefix), [False] * len(prefix)  # evaluated in batches
         return True
 
@@ -239,14 +252,65 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         return len(state)
 
     def evaluate(self, tokens: list[int]) -> None:
-        if not tokens:
-            return
-        self.llm.eval(tokens)
-        self._lib.llama_synchronize(self._ctx)  # on a GPU evaluation runs on after eval returns
-        self.evaluated_tokens += len(tokens)
-        self._tokens.extend(tokens)
-        self._alone.extend([len(tokens) == 1] * len(tokens))
-        self._fresh = True
+        """Add ``tokens`` to the context: those that follow the drafts the cache holds cost nothing, the rest are
+        evaluated when logits are next asked for."""
+        if self._ahead and not self._pending:
+            kept = shared_prefix(self._ahead, tokens)
+            self._tokens.extend(tokens[:kept])
+            self._alone.extend([False] * kept)
+            self._ahead, self._rows = self._ahead[kept:], self._rows[kept:]  # type: ignore[index]
+            self.evaluated_tokens += kept
+            self.kept_drafts += kept
+            tokens = tokens[kept:]
+        if tokens:
+            self._drop_ahead()
+            self._pending.extend(tokens)
+            if not self._drafting:
+                self._flush(drafts=False)
+
+    def _settle(self) -> None:
+        if self._pending:  # with no drafts: they would be taken out again before a snapshot
+            self._flush(drafts=False)
+
+    def _drop_ahead(self) -> None:
+        """Take the drafts out of the cache (the model chose otherwise)."""
+        if self._ahead:
+            self.llm._ctx.kv_cache_seq_rm(-1, len(self._tokens), -1)
+            self._ahead, self._rows = [], self._rows[:1]  # type: ignore[index]
+
+    def _flush(self, drafts: bool) -> None:
+        """Evaluate the pending tokens, with ``drafts`` after them where the context suggests any."""
+        pending, self._pending = self._pending, []
+        start = len(self._tokens)
+        room = self.n_ctx - 1 - start - len(pending)
+        ahead = lookup(self._tokens + pending, min(draft_size(len(pending)), room)) if drafts else []
+        try:
+            self._rows = self._decode(pending + ahead, start, first_row=len(pending) - 1)
+        except ModelError:
+            self._truncate(start)  # cells a failed batch left are not the context's
+            raise
+        self._tokens.extend(pending)
+        self._alone.extend([len(pending) + len(ahead) == 1] * len(pending))
+        self._ahead = ahead
+        self.evaluated_tokens += len(pending)
+        self.drafted_tokens += len(ahead)
+
+    def _decode(self, tokens: Sequence[int], start: int, first_row: int) -> np.ndarray:
+        """Evaluate ``tokens`` at positions from ``start`` in batches of ``n_batch``; the logits after each token
+        from ``first_row`` on."""
+        lib, batch, rows = self._lib, self._batch, []
+        for offset in range(0, len(tokens), self._n_batch):
+            chunk = tokens[offset:offset + self._n_batch]
+            batch.n_tokens = len(chunk)
+            for i, token in enumerate(chunk):
+                batch.token[i], batch.pos[i], batch.n_seq_id[i] = token, start + offset + i, 1
+                batch.seq_id[i][0], batch.logits[i] = 0, offset + i >= first_row
+            if lib.llama_decode(self._ctx, batch) != 0:
+                raise ModelError(f"llama.cpp could not evaluate {len(chunk)} tokens at position {start + offset}")
+            for i in range(max(0, first_row - offset), len(chunk)):
+                rows.append(np.ctypeslib.as_array(lib.llama_get_logits_ith(self._ctx, i), shape=(self.n_vocab,)).copy())
+        lib.llama_synchronize(self._ctx)  # on a GPU evaluation runs on after decode returns
+        return np.stack(rows)
 
     def engine_seconds(self, tokens: Sequence[int], n_batch: int = GPU_BATCH) -> float:
         """Seconds llama.cpp alone takes to evaluate ``tokens`` from an empty cache: a context of its own on the
@@ -292,8 +356,11 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         return ctx
 
     def next_logits(self) -> np.ndarray:
-        ptr = self._lib.llama_get_logits_ith(self._ctx, -1)
-        return np.ctypeslib.as_array(ptr, shape=(self.n_vocab,)).copy()
+        if self._pending:
+            self._flush(drafts=True)
+        if self._rows is None:
+            raise ModelError("no logits: nothing was evaluated since the context last changed")
+        return self._rows[0].copy()
 
     @contextlib.contextmanager
     def lanes(self, n: int, *, n_ctx: int | None = None, unified: bool = False) -> Iterator[list[Any]]:
@@ -313,6 +380,9 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
             engine.close()
 
     def close(self) -> None:
+        batch, self._batch = getattr(self, "_batch", None), None
+        if batch is not None:
+            self._lib.llama_batch_free(batch)
         llm, self.llm = getattr(self, "llm", None), None
         if llm is not None:
             llm.close()

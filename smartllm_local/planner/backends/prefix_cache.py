@@ -250,6 +250,7 @@ class PrefixReuse:
             piece = prefix[len(self._tokens):]
             started = time.perf_counter()
             self.evaluate(piece)
+            self._settle()
             if self.keeps_states is None:
                 self._decide_keeping(len(piece), time.perf_counter() - started)
             if self.keeps_states is False:
@@ -299,6 +300,9 @@ class PrefixReuse:
 
     def evaluate(self, tokens: list[int]) -> None:
         raise NotImplementedError
+
+    def _settle(self) -> None:
+        """Evaluate now what :meth:`evaluate` left for later (a backend that evaluates lazily)."""
 
     def _snapshot(self) -> Any:
         """The cache's state (it holds exactly the prefix)."""
