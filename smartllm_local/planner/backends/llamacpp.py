@@ -117,13 +117,13 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         (tokens per evaluation call) follows the device unless given: llama.cpp's own 2,048 where layers are on a
         GPU, 512 on the CPU (whose speed it does not change); either way llama.cpp computes 512 at a time. ``drafts``:
         evaluate the tokens the loop adds when logits are asked for, with drafts from the context (see
-        :mod:`.drafts`); off, each as it is added, alone or with those added with it (as lanes do)."""
-        n_batch = n_batch or (GPU_BATCH if n_gpu_layers else CPU_BATCH)
+        :mod:`.drafts`); off, each as it is added, alone or with those added with it."""
+        self._n_batch = n_batch = n_batch or (GPU_BATCH if n_gpu_layers else CPU_BATCH)
         self._threads = threads or max(1, os.cpu_count() or 1)
         llama_cpp, self.llm, plain = _open(model_path, n_ctx=n_ctx, threads=self._threads, n_gpu_layers=n_gpu_layers,
                                     seed=seed, n_batch=n_batch, vocab_only=vocab_only)
         self._lib = llama_cpp
-        self._vocab_only = vocab_only
+        self._vocab_only, self._drafting = vocab_only, drafts
         self.model = str(model_path)
         self.n_ctx = self.llm.n_ctx()
         self.n_vocab = self.llm.n_vocab()
@@ -134,7 +134,6 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         self._pending: list[int] = []  # the context's tokens after those, not evaluated yet
         self._ahead: list[int] = []  # drafted tokens the cache holds after the context (none while any is pending)
         self._rows: np.ndarray | None = None  # logits after the context's last token, then after each of _ahead
-        self.drafted_tokens = self.kept_drafts = 0  # drafts evaluated, and those the model then chose
         self._states = MemoryStates()
         self.prefix_store = prefix_store
         if not n_gpu_layers:  # on the CPU keeping states always pays (see PrefixReuse): measured on a GPU only
@@ -145,8 +144,8 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         if plain:  # weights in plain buffers compute otherwise: their states are not AMX's
             self._settings["extra_buffers"] = False
         self.evaluated_tokens = 0  # context tokens run through the model so far (prefix reuse keeps this low)
-        self._batch = self._lib.llama_batch_init(n_batch, 0, 1) if not vocab_only else None
-        self._n_batch, self._drafting = n_batch, drafts
+        self.drafted_tokens = self.kept_drafts = 0  # drafts evaluated, and those the model then chose
+        self._batch = None if vocab_only else self._lib.llama_batch_init(n_batch, 0, 1)
         self._pieces: dict[tuple[int, bool], bytes] = {}
         # The texts a grammar forces recur (`GoToObject(robot_list[`, a line's end): each spelled once.
         self._continuations = functools.lru_cache(maxsize=1024)(
