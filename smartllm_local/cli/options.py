@@ -120,7 +120,7 @@ class ModelOptions:
         return load_backends(self.backend, self.model, workers=workers, endpoints=self.endpoints,
                              server_timeout=self.server_timeout, n_ctx=self.n_ctx, threads=self.threads,
                              n_gpu_layers=self.n_gpu_layers, seed=self.seed, prefix_cache=prefix_cache,
-                             **({} if self.drafts else {"drafts": False}))
+                             drafts=self.drafts)
 
     def as_arguments(self) -> list[str]:
         """The model's options as ``plan`` and ``benchmark run`` take them on the command line."""

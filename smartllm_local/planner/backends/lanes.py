@@ -51,7 +51,7 @@ from ...errors import ModelError
 from ..decoding.first_bytes import FirstBytes
 from ..decoding.grammar import Grammar
 from ..decoding.sampling import Generated, Sampling
-from .base import Backend, shared_prefix
+from .base import Backend
 from .drafts import draft_size, lookup
 from .llamacpp_decoding import LlamaDecoding
 
@@ -428,9 +428,9 @@ class LaneView(LlamaDecoding):
         if len(context) >= self.n_ctx:
             raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
         lane, context = self._lane, list(context)
-        common = shared_prefix(lane.tokens, context)
+        common = _common(lane.tokens, context)
         if state is None and 0 < common == len(lane.tokens) and (len(context) > common or self._rows is not None):
-            self._pending = self._pending[:shared_prefix(self._pending, context[common:])]
+            self._pending = self._pending[:_common(self._pending, context[common:])]
             self.evaluate(context[common + len(self._pending):])
             if self._pending:
                 self._flush()
@@ -444,7 +444,7 @@ class LaneView(LlamaDecoding):
         ``tokens`` follow them, the rest are evaluated when logits are next asked for (at once without drafts)."""
         lane = self._lane
         if lane.ahead and not self._pending and self._rows is not None:
-            kept = shared_prefix(lane.ahead, tokens)
+            kept = _common(lane.ahead, tokens)
             self._engine.accept(lane, tokens[:kept])
             self._rows, tokens = self._rows[kept:], tokens[kept:]
         if tokens:
