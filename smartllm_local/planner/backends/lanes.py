@@ -53,7 +53,7 @@ from ..decoding.grammar import Grammar
 from ..decoding.sampling import Generated, Sampling
 from .base import Backend
 from .drafts import draft_size, lookup
-from .llamacpp_decoding import LlamaDecoding
+from .llamacpp_decoding import LlamaDecoding, fill_batch
 
 _ONE_STREAM = struct.pack("<I", 1)  # the stream count of a state from a cache of one stream of cells
 
@@ -322,11 +322,9 @@ class LaneEngine:
         lib, batch = self._lib, self._batch
         at, wanted = 0, {}
         for lane, chunk in chunks:
-            start, ends = len(lane.tokens), len(chunk) == len(lane.todo)
-            for i, token in enumerate(chunk):
-                batch.token[at], batch.pos[at], batch.n_seq_id[at] = token, start + i, 1
-                batch.seq_id[at][0], batch.logits[at] = lane.seq, ends and i >= lane.real - 1
-                at += 1
+            ends = len(chunk) == len(lane.todo)
+            at = fill_batch(batch, chunk, len(lane.tokens), seq=lane.seq,
+                            logits_from=lane.real - 1 if ends else len(chunk), at=at)
             if ends:
                 wanted[lane.seq] = range(at - len(chunk) + lane.real - 1, at)
         batch.n_tokens = at

@@ -30,7 +30,7 @@ from ...errors import BackendUnavailableError, ModelError
 from .amx import amx_runs, without_extra_buffers
 from .base import continuation_tokens, keep_whole, shared_prefix
 from .drafts import draft_size, lookup
-from .llamacpp_decoding import LlamaDecoding
+from .llamacpp_decoding import LlamaDecoding, fill_batch
 from .prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
 
 CPU_BATCH, GPU_BATCH, UBATCH = 512, 2048, 512
@@ -300,10 +300,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         lib, batch, rows = self._lib, self._batch, []
         for offset in range(0, len(tokens), self._n_batch):
             chunk = tokens[offset:offset + self._n_batch]
-            batch.n_tokens = len(chunk)
-            for i, token in enumerate(chunk):
-                batch.token[i], batch.pos[i], batch.n_seq_id[i] = token, start + offset + i, 1
-                batch.seq_id[i][0], batch.logits[i] = 0, offset + i >= first_row
+            batch.n_tokens = fill_batch(batch, chunk, start + offset, logits_from=first_row - offset)
             if lib.llama_decode(self._ctx, batch) != 0:
                 raise ModelError(f"llama.cpp could not evaluate {len(chunk)} tokens at position {start + offset}")
             for i in range(max(0, first_row - offset), len(chunk)):
@@ -323,10 +320,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         batch = lib.llama_batch_init(n_batch, 0, 1)
         try:
             def run(chunk: Sequence[int], start: int, last: bool) -> None:
-                batch.n_tokens = len(chunk)
-                for i, token in enumerate(chunk):
-                    batch.token[i], batch.pos[i], batch.n_seq_id[i] = token, start + i, 1
-                    batch.seq_id[i][0], batch.logits[i] = 0, last and i == len(chunk) - 1
+                batch.n_tokens = fill_batch(batch, chunk, start, logits_from=len(chunk) - 1 if last else len(chunk))
                 if lib.llama_decode(ctx, batch) != 0:
                     raise ModelError("llama.cpp could not evaluate the engine's timing batch")
 

@@ -32,6 +32,17 @@ _DATA = [("id", np.intc), ("logit", np.single), ("p", np.single)]  # llama_token
 _MAKING = threading.Lock()
 
 
+def fill_batch(batch: Any, tokens: Sequence[int], start: int, *, seq: int = 0, logits_from: int = 0,
+               at: int = 0) -> int:
+    """Put ``tokens`` into the ``llama_batch`` from its slot ``at``, at positions from ``start`` of sequence ``seq``,
+    logits asked for after the ``logits_from``-th token on; the next free slot."""
+    for i, token in enumerate(tokens):
+        slot = at + i
+        batch.token[slot], batch.pos[slot], batch.n_seq_id[slot] = token, start + i, 1
+        batch.seq_id[slot][0], batch.logits[slot] = seq, i >= logits_from
+    return at + len(tokens)
+
+
 class LlamaGrammar:
     """A grammar compiled by llama.cpp (its grammar sampler), asked about the tokens the loop names."""
 
