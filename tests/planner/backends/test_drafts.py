@@ -35,9 +35,9 @@ def test_a_match_across_two_tokens_bytes_is_not_an_occurrence():
     assert lookup([1, 7, 256, 0, 9, 1], 1) == [7]
 
 
-def test_a_batch_is_filled_up_to_a_multiple_of_its_rows():
-    assert [draft_size(n) for n in range(1, 9)] == [(-n) % ROWS for n in range(1, 9)]
-    assert all((n + draft_size(n)) % ROWS == 0 and draft_size(n) < ROWS for n in range(1, 40))
+def test_a_short_batch_is_filled_up_to_its_rows_and_a_long_one_not_at_all():
+    assert [n + draft_size(n) for n in range(1, ROWS + 1)] == [ROWS] * ROWS
+    assert [draft_size(n) for n in range(ROWS, 40)] == [0] * (40 - ROWS)
 
 
 PROMPT = ("def subtask1_wash_apple():\n    # go to the apple\n    GoToObject('Apple')\n    # lift it\n"
