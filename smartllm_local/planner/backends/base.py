@@ -70,13 +70,20 @@ class Backend(Protocol):
 
 
 def shared_prefix(cached: Sequence[int], context: Sequence[int]) -> int:
-    """How many leading tokens a cache already holds of a new context."""
-    common = 0
-    for a, b in zip(cached, context):
-        if a != b:
-            break
-        common += 1
-    return common
+    """How many leading tokens a cache already holds of a new context (list slices compared, halving the
+    difference: C speed on prompts of thousands of tokens)."""
+    size = min(len(cached), len(context))
+    a, b = list(cached[:size]), list(context[:size])
+    if a == b:
+        return size
+    same, differs = 0, size
+    while differs - same > 1:
+        middle = (same + differs) // 2
+        if a[:middle] == b[:middle]:
+            same = middle
+        else:
+            differs = middle
+    return same
 
 
 def keep_whole(alone: Sequence[bool], keep: int) -> int:

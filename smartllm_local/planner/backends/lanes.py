@@ -51,7 +51,7 @@ from ...errors import ModelError
 from ..decoding.first_bytes import FirstBytes
 from ..decoding.grammar import Grammar
 from ..decoding.sampling import Generated, Sampling
-from .base import Backend
+from .base import Backend, shared_prefix
 from .drafts import draft_size, lookup
 from .llamacpp_decoding import LlamaDecoding, fill_batch
 
@@ -72,21 +72,6 @@ def open_lanes(backend: Backend, n: int) -> Iterator[tuple[list[Backend], bool]]
         return
     with lanes(n) as views:
         yield views, True
-
-
-def _common(a: Sequence[int], b: Sequence[int]) -> int:
-    """How many leading tokens two lists share (list comparisons: C speed on prompts of thousands of tokens)."""
-    size = min(len(a), len(b))
-    if a[:size] == b[:size]:
-        return size
-    same, differs = 0, size
-    while differs - same > 1:
-        middle = (same + differs) // 2
-        if a[:middle] == b[:middle]:
-            same = middle
-        else:
-            differs = middle
-    return same
 
 
 @dataclass(eq=False)
@@ -268,16 +253,16 @@ class LaneEngine:
         evaluating now shares more with it."""
         target = lane.target
         limit = len(target) - 1
-        source, kept = lane, min(_common(lane.tokens, target), limit)
+        source, kept = lane, min(shared_prefix(lane.tokens, target), limit)
         for other in self._lanes:
-            shared = min(_common(other.tokens, target), limit) if other is not lane else 0
+            shared = min(shared_prefix(other.tokens, target), limit) if other is not lane else 0
             if shared > kept:
                 source, kept = other, shared
         state = lane.state if lane.state is not None and kept < len(lane.state[0]) <= limit else None
         reach = len(state[0]) if state is not None else kept
         for other in waiting:
             if other is not lane and other.target is not None and other.todo:
-                if min(_common(other.target, target), limit) > reach:
+                if min(shared_prefix(other.target, target), limit) > reach:
                     return False
         lib = self._lib
         if state is not None:
@@ -361,10 +346,7 @@ class LaneView(LlamaDecoding):
         self.chat_template, self.bos_token, self.eos_token = parent.chat_template, parent.bos_token, parent.eos_token
         self.trained_context, self.n_gpu_layers = parent.trained_context, parent.n_gpu_layers
         self._lib, self._vocab, self.n_vocab = parent._lib, parent._vocab, parent.n_vocab
-        self._drafting = parent._drafting  # lanes evaluate as their backend does
-        self._pending: list[int] = []  # the context's tokens after the sequence's, not evaluated yet
-        self._rows: np.ndarray | None = None  # the logits after the context's last token, then after each draft
-        self._init_decoding(parent.end_tokens)
+        self._init_decoding(parent.end_tokens, parent._drafting)  # lanes evaluate as their backend does
 
     @property
     def evaluated_tokens(self) -> int:
@@ -409,6 +391,7 @@ class LaneView(LlamaDecoding):
             before = self._lane.evaluated
             kept = self._parent.kept_state(context, prefixes) if prefixes else None
             self.sync(context, kept)
+            self._settle(drafts=True)
             return len(context) - (self._lane.evaluated - before)
 
     def generate(self, context: Sequence[int], *, grammar: Grammar | None, max_tokens: int, sampling: Sampling,
@@ -418,51 +401,40 @@ class LaneView(LlamaDecoding):
                                     rng=rng, lines=lines)
 
     def sync(self, context: Sequence[int], state: tuple[list[int], bytes] | None = None) -> None:
-        """As the backend's :meth:`~.LlamaCppBackend.sync`: a context that goes on from the lane's is evaluated after
-        it, with drafts; another, or one with a kept ``state`` to start from, is a request for a whole context (see
+        """As the backend's: a context that goes on from the lane's is evaluated after it when logits are next asked
+        for; another, or one with a kept ``state`` to start from, is a request for a whole context now (see
         :meth:`LaneEngine._start`)."""
         if not context:
             raise ModelError("a lane was given an empty context: there is no token to go on from")
-        if len(context) >= self.n_ctx:
-            raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
-        lane, context = self._lane, list(context)
-        common = _common(lane.tokens, context)
-        if state is None and 0 < common == len(lane.tokens) and (len(context) > common or self._rows is not None):
-            self._pending = self._pending[:_common(self._pending, context[common:])]
-            self.evaluate(context[common + len(self._pending):])
-            if self._pending:
-                self._flush()
-            return
+        if state is None:
+            super().sync(context)
+        else:
+            self._ask_whole(self._fitted(context), state)
+
+    def _restart(self, context: list[int], common: int) -> None:
+        self._ask_whole(context, None)
+
+    def _ask_whole(self, context: list[int], state: tuple[list[int], bytes] | None) -> None:
         self._pending = []
-        self._engine.ask(lane, context, extend=False, drafts=self._drafting, state=state)
-        self._rows = lane.rows
-
-    def evaluate(self, tokens: list[int]) -> None:
-        """As the backend's :meth:`~.LlamaCppBackend.evaluate`: drafts the lane's sequence holds are kept where
-        ``tokens`` follow them, the rest are evaluated when logits are next asked for (at once without drafts)."""
-        lane = self._lane
-        if lane.ahead and not self._pending and self._rows is not None:
-            kept = _common(lane.ahead, tokens)
-            self._engine.accept(lane, tokens[:kept])
-            self._rows, tokens = self._rows[kept:], tokens[kept:]
-        if tokens:
-            lane.ahead = []
-            self._rows = None if self._rows is None else self._rows[:1]
-            self._pending.extend(tokens)
-            if not self._drafting:
-                self._flush()
-
-    def _flush(self) -> None:
-        pending, self._pending = self._pending, []
-        self._engine.ask(self._lane, pending, extend=True, drafts=self._drafting)
+        self._engine.ask(self._lane, context, extend=False, drafts=self._drafting, state=state)
         self._rows = self._lane.rows
 
-    def next_logits(self) -> np.ndarray:
-        if self._pending:
-            self._flush()
-        if self._rows is None:
-            raise ModelError("no logits: nothing was evaluated since the lane's context last changed")
-        return self._rows[0].copy()
+    def _held(self) -> list[int]:
+        return self._lane.tokens
+
+    def _drafts(self) -> list[int]:
+        return self._lane.ahead
+
+    def _keep_drafts(self, count: int) -> None:
+        self._engine.accept(self._lane, self._lane.ahead[:count])
+
+    def _drop_drafts(self) -> None:
+        self._lane.ahead = []  # out of its cells before its next request (see LaneEngine._step)
+
+    def _flush(self, drafts: bool) -> None:
+        pending, self._pending = self._pending, []
+        self._engine.ask(self._lane, pending, extend=True, drafts=drafts)
+        self._rows = self._lane.rows
 
     def close(self) -> None:
         """Nothing: the lanes' context is freed when the lanes end."""

@@ -1,9 +1,10 @@
 """The llama.cpp backend (llama-cpp-python), decoding with the planner's loop (:mod:`..decoding.loop`).
 
 The key/value cache holds the last context; a new context that shares a
-prefix with it only evaluates the rest. Tokens the decoding loop adds are evaluated when their logits are
-asked for, so a token the model chose and the text the grammar forces after it go into one batch, and each batch
-carries drafts from the context (:mod:`.drafts`), kept where the model chooses them. A stage's prompt begins with its
+prefix with it only evaluates the rest. Tokens the decoding loop adds, and what the next call's context adds after
+them, are evaluated when logits are next asked for (:class:`.LlamaDecoding`), so a token the model chose and the
+text the grammar forces after it, across a line's end too, go into one batch, and each batch carries drafts from the
+context (:mod:`.drafts`), kept where the model chooses them. A stage's prompt begins with its
 examples, whose state (one sequence's key/value cells, llama.cpp's
 ``llama_state_seq_*``: no logits) is kept in memory and in an optional
 :class:`PrefixStore` on disk, and the rest of a prompt is always evaluated on a
@@ -28,7 +29,7 @@ import numpy as np
 
 from ...errors import BackendUnavailableError, ModelError
 from .amx import amx_runs, without_extra_buffers
-from .base import continuation_tokens, keep_whole, shared_prefix
+from .base import continuation_tokens, keep_whole
 from .drafts import draft_size, lookup
 from .llamacpp_decoding import LlamaDecoding, fill_batch
 from .prefix_cache import MemoryStates, PrefixReuse, PrefixStore, state_key
@@ -123,7 +124,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         llama_cpp, self.llm, plain = _open(model_path, n_ctx=n_ctx, threads=self._threads, n_gpu_layers=n_gpu_layers,
                                     seed=seed, n_batch=n_batch, vocab_only=vocab_only)
         self._lib = llama_cpp
-        self._vocab_only, self._drafting = vocab_only, drafts
+        self._vocab_only = vocab_only
         self.model = str(model_path)
         self.n_ctx = self.llm.n_ctx()
         self.n_vocab = self.llm.n_vocab()
@@ -131,9 +132,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         self._ctx = self.llm._ctx.ctx
         self._tokens: list[int] = []  # the context the key/value cache holds
         self._alone: list[bool] = []  # which of them were evaluated alone (a lone token computes otherwise)
-        self._pending: list[int] = []  # the context's tokens after those, not evaluated yet
         self._ahead: list[int] = []  # drafted tokens the cache holds after the context (none while any is pending)
-        self._rows: np.ndarray | None = None  # logits after the context's last token, then after each of _ahead
         self._states = MemoryStates()
         self.prefix_store = prefix_store
         if not n_gpu_layers:  # on the CPU keeping states always pays (see PrefixReuse): measured on a GPU only
@@ -150,7 +149,8 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         # The texts a grammar forces recur (`GoToObject(robot_list[`, a line's end): each spelled once.
         self._continuations = functools.lru_cache(maxsize=1024)(
             lambda text: tuple(continuation_tokens(text, self.tokenize, self._piece)))
-        self._init_decoding(frozenset(t for t in range(self.n_vocab) if llama_cpp.llama_vocab_is_eog(self._vocab, t)))
+        self._init_decoding(frozenset(t for t in range(self.n_vocab) if llama_cpp.llama_vocab_is_eog(self._vocab, t)),
+                            drafts)
         self.n_gpu_layers = n_gpu_layers
         self.chat_template = self.llm.metadata.get("tokenizer.chat_template")
         # Prompts are fitted within what the model was trained on: a Llama-2 keeps 4,096 tokens.
@@ -196,20 +196,16 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
             piece = self._pieces[key] = buffer.raw[:n]
         return piece
 
-    def sync(self, context: Sequence[int]) -> None:
-        """Make the cache hold ``context`` and the logits be those of its last token."""
-        context = list(context)
-        if len(context) >= self.n_ctx:
-            raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
-        common = shared_prefix(self._tokens, context)
-        if common == len(self._tokens) and (len(context) > common or self._rows is not None):
-            self._pending = self._pending[:shared_prefix(self._pending, context[common:])]
-            self.evaluate(context[common + len(self._pending):])
-        else:  # re-evaluate at least one token for its logits, and no part of a batch alone
-            self._truncate(keep_whole(self._alone, min(common, len(context) - 1)))
-            self.evaluate(context[len(self._tokens):])
-        if self._pending:
-            self._flush(drafts=True)
+    def _held(self) -> list[int]:
+        return self._tokens
+
+    def _drafts(self) -> list[int]:
+        return self._ahead
+
+    def _restart(self, context: list[int], common: int) -> None:
+        """Re-evaluate at least one token for its logits, and no part of a batch alone."""
+        self._truncate(keep_whole(self._alone, min(common, len(context) - 1)))
+        self.evaluate(context[len(self._tokens):])
 
     def _truncate(self, size: int) -> None:
         """Keep the first ``size`` tokens of the cache; the logits are stale until the next evaluation."""
@@ -232,7 +228,7 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
 
     def _snapshot(self) -> bytes:
         self._settle()
-        self._drop_ahead()
+        self._without_drafts()
         size = self._state_bytes()
         buffer = (ctypes.c_uint8 * size)()
         written = self._lib.llama_state_seq_get_data(self._ctx, buffer, size, 0)
@@ -250,39 +246,23 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
     def _state_size(self, state: bytes) -> int:
         return len(state)
 
-    def evaluate(self, tokens: list[int]) -> None:
-        """Add ``tokens`` to the context: those that follow the drafts the cache holds cost nothing, the rest are
-        evaluated when logits are next asked for."""
-        if self._ahead and not self._pending:
-            kept = shared_prefix(self._ahead, tokens)
-            self._tokens.extend(tokens[:kept])
-            self._alone.extend([False] * kept)
-            self._ahead, self._rows = self._ahead[kept:], self._rows[kept:]  # type: ignore[index]
-            self.evaluated_tokens += kept
-            self.kept_drafts += kept
-            tokens = tokens[kept:]
-        if tokens:
-            self._drop_ahead()
-            self._pending.extend(tokens)
-            if not self._drafting:
-                self._flush(drafts=False)
+    def _keep_drafts(self, count: int) -> None:
+        self._tokens.extend(self._ahead[:count])
+        self._alone.extend([False] * count)
+        self._ahead = self._ahead[count:]
+        self.evaluated_tokens += count
+        self.kept_drafts += count
 
-    def _settle(self) -> None:
-        if self._pending:  # with no drafts: they would be taken out again before a snapshot
-            self._flush(drafts=False)
-
-    def _drop_ahead(self) -> None:
-        """Take the drafts out of the cache (the model chose otherwise)."""
-        if self._ahead:
-            self.llm._ctx.kv_cache_seq_rm(-1, len(self._tokens), -1)
-            self._ahead, self._rows = [], self._rows[:1]  # type: ignore[index]
+    def _drop_drafts(self) -> None:
+        self.llm._ctx.kv_cache_seq_rm(-1, len(self._tokens), -1)
+        self._ahead = []
 
     def _flush(self, drafts: bool) -> None:
-        """Evaluate the pending tokens, with ``drafts`` after them where the context suggests any."""
         pending, self._pending = self._pending, []
         start = len(self._tokens)
         room = self.n_ctx - 1 - start - len(pending)
-        ahead = lookup(self._tokens + pending, min(draft_size(len(pending)), room)) if drafts else []
+        size = min(draft_size(len(pending)), room) if drafts else 0
+        ahead = lookup(self._tokens + pending, size) if size > 0 else []
         try:
             self._rows = self._decode(pending + ahead, start, first_row=len(pending) - 1)
         except ModelError:
@@ -347,13 +327,6 @@ class LlamaCppBackend(LlamaDecoding, PrefixReuse):
         if not ctx:
             raise ModelError(f"llama.cpp could not make a second context for {purpose} (out of memory?)")
         return ctx
-
-    def next_logits(self) -> np.ndarray:
-        if self._pending:
-            self._flush(drafts=True)
-        if self._rows is None:
-            raise ModelError("no logits: nothing was evaluated since the context last changed")
-        return self._rows[0].copy()
 
     @contextlib.contextmanager
     def lanes(self, n: int, *, n_ctx: int | None = None, unified: bool = False) -> Iterator[list[Any]]:

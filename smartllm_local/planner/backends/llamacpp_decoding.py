@@ -9,9 +9,11 @@ Grammars are checked by llama.cpp before use: ``llama_sampler_init_grammar`` ret
 (llama-cpp-python 0.3.36 does not check, and a bad grammar would crash the process at the first token); and a
 token is checked before the sampler accepts it: accepting one its grammar refuses aborts the process.
 
-What differs between a backend of one sequence and a lane of several (see :mod:`.lanes`) is only how the
-context gets into the key/value cache and where the logits come from: the hooks ``sync``, ``evaluate`` and
-``next_logits``.
+Both a backend of one sequence and a lane of several (see :mod:`.lanes`) evaluate lazily: the tokens the loop
+adds, and what a context that goes on from them adds, wait until logits are next asked for, so that a line's last
+token and the next line's forced text go into one batch, which carries drafts from the context (:mod:`.drafts`),
+kept where the model then chooses them. What differs between the two is only how a batch reaches llama.cpp and
+how drafts leave the cache: the hooks of :class:`LlamaDecoding`.
 """
 
 from __future__ import annotations
@@ -23,10 +25,12 @@ from typing import Any
 
 import numpy as np
 
+from ...errors import ModelError
 from ..decoding import loop
 from ..decoding.first_bytes import FirstBytes
 from ..decoding.grammar import Grammar, GrammarError
 from ..decoding.sampling import END_RANK, Generated, Sampling
+from .base import shared_prefix
 
 _DATA = [("id", np.intc), ("logit", np.single), ("p", np.single)]  # llama_token_data
 _MAKING = threading.Lock()
@@ -107,9 +111,12 @@ class LlamaDecoding:
     n_ctx: int
     n_vocab: int
 
-    def _init_decoding(self, end_tokens: frozenset[int]) -> None:
+    def _init_decoding(self, end_tokens: frozenset[int], drafting: bool) -> None:
         self.end_tokens = end_tokens  # llama.cpp's end-of-generation tokens
         self._first_bytes: FirstBytes | None = None
+        self._drafting = drafting  # off: each token evaluated as it is added, alone or with those added with it
+        self._pending: list[int] = []  # the context's tokens after those the cache holds, not evaluated yet
+        self._rows: np.ndarray | None = None  # logits after the context's last token, then after each draft
 
     # hooks
     def _piece(self, token: int, special: bool = False) -> bytes:
@@ -118,17 +125,82 @@ class LlamaDecoding:
     def tokenize_continuation(self, text: str) -> list[int]:
         raise NotImplementedError
 
-    def sync(self, context: Sequence[int]) -> None:
-        """Make the cache hold ``context`` and the logits be those of its last token."""
+    def _held(self) -> list[int]:
+        """The context the cache holds (the drafts after it not counted)."""
         raise NotImplementedError
+
+    def _drafts(self) -> list[int]:
+        """The drafts the cache holds after the context."""
+        raise NotImplementedError
+
+    def _keep_drafts(self, count: int) -> None:
+        """The first ``count`` drafts are the context's from now on."""
+        raise NotImplementedError
+
+    def _drop_drafts(self) -> None:
+        """Take the drafts out of the cache (the model chose otherwise)."""
+        raise NotImplementedError
+
+    def _flush(self, drafts: bool) -> None:
+        """Evaluate the pending tokens, with ``drafts`` after them where the context suggests any, and set the rows of
+        logits."""
+        raise NotImplementedError
+
+    def _restart(self, context: list[int], common: int) -> None:
+        """Make the cache hold ``context``, of which it holds the first ``common`` tokens and then others (or
+        nothing)."""
+        raise NotImplementedError
+
+    # lazy evaluation
+    def sync(self, context: Sequence[int]) -> None:
+        """Make the cache hold ``context``: what goes on from the context it holds is evaluated when logits are next
+        asked for (with the tokens the loop adds first), anything else as :meth:`_restart` has it."""
+        context = self._fitted(context)
+        held = self._held()
+        common = shared_prefix(held, context)
+        if held and common == len(held) and (len(context) > common or self._rows is not None):
+            self._pending = self._pending[:shared_prefix(self._pending, context[common:])]
+            self.evaluate(context[common + len(self._pending):])
+        else:
+            self._restart(context, common)
+
+    def _fitted(self, context: Sequence[int]) -> list[int]:
+        """``context`` as a list, or a clear error where it does not fit the cache."""
+        if len(context) >= self.n_ctx:
+            raise ModelError(f"the context ({len(context)} tokens) does not fit n_ctx={self.n_ctx}")
+        return list(context)
 
     def evaluate(self, tokens: list[int]) -> None:
-        """Evaluate ``tokens`` after what the cache holds; the logits become those of the last."""
-        raise NotImplementedError
+        """Add ``tokens`` to the context: those that follow the drafts the cache holds cost nothing, the rest are
+        evaluated when logits are next asked for (at once without drafts)."""
+        if (ahead := self._drafts()) and not self._pending and self._rows is not None:
+            kept = shared_prefix(ahead, tokens)
+            self._keep_drafts(kept)
+            self._rows, tokens = self._rows[kept:], tokens[kept:]
+        if tokens:
+            self._without_drafts()
+            self._pending.extend(tokens)
+            if not self._drafting:
+                self._flush(drafts=False)
+
+    def _without_drafts(self) -> None:
+        """Take the drafts out of the cache, and their rows of logits."""
+        if self._drafts():
+            self._drop_drafts()
+            self._rows = None if self._rows is None else self._rows[:1]
+
+    def _settle(self, drafts: bool = False) -> None:
+        """Evaluate now what :meth:`evaluate` left for later; without ``drafts`` where the cache is to hold the
+        context alone (a state about to be kept)."""
+        if self._pending:
+            self._flush(drafts=drafts)
 
     def next_logits(self) -> np.ndarray:
-        """The logits of the last token evaluated (a copy)."""
-        raise NotImplementedError
+        """The logits after the context's last token (a copy)."""
+        self._settle(drafts=True)
+        if self._rows is None:
+            raise ModelError("no logits: nothing was evaluated since the context last changed")
+        return self._rows[0].copy()
 
     def token_bytes(self, token: int) -> bytes:
         return self._piece(token)

@@ -213,6 +213,7 @@ class PrefixReuse:
         evaluated = self.evaluated_tokens
         loaded = self._load_prefixes(context, ends) if ends and self.keeps_states is not False else None
         self.sync(context)
+        self._settle(drafts=True)
         return loaded if loaded is not None else len(context) - (self.evaluated_tokens - evaluated)
 
     def _decide_keeping(self, tokens: int, seconds: float) -> None:
@@ -301,8 +302,9 @@ class PrefixReuse:
     def evaluate(self, tokens: list[int]) -> None:
         raise NotImplementedError
 
-    def _settle(self) -> None:
-        """Evaluate now what :meth:`evaluate` left for later (a backend that evaluates lazily)."""
+    def _settle(self, drafts: bool = False) -> None:
+        """Evaluate now what :meth:`evaluate` left for later (a backend that evaluates lazily), with ``drafts`` after
+        it where the backend drafts."""
 
     def _snapshot(self) -> Any:
         """The cache's state (it holds exactly the prefix)."""

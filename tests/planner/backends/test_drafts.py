@@ -79,9 +79,26 @@ def test_a_kept_state_holds_the_context_and_no_drafts(smollm2, undrafted):
     """A state snapshotted for the prefix store is the context's alone: the drafts after it are taken out."""
     context = smollm2.tokenize(PROMPT, bos=True)
     for backend in (smollm2, undrafted):
-        backend.sync(context)
+        backend.prefill(context, ())
     assert smollm2._ahead  # the prompt's end was looked up: drafts follow it in the cache
     assert smollm2._snapshot() == undrafted._snapshot()
+
+
+def test_tokens_added_wait_for_the_next_context_and_go_in_one_batch(smollm2, monkeypatch):
+    """What one generate call adds last (a line's last token) and what the next call's context adds after it are
+    evaluated together when logits are next asked for: one batch, not one each."""
+    context = smollm2.tokenize(PROMPT, bos=True)
+    smollm2.prefill(context, ())
+    batches: list[list[int]] = []
+    decode = smollm2._decode
+    monkeypatch.setattr(smollm2, "_decode", lambda tokens, start, first_row: batches.append(list(tokens))
+                        or decode(tokens, start, first_row))
+    word, more = smollm2.tokenize_continuation(" zebra"), smollm2.tokenize_continuation(" crossing the road\n")
+    smollm2.evaluate(word)  # no draft foresaw it: the prompt never names a zebra
+    smollm2.sync(context + word + more)
+    assert batches == []
+    smollm2.next_logits()
+    assert len(batches) == 1 and batches[0][:len(word + more)] == word + more
 
 
 def test_no_drafts_reaches_the_backend_and_the_commands_a_run_passes_on():
