@@ -154,7 +154,8 @@ class LlamaDecoding:
     # lazy evaluation
     def sync(self, context: Sequence[int]) -> None:
         """Make the cache hold ``context``: what goes on from the context it holds is evaluated when logits are next
-        asked for (with the tokens the loop adds first), anything else as :meth:`_restart` has it."""
+        asked for, in one batch with the tokens the loop adds before then; anything else as :meth:`_restart` has
+        it."""
         context = self._fitted(context)
         held = self._held()
         common = shared_prefix(held, context)
