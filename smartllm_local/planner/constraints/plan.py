@@ -402,7 +402,7 @@ class PlanConstraint(Orchestration, Constraint):
         goto_room = fn.steps < self.max_steps if calls.goto_acts else room
         # The cheapest way on to an action: one that succeeds now, or else a GoToObject and one after it.
         cheapest = min(calls.line_len(c) for c in unchecked)
-        to_action = min((calls.line_len(c) for c in actions),
+        to_action = min((calls.line_len(c) + calls.hold_after(fn, c) for c in actions),
                         default=calls.goto_max + calls.action_max if self.world is not None else cheapest)
         # Going somewhere twice in a row is never useful, comment or not (on a site, a move is a step of its own).
         if goto_room and (fn.last_step != "goto" or calls.goto_acts):
@@ -411,7 +411,7 @@ class PlanConstraint(Orchestration, Constraint):
                 options["goto"] = goto
             else:
                 self._cap("a GoToObject step")
-        if room and fn.last_call[0] == "ToggleObjectOn" and self.sleep_len + cheapest + closing <= remaining:
+        if room and fn.last_call[0] == "ToggleObjectOn" and self.sleep_len + to_action + closing <= remaining:
             options["sleep"] = seq(INDENT, "time.sleep(", chars("123456789"), ")\n")  # wait for what was switched on
         if fn.steps < self.max_steps:
             action = calls.node([c for c in actions

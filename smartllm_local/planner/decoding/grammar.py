@@ -194,6 +194,27 @@ class Grammar:
             return (max if longest else min)(self._length(o, memo, longest) for o in node.options)
         return (node.max if longest else node.min) * self._length(node.item, memo, longest)
 
+    def only(self) -> str | None:
+        """The one string the grammar admits; None where it admits several (or where finding out would mean
+        comparing them: a repetition of varying count)."""
+        return self._only(self.rules["root"])
+
+    def _only(self, node: Node) -> str | None:
+        if isinstance(node, Lit):
+            return node.text
+        if isinstance(node, Chars):
+            return next(iter(node.chars)) if len(node.chars) == 1 else None
+        if isinstance(node, Ref):
+            return self._only(self.rules[node.name])
+        if isinstance(node, Seq):
+            parts = [self._only(item) for item in node.items]
+            return None if None in parts else "".join(parts)  # type: ignore[arg-type]
+        if isinstance(node, Alt):
+            texts = {self._only(option) for option in node.options}
+            return texts.pop() if len(texts) == 1 else None
+        item = self._only(node.item)
+        return item * node.max if item is not None and (node.min == node.max or item == "") else None
+
     def sample(self, rng: random.Random, extreme: str = "") -> str:
         """A random string of the grammar: uniform choices and repetition counts, or, with
         ``extreme="longest"`` / ``"shortest"``, a random one among the longest / shortest strings

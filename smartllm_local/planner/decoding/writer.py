@@ -4,7 +4,9 @@ grammar, until the constraint says the output is complete.
 Text the constraint forces is not put into the context on its own: it is carried into the next line the
 writer writes, which begins with it (a backend writes it in its own tokens up to the last one, and the model
 picks that last one under the grammar: token healing, so ``# SubTask 1:`` is followed by the model's own
-`` put``). A line's end is opened (:mod:`.line_ends`): the writer's last token may run past the newline into
+`` put``). So is a line offered with one way to write it (an allocation's step whose robot the team leaves no
+choice of): asked of the model, it would cost an evaluation of its own for the one token healing leaves it.
+A line's end is opened (:mod:`.line_ends`): the writer's last token may run past the newline into
 blank lines or the start of the next line, which is then checked against what the constraint offers next
 and goes on from there. A writer that ends the sequence before the output is complete has it completed by
 the constraint's shortest way, and the count of lines so completed is reported.
@@ -180,7 +182,10 @@ class _Driver:
             elif self.cutting:
                 self._way_out(step)
             elif not self._pending_fed(step):
-                self._write(step)
+                if (line := _only_line(step)) is not None:
+                    self._forced(line)  # nothing to choose: carried into the next line's batch, as forced text is
+                else:
+                    self._write(step)
             self.cutting = self.cutting and not self.constraint.text.endswith("\n\n")
             self._check()
         if self.carry:
@@ -380,6 +385,14 @@ class _Plain:
 
 
 _PLAIN = _Plain()
+
+
+def _only_line(step: Choose) -> str | None:
+    """The line a step leaves no choice in (one kind of line, spelled one way), or None."""
+    if len(step.options) != 1 or REWRITTEN in step.options:
+        return None
+    line = step.grammar.only()
+    return line if line and line.endswith("\n") else None
 
 
 def _as_offered(step: Choose, raw: str) -> str:

@@ -179,17 +179,34 @@ def test_forced_text_goes_into_the_next_line_and_what_ends_a_stage_in_one_batch(
     healing); what the stage forces after its last line goes into the context in one batch, for every
     tokenizer family."""
     head, tail = "def subtask1_wash_apple(robot_list):\n", "\nt1.start()\n"
-    step = "    GoToObject(robot_list[0], 'Apple')\n"
+    step = "    GoToObject(robot_list, 'Apple')\n"  # the shortest of the two: what the writer writes
+    offered = Grammar({"root": alt(step, step.replace("robot_list", "robot_list[0]"))})
     backend = GrammarWriter(vocab)
     prompt = vocab.tokenize("# Your plan:\n", bos=True)
     record = StageRecord("allocation")
-    run_stage(record, backend, Fitted("", prompt), Script(head, Grammar({"root": step}), tail), output_budget=200,
+    run_stage(record, backend, Fitted("", prompt), Script(head, offered, tail), output_budget=200,
               sampling=Sampling(), rng=np.random.default_rng(0))
     assert record.output == head + step + tail
     (context, grammar), = backend.contexts  # one generation: the offered line, the head before it
     assert context == prompt and grammar.matches(head + step) and not grammar.matches(step)
     assert vocab.detokenize(record.context[len(prompt):]) == head + step + tail
     assert record.forced_tokens == len(vocab.tokenize_continuation(tail))
+
+
+def test_a_line_that_leaves_no_choice_goes_into_the_next_lines_batch(vocab):
+    """A line offered with one way to write it (a step whose robot the team leaves no choice of) is not asked of
+    the model: it goes into the context with the next line it writes, as forced text does."""
+    head, only = "def subtask1_wash_apple(robot_list):\n", "    PickupObject(robot_list[0], 'Apple')\n"
+    step = "    GoToObject(robot_list, 'Sink')\n"
+    offered = Grammar({"root": alt(step, step.replace("robot_list", "robot_list[0]"))})
+    backend = GrammarWriter(vocab)
+    prompt = vocab.tokenize("# Your plan:\n", bos=True)
+    record = StageRecord("allocation")
+    run_stage(record, backend, Fitted("", prompt), Script(head, Grammar({"root": only}), offered), output_budget=200,
+              sampling=Sampling(), rng=np.random.default_rng(0))
+    assert record.output == head + only + step
+    (context, grammar), = backend.contexts
+    assert context == prompt and grammar.matches(head + only + step) and not grammar.matches(only + step)
 
 
 def test_a_hugging_face_vocabulary_spells_llama2_continuations_exactly(tmp_path):

@@ -36,14 +36,21 @@ SKILLS = CATALOGUE.skills
 
 
 def _scripted(lines: list[str]):
-    """A writer that writes ``lines`` in order, each where it is offered, and the shortest line elsewhere."""
+    """A line writer and a forcer for :func:`run_constraint`: ``lines`` written in order, each where it is offered
+    (or passed over where the constraint forces it), and the shortest line elsewhere."""
     todo = list(lines)
 
     def write(choose, remaining):
         text = todo.pop(0) if todo and choose.grammar.matches(todo[0]) else shortest_line(choose)
         return text, len(text)
 
-    return write
+    def force(text):
+        for line in text.splitlines(keepends=True):
+            if todo and todo[0] == line:
+                todo.pop(0)
+        return len(text)
+
+    return write, force
 
 
 def _decomposer(floor_plan: int, *, repair: bool = True, goals=()) -> PlanConstraint:
@@ -81,8 +88,8 @@ def test_a_slice_without_a_knife_is_written_after_the_knife_is_fetched():
     """The model goes to the bread and slices it with empty hands: the planner's steps fetch the knife first,
     as the decomposition writes steps (each action where the function last went), and every step succeeds."""
     decomposer = _decomposer(6)
-    text = run_constraint(decomposer, _scripted(["def subtask1_slice_bread():\n", "    GoToObject('Bread')\n",
-                                                 "    SliceObject('Bread')\n"]), len, 3000)
+    text = run_constraint(decomposer, *_scripted(["def subtask1_slice_bread():\n", "    GoToObject('Bread')\n",
+                                                 "    SliceObject('Bread')\n"]), 3000)
     body = _body(text, "subtask1_slice_bread")
     assert body[:5] == ["GoToObject('Bread')", "GoToObject('Knife')", "PickupObject('Knife')", "GoToObject('Bread')",
                         "SliceObject('Bread')"], text
@@ -95,8 +102,8 @@ def test_a_slice_without_a_knife_is_written_after_the_knife_is_fetched():
 def test_without_a_repairer_the_failing_call_is_not_offered():
     """Off (--no-repair), the slice with empty hands is not a line the grammar admits, as before."""
     decomposer = _decomposer(6, repair=False)
-    text = run_constraint(decomposer, _scripted(["def subtask1_slice_bread():\n", "    GoToObject('Bread')\n",
-                                                 "    SliceObject('Bread')\n"]), len, 3000)
+    text = run_constraint(decomposer, *_scripted(["def subtask1_slice_bread():\n", "    GoToObject('Bread')\n",
+                                                 "    SliceObject('Bread')\n"]), 3000)
     assert "SliceObject" not in text and decomposer.repairs is None
 
 
@@ -108,7 +115,7 @@ def test_by_a_thing_in_a_shut_holder_the_holder_is_offered_and_means_the_one_hol
     decomposer = _decomposer(27, repair=False)
     steps = ["    GoToObject('Egg')\n", "    PickupObject('Egg')\n", "    GoToObject('Pan')\n",
              "    OpenObject('Cabinet')\n", "    PutObject('Egg', 'Pan')\n"]
-    text = run_constraint(decomposer, _scripted(["def subtask1_egg_in_pan():\n", *steps]), len, 3000)
+    text = run_constraint(decomposer, *_scripted(["def subtask1_egg_in_pan():\n", *steps]), 3000)
     assert _body(text, "subtask1_egg_in_pan")[:5] == [s.strip() for s in steps], text
     assert not _all_succeed(text, 27)
 
@@ -130,8 +137,8 @@ def test_a_call_the_planner_cannot_enable_is_taken_back_and_not_offered_again():
     writer writes another line there, and the refused line is remembered for that step."""
     decomposer = _decomposer(301)
     line = "    PutObject('Laptop', 'Mug')\n"
-    text = run_constraint(decomposer, _scripted(["def subtask1_a():\n", "    GoToObject('Laptop')\n",
-                                                 "    PickupObject('Laptop')\n", line, line]), len, 3000)
+    text = run_constraint(decomposer, *_scripted(["def subtask1_a():\n", "    GoToObject('Laptop')\n",
+                                                 "    PickupObject('Laptop')\n", line, line]), 3000)
     assert "PutObject('Laptop', 'Mug')" not in text
     assert (0, 2, line) in decomposer.repairs.missed and not decomposer.repairs.made
     assert not _all_succeed(text, 301)
@@ -145,8 +152,8 @@ def test_a_repair_uses_only_what_the_team_can_do():
     decomposer = PlanConstraint(scene_objects("FloorPlan402"), SKILLS, world=world, summary=False, comments=False,
                                 repairer=Repairer(world, SKILLS), for_team=team)
     put = "    PutObject('Cloth', 'Cabinet')\n"
-    text = run_constraint(decomposer, _scripted(["def subtask1_a():\n", "    GoToObject('Cloth')\n",
-                                                 "    PickupObject('Cloth')\n", put]), len, 3000)
+    text = run_constraint(decomposer, *_scripted(["def subtask1_a():\n", "    GoToObject('Cloth')\n",
+                                                 "    PickupObject('Cloth')\n", put]), 3000)
     assert "OpenObject" not in text and put not in text
     assert all(line.split("(")[0].strip() in team[0].skills for r in decomposer.repairs.made for line in r["before"])
 
@@ -248,11 +255,10 @@ def test_a_thing_the_goals_want_whole_is_not_broken():
     script = ["def subtask1_bottle():\n", "    GoToObject('WineBottle')\n", "    BreakObject('WineBottle')\n"]
     goals = [Condition("Potato", state="SLICED"), Condition("Fridge", item="WineBottle")]
     assert wanted_whole(goals) == {"WineBottle", "Fridge"}
-    assert "BreakObject('WineBottle')" not in run_constraint(_decomposer(13, goals=goals), _scripted(script), len,
-                                                              3000)
+    assert "BreakObject('WineBottle')" not in run_constraint(_decomposer(13, goals=goals), *_scripted(script), 3000)
     for others in ([], [Condition("WineBottle", state="BROKEN")]):
-        assert "    BreakObject('WineBottle')\n" in run_constraint(_decomposer(13, goals=others), _scripted(script),
-                                                                   len, 3000)
+        assert "    BreakObject('WineBottle')\n" in run_constraint(_decomposer(13, goals=others), *_scripted(script),
+                                                                   3000)
 
 
 def test_a_thing_a_goal_wants_in_pieces_may_be_broken():
@@ -274,8 +280,8 @@ def test_a_thing_the_goals_want_whole_is_not_cut_and_one_cut_already_is_put_wher
     script = ["def subtask1_apple():\n", "    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
               "    GoToObject('Apple')\n", "    SliceObject('Apple')\n"]
     goals = [Condition("Bread", state="SLICED"), Condition("Microwave", item="Apple")]
-    assert "SliceObject('Apple')" not in run_constraint(_decomposer(19, goals=goals), _scripted(script), len, 3000)
-    text = run_constraint(_decomposer(19), _scripted(script), len, 3000)
+    assert "SliceObject('Apple')" not in run_constraint(_decomposer(19, goals=goals), *_scripted(script), 3000)
+    text = run_constraint(_decomposer(19), *_scripted(script), 3000)
     assert "    SliceObject('Apple')\n" in text
     cut = [("GoToObject", ["Knife"]), ("PickupObject", ["Knife"]), ("GoToObject", ["Apple"]),
            ("SliceObject", ["Apple"])]
@@ -307,10 +313,10 @@ def test_no_sub_task_is_begun_once_the_stated_goals_hold():
               "    GoToObject('Bread')\n", "    SliceObject('Bread')\n", "    GoToObject('CounterTop')\n",
               "    PutObject('Knife', 'CounterTop')\n", "\n", "def subtask2_more():\n"]
     goal = _decomposer(6, repair=False, goals=[Condition("Bread", state="SLICED")])
-    text = run_constraint(goal, _scripted(script), len, 3000)
+    text = run_constraint(goal, *_scripted(script), 3000)
     assert "subtask2" not in text and goal.ended_at_goals
     free = _decomposer(6, repair=False)
-    assert "def subtask2_more():" in run_constraint(free, _scripted(script), len, 3000)
+    assert "def subtask2_more():" in run_constraint(free, *_scripted(script), 3000)
     assert not free.ended_at_goals
 
 
@@ -321,10 +327,10 @@ def test_a_repair_that_frees_a_hand_puts_what_it_held_where_the_goals_put_it():
     script = ["def subtask1_mug_and_egg():\n", "    GoToObject('Mug')\n", "    PickupObject('Mug')\n",
               "    GoToObject('Fridge')\n", "    OpenObject('Fridge')\n", "    PutObject('Egg', 'Fridge')\n"]
     goals = [Condition("Microwave", item="Mug"), Condition("Fridge", item="Egg")]
-    stated = _body(run_constraint(_decomposer(14, goals=goals), _scripted(script), len, 3000), "subtask1_mug_and_egg")
+    stated = _body(run_constraint(_decomposer(14, goals=goals), *_scripted(script), 3000), "subtask1_mug_and_egg")
     assert "PutObject('Mug', 'Microwave')" in stated and "PutObject('Mug', 'Fridge')" not in stated, stated
     assert stated.index("PutObject('Mug', 'Microwave')") < stated.index("PutObject('Egg', 'Fridge')")
-    free = _body(run_constraint(_decomposer(14), _scripted(script), len, 3000), "subtask1_mug_and_egg")
+    free = _body(run_constraint(_decomposer(14), *_scripted(script), 3000), "subtask1_mug_and_egg")
     assert "PutObject('Mug', 'Microwave')" not in free and "PutObject('Egg', 'Fridge')" in free, free
 
 
@@ -338,11 +344,11 @@ def test_once_the_stated_goals_hold_a_sub_task_makes_no_call_that_undoes_one():
               "    GoToObject('LightSwitch')\n", "    SwitchOn('LightSwitch')\n", "    GoToObject('Fridge')\n",
               "    OpenObject('Fridge')\n", "    PickupObject('Potato')\n"]
     goals = [Condition("Fridge", item="Potato"), Condition("LightSwitch", state="OFF")]
-    kept = _body(run_constraint(_decomposer(14, repair=False, goals=goals), _scripted(script), len, 3000),
+    kept = _body(run_constraint(_decomposer(14, repair=False, goals=goals), *_scripted(script), 3000),
                  "subtask1_potato_and_light")
     assert "CloseObject('Fridge')" in kept and "SwitchOn('LightSwitch')" not in kept
     assert "PickupObject('Potato')" not in kept[kept.index("PutObject('Potato', 'Fridge')"):]
-    free = _body(run_constraint(_decomposer(14, repair=False), _scripted(script), len, 3000),
+    free = _body(run_constraint(_decomposer(14, repair=False), *_scripted(script), 3000),
                  "subtask1_potato_and_light")
     assert "SwitchOn('LightSwitch')" in free
 

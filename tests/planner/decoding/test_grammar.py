@@ -91,6 +91,16 @@ def test_matchers_of_one_grammar_walk_it_apart():
     assert second.advance("Go('Apple')\n") and second.accepting and not first.accepting
 
 
+def test_a_grammar_that_admits_one_string_says_which():
+    """What the writer carries as forced text: a line with one way to write it, whatever nodes spell it."""
+    one = Grammar({"robot": alt("robot_list[0]"), "root": seq("    Go(", Ref("robot"), ", ", rep("'", 1, 1), chars("A"),
+                                                              "pple')\n")})
+    assert one.only() == "    Go(robot_list[0], 'Apple')\n"
+    assert Grammar({"root": alt("ab", seq("a", "b"))}).only() == "ab"
+    for several in (alt("a", "b"), opt("a"), chars("ab"), seq("x", rep("y", 0, 2)), alt("a", chars("ab"))):
+        assert Grammar({"root": several}).only() is None
+
+
 # A grammar with every kind of node: literals, classes, references, nullable items in sequences, nested and
 # bounded repetitions, alternatives that share their starts.
 _WORDS = Grammar({
@@ -106,7 +116,8 @@ _SHORT = ["", *(a + b for a in " abc,\n" for b in ("", *" abc,\n"))]  # every te
 @given(st.integers(0, 2**32), st.text(alphabet="abc ,\n", max_size=12))
 def test_after_a_prefix_a_grammar_admits_exactly_what_may_follow_it(seed, noise):
     """The derivative's defining equation: after every prefix of a line, a text follows exactly when the
-    prefix and the text make a line (texts that do and texts that almost do)."""
+    prefix and the text make a line (texts that do and texts that almost do); one that names the only text that
+    may follow names the rest of the line."""
     from smartllm_local.planner.decoding.matcher import Matcher
 
     line = _WORDS.sample(random.Random(seed))
@@ -115,6 +126,7 @@ def test_after_a_prefix_a_grammar_admits_exactly_what_may_follow_it(seed, noise)
         after = _WORDS.after(prefix)
         for text in (rest, noise, rest + noise, noise + rest, *(x + y for x in _SHORT for y in ("", rest, rest[1:]))):
             assert after.matches(text) == _WORDS.matches(prefix + text), (prefix, text)
+        assert after.only() in (None, rest)  # where one string may follow, it is the rest of this line
         if not Matcher(_WORDS).advance(prefix + noise):
             with pytest.raises(GrammarError, match="does not begin"):
                 _WORDS.after(prefix + noise)

@@ -79,5 +79,5 @@ class Stray(FakeBackend):
 def test_a_line_the_grammar_did_not_offer_is_an_error_naming_the_stage_and_the_line():
     record = StageRecord("coalition")
     with pytest.raises(GrammarMismatchError, match=r"^coalition stage: .*'oops\\n'"):
-        run_stage(record, Stray(), Fitted("", [0]), Script(Grammar({"root": "# fine\n"})), output_budget=100,
-                  sampling=Sampling(), rng=np.random.default_rng(0))
+        run_stage(record, Stray(), Fitted("", [0]), Script(Grammar({"root": alt("# fine\n", "# good\n")})),
+                  output_budget=100, sampling=Sampling(), rng=np.random.default_rng(0))

@@ -8,7 +8,7 @@ import pytest
 
 from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.constraints.plan import PlanConstraint
-from smartllm_local.planner.decoding.grammar import Grammar, seq
+from smartllm_local.planner.decoding.grammar import Grammar, alt, seq
 from smartllm_local.planner.decoding.line_ends import BLANKS, COMMENT_NEXT, INDENTED_NEXT, open_ends
 from smartllm_local.planner.decoding.matcher import Matcher
 from smartllm_local.planner.decoding.protocol import Choose
@@ -140,7 +140,7 @@ def test_a_spill_is_checked_against_what_the_plan_offers_next():
         def next(self, remaining):
             if self.text.count("\n") >= 2:
                 return None
-            g = Grammar({"root": seq("a", "\n") if not self.text else seq("b", "\n")})
+            g = Grammar({"root": seq(alt("a", "c") if not self.text else alt("b", "c"), "\n")})
             self._offered = Choose(g, {"line": g}, {"line": COMMENT_NEXT})
             return self._offered
 
