@@ -1,5 +1,5 @@
 """Grammars as data, and what we do with them: GBNF for llama.cpp and llguidance,
-a regular expression to test membership, random sampling, and the longest string.
+a regular expression to test membership, random sampling, the longest string, and the only one.
 
 Every grammar here is finite-depth: rules may refer to other rules but never,
 directly or not, to themselves, and every repetition is bounded. That keeps
