@@ -17,7 +17,7 @@ from .constraints.test_repair import CATALOGUE, SKILLS, _scripted
 
 def _with_finish(script, goals=GOALS, floor_plan=6) -> str:
     decomposer = _decomposer(floor_plan, goals)
-    text = run_constraint(decomposer, _scripted(script), len, 3000)
+    text = run_constraint(decomposer, *_scripted(script), 3000)
     assert decomposer.finish_made is not None, text
     return text
 

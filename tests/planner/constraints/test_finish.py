@@ -56,7 +56,7 @@ def test_the_goal_the_model_left_unmet_is_met_by_the_planners_last_sub_task():
     """The model slices the bread and ends; the apple the goals put in the fridge is the planner's: a sub-task
     defined and called after the model's orchestration, whose every step succeeds, ending with empty hands."""
     decomposer = _decomposer(6, GOALS)
-    text = run_constraint(decomposer, _scripted(SLICE_BREAD), len, 3000)
+    text = run_constraint(decomposer, *_scripted(SLICE_BREAD), 3000)
     assert "\ndef subtask2_meet_goals():\n    # the goals left: Apple in Fridge\n" in text, text
     assert text.endswith("\nsubtask2_meet_goals()\n") and text.index("subtask1_slice_bread()\n") < \
         text.index("def subtask2_meet_goals")
@@ -69,10 +69,10 @@ def test_the_goal_the_model_left_unmet_is_met_by_the_planners_last_sub_task():
 
 def test_off_or_with_every_goal_met_the_plan_ends_where_the_model_ends_it():
     off = _decomposer(6, GOALS, finish=False)
-    text = run_constraint(off, _scripted(SLICE_BREAD), len, 3000)
+    text = run_constraint(off, *_scripted(SLICE_BREAD), 3000)
     assert "meet_goals" not in text and off.finish_made is None
     met = _decomposer(6, GOALS[:1])
-    assert "meet_goals" not in run_constraint(met, _scripted(SLICE_BREAD), len, 3000) and met.finish_made is None
+    assert "meet_goals" not in run_constraint(met, *_scripted(SLICE_BREAD), 3000) and met.finish_made is None
 
 
 def test_a_goal_no_plan_meets_is_left_the_named_others_met_and_a_team_that_cannot_adds_nothing():
@@ -82,15 +82,15 @@ def test_a_goal_no_plan_meets_is_left_the_named_others_met_and_a_team_that_canno
     fridge) adds no sub-task, rather than one that fails."""
     goals = [*GOALS, Condition("Television", state="ON"), Condition("Fridge", item="Tomato")]
     named = _decomposer(6, goals, said=Said(asked=tuple(goals[1:])))
-    text = run_constraint(named, _scripted(SLICE_BREAD), len, 3000)
+    text = run_constraint(named, *_scripted(SLICE_BREAD), 3000)
     assert named.finish_made["goals"] == ["Apple in Fridge", "Tomato in Fridge"], text
     dry, failed = _final_state(text, 6)
     assert not failed and _met(dry, [g for g in goals if g.subject != "Television"])
     nowhere = _decomposer(6, goals)
-    assert "meet_goals" not in run_constraint(nowhere, _scripted(SLICE_BREAD), len, 3000)
+    assert "meet_goals" not in run_constraint(nowhere, *_scripted(SLICE_BREAD), 3000)
     team = [r for r in CATALOGUE.robots.values() if "OpenObject" not in r.skills and "SliceObject" in r.skills][:1]
     weak = _decomposer(6, GOALS, team=team)
-    text = run_constraint(weak, _scripted(SLICE_BREAD), len, 3000)
+    text = run_constraint(weak, *_scripted(SLICE_BREAD), 3000)
     assert "meet_goals" not in text and weak.finish_made is None
 
 
@@ -104,14 +104,14 @@ def test_a_place_goal_on_a_thing_the_model_acted_on_but_never_carried_is_met():
     nothing is added (the statement is as likely wrong as the plan)."""
     goals = [Condition("GarbageCan", item="Newspaper")]
     pushed = _decomposer(203, goals)
-    text = run_constraint(pushed, _scripted(_newspaper("    PushObject('Newspaper')\n")), len, 3000)
+    text = run_constraint(pushed, *_scripted(_newspaper("    PushObject('Newspaper')\n")), 3000)
     assert "PushObject('Newspaper')" in text and pushed.finish_made["goals"] == ["Newspaper in GarbageCan"], text
     dry, failed = _final_state(text, 203)
     assert not failed and _met(dry, goals)
     carried = _decomposer(203, goals)
     lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Sofa')\n",
                        "    PutObject('Newspaper', 'Sofa')\n")
-    text = run_constraint(carried, _scripted(lines), len, 3000)
+    text = run_constraint(carried, *_scripted(lines), 3000)
     assert "PutObject('Newspaper', 'Sofa')" in text and carried.finish_made is None, text
 
 
@@ -122,7 +122,7 @@ def test_a_place_goal_on_a_thing_the_model_let_fall_is_met(let_go):
     goals = [Condition("GarbageCan", item="Newspaper")]
     dropped = _decomposer(203, goals)
     lines = _newspaper("    PickupObject('Newspaper')\n", f"    {let_go}('Newspaper')\n")
-    text = run_constraint(dropped, _scripted(lines), len, 3000)
+    text = run_constraint(dropped, *_scripted(lines), 3000)
     assert f"{let_go}('Newspaper')" in text and dropped.finish_made["goals"] == ["Newspaper in GarbageCan"], text
     dry, failed = _final_state(text, 203)
     assert not failed and _met(dry, goals)
@@ -136,18 +136,18 @@ def test_a_thing_carried_only_where_the_instruction_names_no_holder_goes_where_t
     lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Floor')\n",
                        "    PutObject('Newspaper', 'Floor')\n")
     floor = _decomposer(203, goals, said=Said(holders={"GarbageCan": ()}))
-    text = run_constraint(floor, _scripted(lines), len, 3000)
+    text = run_constraint(floor, *_scripted(lines), 3000)
     assert "PutObject('Newspaper', 'Floor')" in text and floor.finish_made["goals"] == ["Newspaper in GarbageCan"]
     dry, failed = _final_state(text, 203)
     assert not failed and _met(dry, goals)
     sofa = _decomposer(203, goals, said=Said(holders={"GarbageCan": (), "Sofa": ()}))
     lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Sofa')\n",
                        "    PutObject('Newspaper', 'Sofa')\n")
-    assert "meet_goals" not in run_constraint(sofa, _scripted(lines), len, 3000) and sofa.finish_made is None
+    assert "meet_goals" not in run_constraint(sofa, *_scripted(lines), 3000) and sofa.finish_made is None
     unnamed = _decomposer(203, goals, said=Said(holders={"Sofa": ()}))  # the goal's holder named nowhere
     lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Floor')\n",
                        "    PutObject('Newspaper', 'Floor')\n")
-    assert "meet_goals" not in run_constraint(unnamed, _scripted(lines), len, 3000)
+    assert "meet_goals" not in run_constraint(unnamed, *_scripted(lines), 3000)
 
 
 def test_a_place_the_instruction_owes_is_met_wherever_the_model_put_the_thing():
@@ -158,7 +158,7 @@ def test_a_place_the_instruction_owes_is_met_wherever_the_model_put_the_thing():
     lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Sofa')\n",
                        "    PutObject('Newspaper', 'Sofa')\n")
     owed = _decomposer(203, goals, said=Said(owed=tuple(goals), holders={"GarbageCan": ("Newspaper",), "Sofa": ()}))
-    text = run_constraint(owed, _scripted(lines), len, 3000)
+    text = run_constraint(owed, *_scripted(lines), 3000)
     assert "PutObject('Newspaper', 'Sofa')" in text and owed.finish_made["goals"] == ["Newspaper in GarbageCan"], text
     dry, failed = _final_state(text, 203)
     assert not failed and _met(dry, goals)
@@ -171,7 +171,7 @@ def test_a_holder_the_instruction_names_for_other_things_only_is_no_place_it_nam
     lines = _newspaper("    PickupObject('Newspaper')\n", "    GoToObject('Sofa')\n",
                        "    PutObject('Newspaper', 'Sofa')\n")
     other = _decomposer(203, goals, said=Said(holders={"GarbageCan": (), "Sofa": ("RemoteControl",)}))
-    text = run_constraint(other, _scripted(lines), len, 3000)
+    text = run_constraint(other, *_scripted(lines), 3000)
     assert other.finish_made["goals"] == ["Newspaper in GarbageCan"], text
 
 
@@ -182,12 +182,12 @@ def test_a_state_the_instruction_owes_is_met_though_the_model_acted_on_the_thing
     lines = ["def subtask1_tv():\n", "    GoToObject('Television')\n", "    SwitchOn('Television')\n", "\n",
              "subtask1_tv()\n"]
     owed = _decomposer(203, goals, said=Said(owed=tuple(goals)))
-    text = run_constraint(owed, _scripted(lines), len, 3000)
+    text = run_constraint(owed, *_scripted(lines), 3000)
     assert "SwitchOn('Television')" in text and owed.finish_made["goals"] == ["Television off"], text
     dry, failed = _final_state(text, 203)
     assert not failed and _met(dry, goals)
     stated = _decomposer(203, goals)
-    assert "meet_goals" not in run_constraint(stated, _scripted(lines), len, 3000)
+    assert "meet_goals" not in run_constraint(stated, *_scripted(lines), 3000)
 
 
 def test_a_model_that_writes_sub_tasks_to_the_limit_leaves_a_robot_for_the_planners_last_one():
@@ -197,13 +197,13 @@ def test_a_model_that_writes_sub_tasks_to_the_limit_leaves_a_robot_for_the_plann
     lines = [line for k in range(1, MAX_SUBTASKS + 1)
              for line in (f"def subtask{k}_look():\n", "    GoToObject('Bread')\n", "    PushObject('Bread')\n", "\n")]
     decomposer = _decomposer(1, [Condition("Fridge", item="Apple")])
-    text = run_constraint(decomposer, _scripted(lines), len, 6000)
+    text = run_constraint(decomposer, *_scripted(lines), 6000)
     assert f"def subtask{MAX_SUBTASKS - 1}_look():" in text and f"def subtask{MAX_SUBTASKS}_look():" not in text
     assert decomposer.finish_made["goals"] == ["Apple in Fridge"], text
     dry, failed = _final_state(text, 1)
     assert not failed and _met(dry, [Condition("Fridge", item="Apple")])
     free = _decomposer(1, [Condition("Fridge", item="Apple")], finish=False)
-    assert f"def subtask{MAX_SUBTASKS}_look():" in run_constraint(free, _scripted(lines), len, 6000)
+    assert f"def subtask{MAX_SUBTASKS}_look():" in run_constraint(free, *_scripted(lines), 6000)
 
 
 def test_a_model_that_writes_to_the_end_of_the_budget_leaves_room_for_the_planners_last_sub_task():
@@ -213,9 +213,9 @@ def test_a_model_that_writes_to_the_end_of_the_budget_leaves_room_for_the_planne
         f"def subtask{k}_look_around_the_kitchen():\n", "    GoToObject('Bread')\n", "    PushObject('Bread')\n",
         "    GoToObject('Toaster')\n", "    PushObject('Toaster')\n", "\n")]
     goals = [Condition("Fridge", item="Apple")]
-    budget = len(run_constraint(_decomposer(1, goals, finish=False), _scripted(wander), len, 6000)) + 20
+    budget = len(run_constraint(_decomposer(1, goals, finish=False), *_scripted(wander), 6000)) + 20
     decomposer = _decomposer(1, goals)
-    text = run_constraint(decomposer, _scripted(wander), len, budget)
+    text = run_constraint(decomposer, *_scripted(wander), budget)
     assert "def subtask2_look_around_the_kitchen():" in text and "def subtask4_look" not in text, text
     assert decomposer.finish_made["goals"] == ["Apple in Fridge"], text
     dry, failed = _final_state(text, 1)
@@ -242,7 +242,7 @@ def test_a_decomposition_for_a_team_lifts_no_more_than_the_whole_team_a_thing_we
         world = for_decomposition(scene, SKILLS, MAX_SUBTASKS, team)
         decomposer = PlanConstraint(scene, SKILLS, world=world, summary=False, comments=False, for_team=team,
                                     repairer=Repairer(world, SKILLS), goals=goals, finish=True)
-        text = run_constraint(decomposer, _scripted(SHAKER_IN_POT), len, 3000)
+        text = run_constraint(decomposer, *_scripted(SHAKER_IN_POT), 3000)
         assert ("PickupObject('Pot')" in text) == lifted, text
 
 
@@ -253,7 +253,7 @@ def test_the_planners_steps_may_be_more_than_a_model_sub_task_s():
     lines = ["def subtask1_look():\n", "    GoToObject('Bread')\n", "    PushObject('Bread')\n", "\n",
              "subtask1_look()\n"]
     decomposer = _decomposer(1, goals, said=Said(asked=tuple(goals)))
-    text = run_constraint(decomposer, _scripted(lines), len, 4000)
+    text = run_constraint(decomposer, *_scripted(lines), 4000)
     assert decomposer.finish_made["goals"] == ["Potato cooked", "Potato in Pan", "Bread in Fridge"], text
     assert MAX_STEPS < len(decomposer.finish_made["lines"]) <= 2 * MAX_STEPS
     dry, failed = _final_state(text, 1)
@@ -264,7 +264,7 @@ def test_the_planners_steps_keep_the_stated_goals_that_held():
     """The apple left for the planner, the fridge stated closed (and closed): its steps close the fridge again."""
     goals = [*GOALS, Condition("Fridge", state="CLOSED")]
     decomposer = _decomposer(6, goals)
-    text = run_constraint(decomposer, _scripted(SLICE_BREAD), len, 3000)
+    text = run_constraint(decomposer, *_scripted(SLICE_BREAD), 3000)
     assert decomposer.finish_made["goals"] == ["Apple in Fridge"], text
     assert decomposer.finish_made["lines"][-1].strip() == "CloseObject('Fridge')"
     dry, failed = _final_state(text, 6)
@@ -309,14 +309,14 @@ def test_a_goal_on_an_object_the_model_acted_on_is_left_to_the_model():
     script = ["def subtask1_apple():\n", "    GoToObject('Apple')\n", "    PickupObject('Apple')\n",
               "    GoToObject('CounterTop')\n", "    PutObject('Apple', 'CounterTop')\n", "\n", "subtask1_apple()\n"]
     decomposer = _decomposer(6, GOALS)
-    text = run_constraint(decomposer, _scripted(script), len, 3000)
+    text = run_constraint(decomposer, *_scripted(script), 3000)
     assert decomposer.finish_made["goals"] == ["Bread sliced"], text
 
 
 def test_the_planners_steps_name_slices_by_their_type():
     """A goal on a slice that does not exist yet: the planner's steps name the piece by its type, as a plan does."""
     decomposer = _decomposer(6, [Condition("Pan", item="TomatoSliced")])
-    text = run_constraint(decomposer, _scripted(SLICE_BREAD), len, 3000)
+    text = run_constraint(decomposer, *_scripted(SLICE_BREAD), 3000)
     assert "PutObject('TomatoSliced', 'Pan')" in text and "|" not in text, text
 
 
@@ -366,7 +366,7 @@ def test_a_goal_the_planners_steps_meet_as_written_a_burner_switched_by_name_not
     cooked. A plan whose steps, as written, leave a goal unmet is not written."""
     goals = [Condition("Pan", item="Potato"), Condition("Potato", state="COOKED")]
     decomposer = _decomposer(1, goals)
-    text = run_constraint(decomposer, _scripted(PAN_ON_STOVE), len, 3000)
+    text = run_constraint(decomposer, *_scripted(PAN_ON_STOVE), 3000)
     lines = decomposer.finish_made["lines"]
     assert "    SwitchOn('StoveBurner')\n" in lines and not any("StoveKnob" in line for line in lines), lines
     dry, failed = _final_state(text, 1)
@@ -379,14 +379,14 @@ def test_the_planners_last_sub_task_is_measured_in_the_tokens_it_costs():
     as (here a third of its characters, as the writer spends them): a budget too small for its characters holds it,
     and the output stays within the budget."""
     third = lambda text: -(-len(text) // 3)  # noqa: E731
-    budget = len(run_constraint(_decomposer(6, GOALS), _scripted(SLICE_BREAD), len, 3000)) - 1
+    budget = len(run_constraint(_decomposer(6, GOALS), *_scripted(SLICE_BREAD), 3000)) - 1
     counted = _decomposer(6, GOALS)
-    text = run_constraint(counted, _scripted(SLICE_BREAD), len, budget)
+    text = run_constraint(counted, *_scripted(SLICE_BREAD), budget)
     assert counted.finish_made is None and "meet_goals" not in text
     world = WorldCheck(scene_objects(6), SKILLS, MAX_SUBTASKS)
     costed = PlanConstraint(scene_objects(6), SKILLS, world=world, summary=False, comments=False,
                             repairer=Repairer(world, SKILLS), goals=GOALS, finish=True, cost=third)
-    text = run_constraint(costed, _scripted(SLICE_BREAD), third, budget)
+    text = run_constraint(costed, *_scripted(SLICE_BREAD, third), budget)
     assert "Apple in Fridge" in costed.finish_made["goals"], text
     dry, failed = _final_state(text, 6)
     assert not failed and _met(dry, GOALS)

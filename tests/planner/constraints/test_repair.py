@@ -35,9 +35,9 @@ CATALOGUE = load_domain().catalogue
 SKILLS = CATALOGUE.skills
 
 
-def _scripted(lines: list[str]):
-    """A line writer and a forcer for :func:`run_constraint`: ``lines`` written in order, each where it is offered
-    (or passed over where the constraint forces it), and the shortest line elsewhere."""
+def _scripted(lines: list[str], cost=len):
+    """A line writer and a forcer (forced text costs ``cost`` of it) for :func:`run_constraint`: ``lines`` written
+    in order, each where it is offered (or passed over where the constraint forces it), the shortest line elsewhere."""
     todo = list(lines)
 
     def write(choose, remaining):
@@ -48,7 +48,7 @@ def _scripted(lines: list[str]):
         for line in text.splitlines(keepends=True):
             if todo and todo[0] == line:
                 todo.pop(0)
-        return len(text)
+        return cost(text)
 
     return write, force
 
