@@ -5,8 +5,10 @@ sub-task needs (its skills, sorted, and the mass of the heaviest thing it picks 
 then which robots have what and what is missing, and only then, after ``; so``, the
 robot or team. One line, shown here broken in two::
 
-    # SubTask 2 (subtask2_toast_slice): needs GoToObject, PickupObject, PutObject, SwitchOn, lifting 0.117 kg;
-      robots[1] picks up and puts but lacks SwitchOn, which robots[2] has; so robots[1] and robots[2]
+    # SubTask 1 (subtask1_book_to_bed): needs GoToObject, PickupObject, PutObject, lifting 0.5 kg;
+      robots[0] and robots[1] both have these skills and lift 100 kg, so one is enough; so robots[0]
+
+Where one team is left, the planner writes the analysis too: the fact that leaves it (``only robots[0] can do it``).
 """
 
 from __future__ import annotations
@@ -146,10 +148,31 @@ class CoalitionConstraint(Constraint):
         else:
             options["line"] = seq(*tail)
         apart = self._apart(k)
+        sole = self._sole_tail(k, apart)
+        if sole is not None and len(sole) <= remaining - reserve:
+            options["line"] = seq(sole)  # one way to write it: the writer carries it, as forced text
         rules = {**self.rules, f"team-{k}": alt(*(" and ".join(f"robots[{i}]" for i in c) for c in apart))} \
             if apart else self.rules
         # Another line follows (its "# SubTask"), or the output ends.
         return self._choose(rules, options, {"line": COMMENT_NEXT} if k + 1 < len(self.names) else {})
+
+    def _sole_tail(self, k: int, apart: list[tuple[int, ...]]) -> str | None:
+        """Where one team is left for sub-task ``k``, the rest of its line: the fact that leaves it, then the team
+        (None where the model has a team to choose). Words about a choice there is none of cost a chosen token
+        each (the 1.5B spent ~30 on "robots[0] and robots[1] both have these skills..." and then named the one
+        team the line admitted); the planner states the fact in one batch."""
+        teams = apart or self.teams[k]
+        if self.free or teams is None or len(teams) != 1:
+            return None
+        team = teams[0]
+        named = " and ".join(f"robots[{i}]" for i in team)
+        if apart and len(self.teams[k] or ()) > 1:
+            fact = f"only {named} can do it while the sub-tasks beside it run"
+        elif len(team) == 1:
+            fact = f"only {named} can do it"
+        else:
+            fact = f"no robot can do it alone, but {named} together can"
+        return f" {fact}; so {named}\n"
 
     def _apart(self, k: int) -> list[tuple[int, ...]]:
         """Sub-task ``k``'s teams that leave the others its block starts at once a team each, no robot in two, with

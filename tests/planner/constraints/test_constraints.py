@@ -223,23 +223,28 @@ def _robots(*ids):
     return load_domain().catalogue.team(ids)
 
 
-def _line(name, team, need, k=1):
-    return f"# SubTask {k} ({name}): {needs_clause(need)} they share the work; so {team}\n"
+def _line(name, team, need, k=1, why="they share the work"):
+    return f"# SubTask {k} ({name}): {needs_clause(need)} {why}; so {team}\n"
 
 
 def test_coalitions_admit_only_teams_with_the_skills_and_the_strength():
-    # robot 25 picks up and puts, robot 23 opens and closes: the fridge job needs both.
+    # robot 25 picks up and puts, robot 23 opens and closes: the fridge job needs both (the one team left, so
+    # the planner states why).
     fridge = Need(frozenset({"GoToObject", "OpenObject", "PickupObject", "PutObject"}), 0.2)
     team = _robots(25, 23)
-    assert accepts(CoalitionConstraint(["f"], team, needs=[fridge]), _line("f", "robots[0] and robots[1]", fridge))
-    assert not accepts(CoalitionConstraint(["f"], team, needs=[fridge]), _line("f", "robots[0]", fridge))
+    both = "no robot can do it alone, but robots[0] and robots[1] together can"
+    assert accepts(CoalitionConstraint(["f"], team, needs=[fridge]),
+                   _line("f", "robots[0] and robots[1]", fridge, why=both))
+    assert not accepts(CoalitionConstraint(["f"], team, needs=[fridge]), _line("f", "robots[0]", fridge, why=both))
     assert not accepts(CoalitionConstraint(["f"], team, needs=[fridge]), "# INFEASIBLE: nobody can\n")
     assert accepts(CoalitionConstraint(["f"], team, needs=[fridge], free=True), _line("f", "robots[0]", fridge))
     # robot 7 lifts 0.08 kg, robot 8 lifts 0.4 kg: only teams with robot 8 can carry a 0.2 kg apple.
     apple = Need(frozenset({"GoToObject", "PickupObject"}), 0.2)
     light = _robots(7, 8)
-    assert not accepts(CoalitionConstraint(["f"], light, needs=[apple]), _line("f", "robots[0]", apple))
-    assert accepts(CoalitionConstraint(["f"], light, needs=[apple]), _line("f", "robots[1]", apple))
+    assert not accepts(CoalitionConstraint(["f"], light, needs=[apple]),
+                       _line("f", "robots[0]", apple, why="only robots[0] can do it"))
+    assert accepts(CoalitionConstraint(["f"], light, needs=[apple]),
+                   _line("f", "robots[1]", apple, why="only robots[1] can do it"))
 
 
 def test_known_needs_are_stated_by_the_catalogue_not_the_model():

@@ -12,7 +12,7 @@ from smartllm_local.planner.constraints.coalition import CoalitionConstraint, ne
 from smartllm_local.planner.constraints.feasibility import Need, minimal_lists, minimal_teams
 from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.constraints.world_check import WorldCheck
-from smartllm_local.planner.decoding.writer import accepts
+from smartllm_local.planner.decoding.writer import accepts, run_constraint
 from smartllm_local.worlds import scene_objects
 
 CATALOGUE = load_domain().catalogue
@@ -25,8 +25,8 @@ DECOMPOSITION = "".join(
 NAMES = [f"subtask{k}_{item.lower()}" for k, item in enumerate(ITEMS, start=1)]
 
 
-def _coalition_line(need: Need, team: str) -> str:
-    return f"# SubTask 1 (f): {needs_clause(need)} one of them carries it; so {team}\n"
+def _coalition_line(need: Need, team: str, why: str = "one of them carries it") -> str:
+    return f"# SubTask 1 (f): {needs_clause(need)} {why}; so {team}\n"
 
 
 def _allocated(lists: list[str], slots: list[str] | None = None) -> str:
@@ -72,9 +72,41 @@ def test_a_coalition_names_no_robot_the_sub_task_can_do_without():
     # 0.4 kg and 0.08 kg: only the two together lift the 0.47 kg lettuce.
     lettuce = Need(frozenset({"GoToObject", "PickupObject", "PutObject"}), 0.47)
     weak = CATALOGUE.team([8, 7])
+    together = "no robot can do it alone, but robots[0] and robots[1] together can"
     assert accepts(CoalitionConstraint(["f"], weak, needs=[lettuce]),
-                   _coalition_line(lettuce, "robots[0] and robots[1]"))
-    assert not accepts(CoalitionConstraint(["f"], weak, needs=[lettuce]), _coalition_line(lettuce, "robots[0]"))
+                   _coalition_line(lettuce, "robots[0] and robots[1]", why=together))
+    assert not accepts(CoalitionConstraint(["f"], weak, needs=[lettuce]),
+                       _coalition_line(lettuce, "robots[0]", why=together))
+
+
+def test_where_one_team_is_left_the_planner_states_why_and_asks_the_model_nothing():
+    """Words about a choice there is none of cost a chosen token each: the line is offered spelled one way, the
+    fact that leaves the team and then the team, and the writer carries it into the next line's batch, as
+    forced text; where teams are left to choose among, the model reasons and chooses."""
+    lettuce = Need(frozenset({"GoToObject", "PickupObject", "PutObject"}), 0.47)
+    apple = Need(frozenset({"GoToObject", "PickupObject", "PutObject"}), 0.2)
+    weak, strong = CATALOGUE.team([8, 7]), CATALOGUE.team([1, 2])
+    assert not accepts(CoalitionConstraint(["f"], weak, needs=[lettuce]),
+                       _coalition_line(lettuce, "robots[0] and robots[1]"))
+
+    def written(constraint):
+        asked, forced = [], []
+
+        def write(choose, remaining):
+            asked.append(choose)
+            line = " one of them carries it; so robots[1]\n"
+            assert choose.kind_of(line)
+            return line, len(line)
+
+        text = run_constraint(constraint, write, lambda t: forced.append(t) or len(t), 1000)
+        return text, asked, "".join(forced)
+
+    text, asked, forced = written(CoalitionConstraint(["f", "g"], weak, needs=[lettuce, lettuce]))
+    line = (f"# SubTask 1 (f): {needs_clause(lettuce)} no robot can do it alone, but robots[0] and robots[1] "
+            "together can; so robots[0] and robots[1]\n")
+    assert text == forced == line + line.replace("SubTask 1 (f)", "SubTask 2 (g)") and not asked
+    text, asked, forced = written(CoalitionConstraint(["f"], strong, needs=[apple]))
+    assert text == _coalition_line(apple, "robots[1]") and len(asked) == 1
 
 
 def test_the_sub_tasks_started_at_once_are_given_teams_that_leave_each_other_robots():
@@ -86,16 +118,19 @@ def test_the_sub_tasks_started_at_once_are_given_teams_that_leave_each_other_rob
     clock = Need(frozenset({"GoToObject", "PickupObject", "PutObject"}), 0.8)
     team = CATALOGUE.team([28, 8, 24])
 
-    def lines(first: str, second: str) -> str:
-        return (f"# SubTask 1 (s): {needs_clause(statue)} they lift it; so {first}\n"
-                f"# SubTask 2 (c): {needs_clause(clock)} it lifts it; so {second}\n")
+    def lines(first: str, second: str, beside: bool = False) -> str:
+        def why(named: str, words: str) -> str:
+            return f"only {named} can do it while the sub-tasks beside it run" if beside else words
+
+        return (f"# SubTask 1 (s): {needs_clause(statue)} {why(first, 'they lift it')}; so {first}\n"
+                f"# SubTask 2 (c): {needs_clause(clock)} {why(second, 'it lifts it')}; so {second}\n")
 
     def coalition(blocks=()):
         return CoalitionConstraint(["s", "c"], team, needs=[statue, clock], blocks=blocks)
 
-    assert accepts(coalition([{0, 1}]), lines("robots[1] and robots[2]", "robots[0]"))
-    assert not accepts(coalition([{0, 1}]), lines("robots[0] and robots[1]", "robots[0]"))
-    assert not accepts(coalition([{0, 1}]), lines("robots[0] and robots[2]", "robots[1] and robots[2]"))
+    assert accepts(coalition([{0, 1}]), lines("robots[1] and robots[2]", "robots[0]", beside=True))
+    assert not accepts(coalition([{0, 1}]), lines("robots[0] and robots[1]", "robots[0]", beside=True))
+    assert not accepts(coalition([{0, 1}]), lines("robots[0] and robots[2]", "robots[1] and robots[2]", beside=True))
     assert accepts(coalition(), lines("robots[0] and robots[1]", "robots[0]"))
 
 
