@@ -130,10 +130,10 @@ def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone(
     for run in (alone, after):
         record, coalition = run.stage("allocation"), run.stage("coalition")
         # the coalition's context as it was evaluated (what it wrote, not the end of sequence it chose), then
-        # the line that opens the allocation, and any lines the coalition's completion forced after that end
+        # the line that opens the allocation, and what the coalition forced after its last chosen token (lines
+        # with one team left, lines completed after its end of sequence), evaluated in the allocation's batch
         assert record.reused_tokens >= coalition.prompt_tokens + coalition.generated_tokens - 1
-        if not coalition.completed_lines:
-            assert record.prompt_tokens - record.reused_tokens < 12
+        assert record.prompt_tokens - record.reused_tokens < 12 + coalition.forced_tokens
 
 
 def _planned(tmp_path, states=None):
@@ -166,7 +166,9 @@ def test_a_second_process_starts_from_the_stored_examples(kitchen01, tmp_path):
     decomposition = warm["decomposition"]
     assert decomposition["prompt_tokens"] - decomposition["reused_tokens"] < 90  # team skills, instruction, chat turn
     assert warm["coalition"]["reused_tokens"] == warm["coalition"]["shared_tokens"] > 0, warm
-    assert cold["allocation"]["prompt_tokens"] - cold["allocation"]["reused_tokens"] < 12  # in the coalition's context
+    # in the coalition's context: the line that opens the allocation, and what the coalition forced at its end
+    assert cold["allocation"]["prompt_tokens"] - cold["allocation"]["reused_tokens"] \
+        < 12 + cold["coalition"]["forced_tokens"]
 
 
 @pytest.mark.heavy
