@@ -78,6 +78,13 @@ def all_apart(lines: Sequence[str], skills: SkillSet, team: Sequence[Robot], sce
     return all(apart(block, steps, (), actions, team, scene) for block in blocks(lines))
 
 
+def started_together(decomposition: str, calls_too: bool = True) -> list[set[int]]:
+    """The functions (by order written) the coalition keeps teams apart for: each block of threads, and with
+    ``calls_too`` each run of direct calls in a row."""
+    lines = decomposition.splitlines(keepends=True)
+    return [*blocks(lines), *(calls_in_a_row(lines) if calls_too else ())]
+
+
 def blocks(lines: Sequence[str]) -> Iterator[set[int]]:
     """The functions (by order written) each block of the orchestration starts at once, where there are two or
     more: the threads started before a join."""

@@ -46,7 +46,7 @@ from .executable import WORLD_CHECK, for_team
 from .finish_fold import fold_finish
 from .goal_stage import GOAL_CHECK, StatedGoals, checked_against_team, said_of, state_goals, stated_conditions
 from .idle_steps import drop_idle_steps
-from .in_turn import blocks, calls_in_a_row, free_blocks
+from .in_turn import free_blocks, started_together
 from .joined import join_in_turn
 from .kept_in_hand import put_kept_things
 from .opened_for_nothing import drop_opened_for_nothing
@@ -293,8 +293,7 @@ class Planner:
                             self.backend, floor + reserve, self.chat)
         names = [f.name for f in decomposed.functions]
         needs = function_needs(decomposed, scene, self.catalogue.skills.lifting)
-        lines = decomposition.splitlines(keepends=True)
-        together = [*blocks(lines), *(calls_in_a_row(lines) if self.config.together else ())]
+        together = started_together(decomposition, calls_too=self.config.together)
         constraint = CoalitionConstraint(names, team, needs=[needs[n] for n in names], free=self.config.free_teams,
                                          blocks=together) if self.config.grammar else None
         budget = floor

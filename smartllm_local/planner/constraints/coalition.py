@@ -104,7 +104,7 @@ class CoalitionConstraint(Constraint):
         }
         for k, allowed in enumerate(teams):
             if allowed:
-                self.rules[f"team-{k}"] = alt(*(" and ".join(f"robots[{i}]" for i in c) for c in allowed))
+                self.rules[f"team-{k}"] = alt(*map(_named, allowed))
             else:
                 self.rules[f"team-{k}"] = robot_list(self.team_size, 1, " and ")
         self.word_len = longest(Ref("word"), self.rules) + 1  # a word and the space before it
@@ -143,16 +143,15 @@ class CoalitionConstraint(Constraint):
         # The model's needs, when it writes them, take at most a quarter of the words.
         need_words = min(self.MAX_NEED_WORDS, max(1, words // 4)) if self.free else 0
         tail = (" ", _words(Ref("word"), min(self.MAX_WORDS, words - need_words)), "; so ", Ref(f"team-{k}"), "\n")
-        if self.free:
-            options["line"] = seq(self.heads[k], _words(Ref("need-word"), need_words), ";", *tail)
-        else:
-            options["line"] = seq(*tail)
         apart = self._apart(k)
         sole = self._sole_tail(k, apart)
         if sole is not None and len(sole) <= remaining - reserve:
             options["line"] = seq(sole)  # one way to write it: the writer carries it, as forced text
-        rules = {**self.rules, f"team-{k}": alt(*(" and ".join(f"robots[{i}]" for i in c) for c in apart))} \
-            if apart else self.rules
+        elif self.free:
+            options["line"] = seq(self.heads[k], _words(Ref("need-word"), need_words), ";", *tail)
+        else:
+            options["line"] = seq(*tail)
+        rules = {**self.rules, f"team-{k}": alt(*map(_named, apart))} if apart else self.rules
         # Another line follows (its "# SubTask"), or the output ends.
         return self._choose(rules, options, {"line": COMMENT_NEXT} if k + 1 < len(self.names) else {})
 
@@ -165,7 +164,7 @@ class CoalitionConstraint(Constraint):
         if self.free or teams is None or len(teams) != 1:
             return None
         team = teams[0]
-        named = " and ".join(f"robots[{i}]" for i in team)
+        named = _named(team)
         if apart and len(self.teams[k] or ()) > 1:
             fact = f"only {named} can do it while the sub-tasks beside it run"
         elif len(team) == 1:
@@ -209,6 +208,11 @@ def refusal_reason(names: Sequence[str], team: Sequence[Robot], needs: Sequence[
     parts = [f"SubTask {k} ({name}): {' and '.join(reasons)}"
              for k, (name, need) in enumerate(zip(names, needs), start=1) if (reasons := shortfall(team, need))]
     return "; ".join(parts)
+
+
+def _named(team: Sequence[int]) -> str:
+    """A team as a line names it: ``robots[1] and robots[2]``."""
+    return " and ".join(f"robots[{i}]" for i in team)
 
 
 def _words(word: Node, most: int) -> Node:

@@ -23,7 +23,7 @@ from ..constraints.restated import RestatedAllocation, restated_bodies
 from ..constraints.world_check import WorldCheck
 from ..decoding.protocol import REFUSAL_PREFIX
 from ..decoding.writer import accepts
-from ..in_turn import blocks, calls_in_a_row
+from ..in_turn import started_together
 from .asked_words import ASKED_STATES, load_state_words, placements_asked, states_asked
 from .goal_prompt import GOAL_FOLDER, load_goal_examples
 from .prompts import STAGES, load_examples
@@ -62,9 +62,8 @@ def check_examples(domain: Domain) -> tuple[int, list[str]]:
         names = [f.name for f in plan.functions]
         if ex.coalition is not None:
             needs = function_needs(plan, scene, skills.lifting)
-            lines = ex.decomposition.splitlines(keepends=True)
             coalition = CoalitionConstraint(names, team, needs=[needs[n] for n in names],
-                                            blocks=[*blocks(lines), *calls_in_a_row(lines)])
+                                            blocks=started_together(ex.decomposition))
             if not accepts(coalition, ex.coalition):
                 problems.append(f"{folder}/coalition/{ex.name}.txt: not in the coalition grammar; each line states "
                                 f"its needs as the planner does (e.g. `# SubTask 1 ({names[0]}): {coalition.heads[0]}"

@@ -17,7 +17,7 @@ from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.constraints.world_check import WorldCheck
 from smartllm_local.planner.decoding.writer import accepts
-from smartllm_local.planner.in_turn import blocks, calls_in_a_row
+from smartllm_local.planner.in_turn import started_together
 from smartllm_local.planner.pipeline import DEFAULT_BUDGETS
 from smartllm_local.planner.prompting.example_check import check_examples
 from smartllm_local.planner.prompting.prompts import PromptOptions, load_examples, shape
@@ -64,9 +64,8 @@ def test_every_coalition_example_is_in_the_grammar_the_planner_uses(ex):
     names = [f.name for f in plan.functions]
     pickups = [s.name for s in catalogue.skills.values() if s.action == "PickupObject"]
     needs = function_needs(plan, scene, pickups)
-    lines = ex.decomposition.splitlines(keepends=True)
     known = CoalitionConstraint(names, catalogue.team(ex.robots), needs=[needs[n] for n in names],
-                                blocks=[*blocks(lines), *calls_in_a_row(lines)])
+                                blocks=started_together(ex.decomposition))
     assert accepts(known, ex.coalition)
     assert known.minimum_budget() <= DEFAULT_BUDGETS["coalition"]
     assert ex.feasible == (known.refusal is None)
