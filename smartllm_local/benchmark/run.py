@@ -69,7 +69,7 @@ class TaskOutcome:
         if self.scores is not None:
             data.update(self.scores.metrics(), ticks=self.scores.ticks, Speed=self.scores.Speed)
         if self.result is not None:
-            data["tokens"] = {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens,
+            data["tokens"] = {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens, "prompted": r.prompted,
                                         "generated": r.generated_tokens, "seconds": round(r.seconds, 2),
                                         "prompt_seconds": round(r.prompt_seconds, 2),
                                         "choices": r.choices, "refused": r.refused, "logprob": round(r.logprob, 3),

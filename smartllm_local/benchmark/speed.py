@@ -128,8 +128,8 @@ def decode_speed(load: Load, config: PlannerConfig, catalogue: Catalogue, tasks:
 
 
 def _costs(result: PlanResult) -> dict[str, dict[str, float]]:
-    return {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens,
-                      "evaluated": r.prompt_tokens - r.reused_tokens,
+    return {r.stage: {"prompt": r.prompt_tokens, "reused": r.reused_tokens, "prompted": r.prompted,
+                      "evaluated": r.prompt_tokens - r.reused_tokens if r.prompted else 0,
                       "ttft_s": round(r.prompt_seconds, 3)} for r in result.stages.values()}
 
 

@@ -146,6 +146,9 @@ def stage_summary(record: StageRecord) -> str:
     if not (record.prompt_tokens or record.generated_tokens or record.forced_tokens):  # no model wrote it
         said = record.error or next((line.lstrip("# ") for line in record.output.splitlines() if line.strip()), "")
         return f"{said}; {record.seconds:.1f} s in all"
+    if not record.prompted and not record.generated_tokens:  # every line was one way to write: no model asked
+        return (f"nothing for the model to choose: {record.forced_tokens:,} tokens written by the planner, the prompt "
+                f"({record.prompt_tokens:,} tokens) not evaluated; {record.seconds:.1f} s in all")
     writing = max(0.0, record.seconds - record.prompt_seconds)
     return (f"prompt {record.prompt_tokens:,} tokens ({record.reused_tokens:,} reused) in "
             f"{record.prompt_seconds:.1f} s; {_written(record.generated_tokens, record.forced_tokens)} in "

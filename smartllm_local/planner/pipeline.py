@@ -31,7 +31,7 @@ from ..worlds import Ai2ThorWorld, World
 from .backends.base import Backend
 from .candidates import Candidates, mean_logprob, write_all
 from .constraints.coalition import LINE as COALITION_LINE
-from .constraints.coalition import CoalitionConstraint
+from .constraints.coalition import CoalitionConstraint, chosen_teams
 from .constraints.feasibility import function_needs
 from .constraints.finish import Said
 from .constraints.format import MAX_SUBTASKS
@@ -41,6 +41,7 @@ from .constraints.restated import RestatedAllocation, restated_bodies
 from .constraints.world_check import WorldCheck, for_decomposition
 from .decoding.protocol import REFUSAL_PREFIX, Constraint
 from .decoding.sampling import Sampling
+from .decoding.writer import exact_budget
 from .errands import drop_errands
 from .executable import WORLD_CHECK, for_team
 from .finish_fold import fold_finish
@@ -367,9 +368,11 @@ class Planner:
         if self.config.grammar and self.config.restate:
             world = (WorldCheck(scene, skills, len(team))
                      if self.config.world_check else None)
+            coalition = result.stages.get("coalition")
             constraint = RestatedAllocation(scene, skills, team=len(team) if self.config.free_teams else team,
                                             function_names=names, bodies=restated_bodies(decomposition, names),
-                                            world=world, together=self.config.together)
+                                            world=world, together=self.config.together,
+                                            chosen=chosen_teams(coalition.output) if coalition is not None else None)
         elif self.config.grammar:
             team_skills = [s for s in skills.values() if any(s.name in r.skills for r in team)]
             constraint = PlanConstraint(scene, SkillSet(team_skills), team_size=len(team),
@@ -378,7 +381,7 @@ class Planner:
                                         together=self.config.together)
         # Restating, the output's length is known to the character; rewriting, it is estimated.
         if isinstance(constraint, RestatedAllocation):
-            return constraint, constraint.maximum_output()
+            return constraint, exact_budget(constraint.maximum_output())
         # never below what the shortest complete allocation needs
         minimum = constraint.minimum_budget() if isinstance(constraint, PlanConstraint) else 0
         written = allocation_budget(result.stage("decomposition"), len(names), self.config.budgets["allocation"])
@@ -422,7 +425,9 @@ class Planner:
             raise UserError(f"the coalition's context ({len(context)} tokens) and the allocation's output budget "
                             f"({budget} tokens) exceed the model's context of {self.backend.n_ctx} tokens; "
                             "raise --n-ctx")
-        return Fitted(text + coalition.output + ALLOCATION_GLUE, context, prefixes, kept, dropped, continues=live)
+        # A coalition that asked the model nothing left its prompt unevaluated: the allocation loads its prefixes.
+        return Fitted(text + coalition.output + ALLOCATION_GLUE, context, prefixes, kept, dropped,
+                      continues=live and coalition.prompted)
 
     def _finish_plan_stage(self, record: StageRecord, result: PlanResult, *, form: str, scene: SceneObjects,
                            team_size: int | None = None, parsed: object = None) -> None:

@@ -34,6 +34,7 @@ class StageRecord:
     forced_tokens: int = 0
     seconds: float = 0.0
     prompt_seconds: float = 0.0  # of those, evaluating the prompt (the time to the first token)
+    prompted: bool = False  # whether the prompt was evaluated: not where the model had nothing to choose
     output_budget: int = 0
     examples: list[str] = field(default_factory=list)
     dropped: list[str] = field(default_factory=list)
@@ -101,7 +102,7 @@ class StageRecord:
         return {
             "chat_template": self.chat_template,
             "prompt_tokens": self.prompt_tokens, "shared_tokens": self.shared_tokens,
-            "reused_tokens": self.reused_tokens, "generated_tokens": self.generated_tokens,
+            "prompted": self.prompted, "reused_tokens": self.reused_tokens, "generated_tokens": self.generated_tokens,
             "forced_tokens": self.forced_tokens, "output_budget": self.output_budget,
             "seconds": round(self.seconds, 3), "prompt_seconds": round(self.prompt_seconds, 3),
             "tokens_per_second": round(self.tokens_per_second, 2),

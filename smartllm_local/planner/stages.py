@@ -92,16 +92,25 @@ def run_stage(
     record.output_budget = output_budget
     progress.stage_started(record.stage, len(context))
     started = time.perf_counter()
-    record.reused_tokens = backend.prefill(context, () if prompt.continues else prompt.prefixes)
-    record.prompt_seconds = time.perf_counter() - started
-    progress.prompt_evaluated(record.stage, tokens=len(context), shared=record.shared_tokens,
-                              reused=record.reused_tokens, seconds=record.prompt_seconds)
+
+    def prefill() -> None:
+        """Evaluate the prompt: when the model is first asked to write (a stage whose every line the constraint
+        leaves one way to write never asks it, and costs no evaluation)."""
+        if record.prompted:
+            return
+        began = time.perf_counter()
+        record.reused_tokens = backend.prefill(prompt.tokens, () if prompt.continues else prompt.prefixes)
+        record.prompt_seconds, record.prompted = time.perf_counter() - began, True
+        progress.prompt_evaluated(record.stage, tokens=len(prompt.tokens), shared=record.shared_tokens,
+                                  reused=record.reused_tokens, seconds=record.prompt_seconds)
+
     if constraint is None:
+        prefill()
         _generate_freely(record, backend, context, output_budget=output_budget, sampling=sampling, rng=rng)
         record.seconds = time.perf_counter() - started
     else:
         _generate_constrained(record, backend, context, constraint, output_budget=output_budget,
-                              sampling=sampling, rng=rng, progress=progress, started=started)
+                              sampling=sampling, rng=rng, progress=progress, started=started, prefill=prefill)
     progress.stage_ended(record)
 
 
@@ -121,9 +130,10 @@ def _generate_freely(record: StageRecord, backend: Backend, context: list[int], 
 
 def _generate_constrained(record: StageRecord, backend: Backend, context: list[int], constraint: Constraint, *,
                           output_budget: int, sampling: Sampling, rng: np.random.Generator,
-                          progress: StageProgress, started: float) -> None:
-    """The output line by line under the stage's constraint, in ``context`` (which it extends)."""
-    writer = _StageWriter(record, backend, context, sampling, rng, progress)
+                          progress: StageProgress, started: float, prefill: Callable[[], None]) -> None:
+    """The output line by line under the stage's constraint, in ``context`` (which it extends); ``prefill``
+    evaluates the prompt, before the model's first line."""
+    writer = _StageWriter(record, backend, context, sampling, rng, progress, prefill)
     report = Report()
     record.context = context
     try:
@@ -148,14 +158,16 @@ class _StageWriter(TokenWriter):
     """The backend as a stage's writer: each line generated under its grammar, in the stage's context."""
 
     def __init__(self, record: StageRecord, backend: Backend, context: list[int], sampling: Sampling,
-                 rng: np.random.Generator, progress: StageProgress = SILENT):
+                 rng: np.random.Generator, progress: StageProgress = SILENT,
+                 prefill: Callable[[], None] = lambda: None):
         self.record, self.backend, self.context, self.sampling, self.rng = record, backend, context, sampling, rng
-        self.progress = progress
+        self.progress, self.prefill = progress, prefill
         self.raw = ""  # what was written, as it was written (the output is that, normalized)
         self._last = 0  # tokens of the last line written, and of text forced after it
 
     def write(self, line: Line, remaining: int) -> Written:
         record = self.record
+        self.prefill()
         try:
             result = self.backend.generate(self.context, grammar=line.grammar, max_tokens=line.grammar.max_length() + 1,
                                            sampling=self.sampling, rng=self.rng, lines=line.lines)

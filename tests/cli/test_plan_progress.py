@@ -101,3 +101,16 @@ def test_a_stage_no_model_writes_shows_what_it_found_or_its_error(terminal):
                                      "allocation: the goal holds already: there is nothing to plan; 0.7 s in all"]
     else:
         assert "planning without the model" in text
+
+
+def test_a_stage_the_planner_wrote_alone_says_its_prompt_was_not_evaluated():
+    """An allocation whose every line was one way to write: no model asked, so no prompt evaluated or tokens/s."""
+    out = io.StringIO()
+    record = StageRecord("allocation", prompt_tokens=3800, forced_tokens=201, seconds=0.3)
+    with PlanProgress(Console(file=out, force_terminal=False)) as progress:
+        progress.stage_started("allocation", 3800)
+        progress.tokens_written("allocation", 0, 201)
+        progress.stage_ended(record)
+    assert out.getvalue().splitlines() == [
+        "allocation: nothing for the model to choose: 201 tokens written by the planner, the prompt (3,800 tokens) "
+        "not evaluated; 0.3 s in all"]

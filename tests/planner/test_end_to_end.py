@@ -43,7 +43,14 @@ def test_the_plan_command_shows_a_line_per_stage_on_stderr_and_only_the_plan_on_
     lines = [line for line in kitchen01.stderr.splitlines() if not line.startswith("notice: ")]
     records = json.loads((kitchen01.out / "result.json").read_text())["stages"]
     assert [line.split(":")[0] for line in lines] == list(records) == ["decomposition", "coalition", "allocation"]
+    assert records["decomposition"]["prompted"]
     for line, (stage, timings) in zip(lines, records.items()):
+        if not timings["prompted"]:  # every line had one way to write it: the planner's, its prompt not evaluated
+            assert timings["generated_tokens"] == 0 and line == (
+                f"{stage}: nothing for the model to choose: {timings['forced_tokens']:,} tokens written by the "
+                f"planner, the prompt ({timings['prompt_tokens']:,} tokens) not evaluated; {timings['seconds']:.1f} "
+                "s in all"), line
+            continue
         assert line.startswith(f"{stage}: prompt {timings['prompt_tokens']:,} tokens "
                                f"({timings['reused_tokens']:,} reused) in "), line
         written = timings["generated_tokens"] + timings["forced_tokens"]

@@ -65,3 +65,35 @@ def test_a_free_stage_tells_its_start_and_its_end():
               rng=np.random.default_rng(0), progress=recorder)
     assert [e[0] for e in recorder.events] == ["started", "evaluated", "ended"]
     assert recorder.events[-1][1].generated_tokens == 1
+
+
+class Counting(FakeBackend):
+    """Counts the prompts it is asked to evaluate."""
+
+    def __init__(self):
+        super().__init__()
+        self.prefilled = 0
+
+    def prefill(self, context, prefixes) -> int:
+        self.prefilled += 1
+        return 0
+
+
+def test_a_stage_that_leaves_the_model_nothing_to_choose_never_evaluates_its_prompt():
+    """Every line offered one way (an allocation whose robots the team leaves no choice of): the planner writes
+    it all, the prompt is not evaluated (no prefill, no "evaluated" event), and the record says so; a stage with
+    one choice evaluates it once, before the model's first line."""
+    one_way = Script("def wash(robot_list):\n", Grammar({"root": alt("    GoToObject(robot_list[0], 'Sink')\n")}))
+    recorder, record, backend = Recorder(), StageRecord("allocation"), Counting()
+    run_stage(record, backend, Fitted("prompt", [1] * 10, prefixes=(6,)), one_way, output_budget=200,
+              sampling=Sampling(), rng=np.random.default_rng(0), progress=recorder)
+    assert record.output == "def wash(robot_list):\n    GoToObject(robot_list[0], 'Sink')\n"
+    assert backend.prefilled == 0 and not record.prompted and record.generated_tokens == 0
+    assert [e[0] for e in recorder.events] == ["started", "written", "ended"]
+    choice = Script("def wash(robot_list):\n", Grammar({"root": alt("    GoToObject(robot_list[0], 'Sink')\n",
+                                                                     "    GoToObject(robot_list, 'Sink')\n")}))
+    recorder, record, backend = Recorder(), StageRecord("allocation"), Counting()
+    run_stage(record, backend, Fitted("prompt", [1] * 10, prefixes=(6,)), choice, output_budget=200,
+              sampling=Sampling(), rng=np.random.default_rng(0), progress=recorder)
+    assert backend.prefilled == 1 and record.prompted and record.generated_tokens > 0
+    assert [e[0] for e in recorder.events][:2] == ["started", "evaluated"]

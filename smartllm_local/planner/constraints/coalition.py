@@ -31,6 +31,13 @@ WORD_CHARS = REASON_CHARS - {" ", ";"}
 _TEAM = re.compile(r"; so (robots\[\d+\](?: and robots\[\d+\])*)\n?$")
 LINE = re.compile(r"^(# SubTask \d+ \(\w+\): )needs ([^;\n]+); ([^;\n]+); so (robots\[\d+\](?: and robots\[\d+\])*)$",
                   re.M)
+_NAME, _INDEX = re.compile(r"\((\w+)\)"), re.compile(r"robots\[(\d+)\]")
+
+
+def chosen_teams(coalition: str) -> dict[str, frozenset[int]]:
+    """The team each sub-task's line chose, by function name (none for a refusal or free text that is no line)."""
+    return {_NAME.search(m.group(1)).group(1): frozenset(map(int, _INDEX.findall(m.group(4))))  # type: ignore[union-attr]
+            for m in LINE.finditer(coalition)}
 
 
 def needs_clause(need: Need) -> str:

@@ -193,6 +193,14 @@ def feasible_lists(team: Sequence[Robot], steps: Sequence[Step], min_length: int
     return good
 
 
+def one_robot_suffices(team: Sequence[Robot], steps: Sequence[Step]) -> bool:
+    """Whether a function of these steps is one robot's work whoever is free: one robot of the team can do every
+    step, and every robot with a step's skill can do that step alone, so a team would pool nothing (no load, no
+    place's capacity) and no robot list of two is ever the least one that works."""
+    return any(all(_step_ok([robot], step) for step in steps) for robot in team) and \
+        all(_step_ok([robot], step) for step in steps for robot in team if step.skill in robot.skills)
+
+
 def _step_ok(listed: Sequence[Robot], step: Step) -> bool:
     actors = listed if step.slot is None else [listed[step.slot]]
     demand = step.demand

@@ -66,12 +66,17 @@ class Orchestration:
         if self.team is not None:
             lists = self._checked_lists(fn, need)
             if lists or (lists is not None and self.threads):  # none that works in the block: it waits
-                free = [o for o in lists if not self.busy.intersection(o)]
+                free = self._chosen(fn, [o for o in lists if not self.busy.intersection(o)])
                 return alt(*(", ".join(f"robots[{i}]" for i in order) for order in free)) if free else None
         free_robots = [i for i in range(self.team_size) if i not in self.busy]
         if len(free_robots) < need:
             return None
         return robot_list(self.team_size, need, ", ", ordered=True, among=free_robots)
+
+    def _chosen(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
+        """Of the lists a function may be run with, those of the team its coalition line chose (see
+        :class:`.restated.RestatedAllocation`); all of them here."""
+        return lists
 
     def _checked_lists(self, fn: WrittenFunction, need: int) -> list[tuple[int, ...]] | None:
         """Capable robot lists (and of those, the ones the world allows), kept for this point of the plan.

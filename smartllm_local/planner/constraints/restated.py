@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
 from ...robots import Robot
@@ -29,7 +29,7 @@ from ...skills import Skill, SkillSet
 from ..decoding.grammar import alt, seq
 from ..decoding.protocol import Choose, Forced
 from .candidates import acts_on
-from .feasibility import Step, feasible_lists
+from .feasibility import Step, feasible_lists, one_robot_suffices
 from .format import INDENT
 from .plan import STEP_LINE, PlanConstraint
 from .world_check import Call, Thread, WorldCheck
@@ -59,10 +59,12 @@ class RestatedAllocation(PlanConstraint):
 
     def __init__(self, scene: SceneObjects, skills: SkillSet, *, team: Sequence[Robot] | int,
                  function_names: Sequence[str], bodies: Sequence[Sequence[str]], world: WorldCheck | None = None,
-                 together: bool = False):
+                 together: bool = False, chosen: Mapping[str, frozenset[int]] | None = None):
+        """``chosen``: the team each function's coalition line chose (:func:`.coalition.chosen_teams`)."""
         if len(bodies) != len(function_names):
             raise ValueError("a restated allocation needs one body per function name")
         self.bodies = [list(body) for body in bodies]
+        self.chosen = dict(chosen or {})
         known = {"team": team} if not isinstance(team, int) else {"team_size": team}
         # Refusing is the coalition stage's answer; once teams are formed, the plan is written.
         super().__init__(scene, skills, function_names=function_names, world=world, allow_refusal=False,
@@ -75,6 +77,7 @@ class RestatedAllocation(PlanConstraint):
         self.body_world = WorldCheck(world.scene, world.skills, robots=self.team) \
             if self.team_world is not None else None
         self._bodies_run: set[str] = set()
+        self._alone: dict[str, bool] = {}  # per function: whether one robot can do its whole body (_one_robot)
         # The open block of threads: the team's dry run where it began, and its threads so far.
         self._block_start: object = None
         self._block: list[Thread] = []
@@ -120,8 +123,30 @@ class RestatedAllocation(PlanConstraint):
             self.world.dead_ends += 1
         # No robot can: the coalition stage refuses such plans, and free teams leave it to the model.
         robots = working or able or self.robot_args
+        if self.joins and "robot_list[0]" in robots and self._one_robot(fn):
+            robots = ["robot_list[0]"]
         text = seq(f"{INDENT}{skill.name}(", alt(*robots), f", {args})\n")
         return self._choose(self.rules, {"goto" if skill.action == "" else "action": text})
+
+    def _chosen(self, fn: WrittenFunction, lists: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
+        """The lists of the team the function's coalition line chose, where any may be given now: the coalition
+        decided who does the sub-task, and the allocation writes it (over the whole benchmark the model's
+        allocations had named that team for all 66 sub-tasks); every list where none is or none can be."""
+        team = self.chosen.get(fn.name)
+        return [order for order in lists if frozenset(order) == team] or lists
+
+    def _one_robot(self, fn: WrittenFunction) -> bool:
+        """Whether the function's whole body is one robot's work (:func:`.feasibility.one_robot_suffices`). Where
+        sub-tasks join threads (``together``), its robot lists are then of one robot, where ``robot_list`` and
+        ``robot_list[0]`` name the same robot: each step is written for ``robot_list[0]``, and the model is not
+        asked which."""
+        if self.team is None:
+            return False
+        if fn.name not in self._alone:
+            calls = filter(None, map(self._skill_call, self.bodies[len(self.functions) - 1]))
+            whole = replace(fn, calls=[(0, skill.name, tuple(objects)) for skill, objects, _ in calls])
+            self._alone[fn.name] = one_robot_suffices(self.team, self._steps(whole))
+        return self._alone[fn.name]
 
     @staticmethod
     def _new_slot(fn: WrittenFunction, arg: str) -> bool:

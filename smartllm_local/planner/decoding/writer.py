@@ -42,6 +42,13 @@ REWRITTEN = "repair"
 #: Tokens held back from the constraint for what opened line ends add (see above).
 SLACK = 64
 
+def exact_budget(longest: int) -> int:
+    """The budget of an output whose longest is known to the character (a restated allocation's): that, and the
+    slack a writer holds back for what the line ends a model opens add. Where the planner writes every line (all
+    carried, counted at their length), the constraint still has room for the longest output."""
+    return longest + SLACK
+
+
 #: Writes one line for an offered grammar; returns the text and the tokens it cost (the line-by-line writers
 #: of tests and of ``accepts``: a complete line, nothing past its newline).
 LineWriter = Callable[[Choose, int], tuple[str, int]]

@@ -128,12 +128,12 @@ def test_later_tasks_reuse_the_examples_and_scene_and_plan_what_they_plan_alone(
     assert coalition[1].reused_tokens == (coalition[1].shared_tokens if coalition[0].examples == coalition[1].examples
                                           else 0)
     for run in (alone, after):
+        # The coalition chose; living-02's allocation had nothing left to choose (its sub-task's robot and every
+        # step's were the coalition's and the team's): the planner wrote it, and no prompt was evaluated. An
+        # allocation that goes on in its coalition's context: tests/benchmark/test_speed.py.
         record, coalition = run.stage("allocation"), run.stage("coalition")
-        # the coalition's context as it was evaluated (what it wrote, not the end of sequence it chose), then
-        # the line that opens the allocation, and what the coalition forced after its last chosen token (lines
-        # with one team left, lines completed after its end of sequence), evaluated in the allocation's batch
-        assert record.reused_tokens >= coalition.prompt_tokens + coalition.generated_tokens - 1
-        assert record.prompt_tokens - record.reused_tokens < 12 + coalition.forced_tokens
+        assert coalition.prompted and coalition.generated_tokens > 0
+        assert not record.prompted and record.generated_tokens == record.reused_tokens == 0 < record.forced_tokens
 
 
 def _planned(tmp_path, states=None):
@@ -158,17 +158,17 @@ def test_a_second_process_starts_from_the_stored_examples(kitchen01, tmp_path):
     first = (kitchen01.out / "allocated.py").read_text()
     cold = json.loads((kitchen01.out / "result.json").read_text())["stages"]
     stored = entries(kitchen01.states)
-    # The decomposition's examples and scene, and the examples coalition and allocation share.
-    assert len(stored) == 3 and cold["decomposition"]["reused_tokens"] == cold["coalition"]["reused_tokens"] == 0
+    # The decomposition's examples and scene. kitchen-01's one robot leaves the coalition and the allocation
+    # nothing to choose: the planner writes them and evaluates no prompt, so nothing of theirs is stored (a coalition
+    # and allocation the model writes, from stored examples: tests/benchmark/test_speed.py).
+    assert len(stored) == 2 and cold["decomposition"]["reused_tokens"] == 0
+    assert not any(cold[stage]["prompted"] or cold[stage]["generated_tokens"] for stage in ("coalition", "allocation"))
     second, warm, proc = plan("second", "--quiet")
     assert second == first
     assert all(line.startswith("notice: ") for line in proc.stderr.splitlines()) and proc.stdout == second
     decomposition = warm["decomposition"]
     assert decomposition["prompt_tokens"] - decomposition["reused_tokens"] < 90  # team skills, instruction, chat turn
-    assert warm["coalition"]["reused_tokens"] == warm["coalition"]["shared_tokens"] > 0, warm
-    # in the coalition's context: the line that opens the allocation, and what the coalition forced at its end
-    assert cold["allocation"]["prompt_tokens"] - cold["allocation"]["reused_tokens"] \
-        < 12 + cold["coalition"]["forced_tokens"]
+    assert len(entries(kitchen01.states)) == 2
 
 
 @pytest.mark.heavy
@@ -182,7 +182,7 @@ def test_a_damaged_store_is_rebuilt(tmp_path):
         path.write_bytes(path.read_bytes()[:1000])
     third, rebuilt, _ = plan("third")
     assert third == first and rebuilt["coalition"]["reused_tokens"] == rebuilt["decomposition"]["reused_tokens"] == 0
-    assert [p.stat().st_size > 1000 for p in entries(states)] == [True] * 3
+    assert [p.stat().st_size > 1000 for p in entries(states)] == [True] * 2  # the decomposition's (see above)
 
 
 class _Keeper(PrefixReuse):

@@ -8,7 +8,7 @@ from __future__ import annotations
 import pytest
 
 from smartllm_local.domain import load_domain
-from smartllm_local.planner.constraints.coalition import CoalitionConstraint, needs_clause
+from smartllm_local.planner.constraints.coalition import CoalitionConstraint, chosen_teams, needs_clause
 from smartllm_local.planner.constraints.feasibility import Need, minimal_lists, minimal_teams
 from smartllm_local.planner.constraints.restated import RestatedAllocation, restated_bodies
 from smartllm_local.planner.constraints.world_check import WorldCheck
@@ -258,6 +258,106 @@ def test_together_a_body_brings_in_no_robot_it_can_do_without():
         text = run_constraint(allocator, write, len, 5000)
         assert ("robot_list[1]" in text) == second, text
         assert ("[robots[0], robots[1]]" in text or "[robots[1], robots[0]]" in text) == second, text
+
+
+def test_together_a_body_one_robot_does_alone_leaves_the_writer_no_robot_to_choose():
+    """Where one robot can do a function's whole body and every robot with a step's skill can do that step alone,
+    its robot lists are of one robot, where robot_list and robot_list[0] name the same robot: each step is written
+    for robot_list[0], and the writer is asked only about threads and teams. Where a robot that picks things up
+    cannot lift one alone (robot 7 lifts 0.08 kg), two robots may pool the lift: the steps stay the writer's."""
+    def written(*robot_ids: int) -> tuple[str, list[str]]:
+        asked: list[str] = []
+
+        def write(choose, remaining):
+            text = choose.grammar.sample(_Whole())
+            if text.startswith("    "):
+                asked.append(text)
+            return text, len(text)
+
+        team = CATALOGUE.team(robot_ids)
+        allocator = RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=NAMES,
+                                       bodies=restated_bodies(DECOMPOSITION, NAMES),
+                                       world=WorldCheck(scene_objects(KITCHEN), CATALOGUE.skills, len(team)),
+                                       together=True)
+        return run_constraint(allocator, write, len, 5000), asked
+
+    text, asked = written(1, 2)
+    assert not asked and text.count("(robot_list[0], ") == 4 * len(NAMES) and "(robot_list, " not in text, text
+    text, asked = written(1, 8, 7)
+    assert "    GoToObject(robot_list, 'Apple')\n" in asked and "(robot_list, " in text, text
+
+
+def test_an_allocation_the_planner_writes_alone_has_room_for_its_threads():
+    """Every body line one way to write, counted at its length as the planner carries it: within the exact
+    budget (the longest output, and the slack held back for line ends the model opens) the functions still
+    join threads; within the longest output alone, the slack held back left the last one a direct call."""
+    from smartllm_local.planner.decoding.writer import Report, TokenWriter, Written, exact_budget, run_tokens
+
+    class FirstOption(TokenWriter):
+        def write(self, line, remaining):
+            text = line.grammar.sample(_Whole())
+            return Written(text, len(text))
+
+        def force(self, text):
+            return len(text)
+
+    def allocated(exact: bool) -> str:
+        team = CATALOGUE.team((1, 2))
+        allocator = RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=NAMES,
+                                       bodies=restated_bodies(DECOMPOSITION, NAMES),
+                                       world=WorldCheck(scene_objects(KITCHEN), CATALOGUE.skills, len(team)),
+                                       together=True)
+        longest = allocator.maximum_output()
+        return run_tokens(allocator, FirstOption(), exact_budget(longest) if exact else longest, Report())
+
+    exact = allocated(exact=True)
+    assert exact.endswith("t1 = threading.Thread(target=subtask3_lettuce, args=([robots[0]],))\nt1.start()\n"
+                          "t1.join()\n") and "t2.start()\n" in exact and "(robot_list, " not in exact, exact
+    assert allocated(exact=False).endswith("\nsubtask3_lettuce([robots[0]])\n")
+
+
+def test_an_allocation_runs_each_sub_task_on_the_team_its_coalition_line_chose():
+    """Two strong robots, either of which can do each sub-task: the coalition chose robots[1] for the apple and
+    robots[0] for the tomato, and the allocation offers those teams alone (a lettuce it named no team for, or a
+    team that cannot run it, leaves the lists as they were); the coalition's lines are read by name."""
+    coalition = (f"# SubTask 1 (subtask1_apple): {needs_clause(Need(frozenset({'GoToObject'}), 0))} one is enough; "
+                 "so robots[1]\n# SubTask 2 (subtask2_tomato): needs GoToObject; either; so robots[0]\n")
+    assert chosen_teams(coalition) == {"subtask1_apple": frozenset({1}), "subtask2_tomato": frozenset({0})}
+    team = CATALOGUE.team((1, 2))
+
+    def allocator(chosen):
+        return RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=NAMES,
+                                  bodies=restated_bodies(DECOMPOSITION, NAMES),
+                                  world=WorldCheck(scene_objects(KITCHEN), CATALOGUE.skills, len(team)),
+                                  together=True, chosen=chosen)
+
+    def threads(first: str, second: str, third: str) -> str:
+        text = _allocated([first, second], ["robot_list[0]"] * 3)
+        return text[:text.index("t1 = ")] + (
+            f"t1 = threading.Thread(target=subtask1_apple, args=([{first}],))\n"
+            f"t2 = threading.Thread(target=subtask2_tomato, args=([{second}],))\n"
+            "t1.start()\nt2.start()\nt1.join()\nt2.join()\n"
+            f"t1 = threading.Thread(target=subtask3_lettuce, args=([{third}],))\nt1.start()\nt1.join()\n")
+
+    chosen = chosen_teams(coalition)
+    assert accepts(allocator(chosen), threads("robots[1]", "robots[0]", "robots[0]"))
+    assert accepts(allocator(chosen), threads("robots[1]", "robots[0]", "robots[1]"))  # the lettuce: either
+    assert not accepts(allocator(chosen), threads("robots[0]", "robots[1]", "robots[0]"))
+    assert accepts(allocator({}), threads("robots[0]", "robots[1]", "robots[0]"))
+    # A team that cannot run it (there is no robots[5]): the lists as they were.
+    assert accepts(allocator({"subtask1_apple": frozenset({5})}), threads("robots[0]", "robots[1]", "robots[0]"))
+
+
+class _Whole:
+    """Grammar.sample's choices: the whole robot_list where it is an option, else the first."""
+
+    @staticmethod
+    def choice(options):
+        return next((o for o in options if getattr(o, "text", None) == "robot_list"), options[0])
+
+    @staticmethod
+    def randint(low, high):
+        return low
 
 
 class _Second:
