@@ -158,8 +158,7 @@ class _StageWriter(TokenWriter):
     """The backend as a stage's writer: each line generated under its grammar, in the stage's context."""
 
     def __init__(self, record: StageRecord, backend: Backend, context: list[int], sampling: Sampling,
-                 rng: np.random.Generator, progress: StageProgress = SILENT,
-                 prefill: Callable[[], None] = lambda: None):
+                 rng: np.random.Generator, progress: StageProgress, prefill: Callable[[], None]):
         self.record, self.backend, self.context, self.sampling, self.rng = record, backend, context, sampling, rng
         self.progress, self.prefill = progress, prefill
         self.raw = ""  # what was written, as it was written (the output is that, normalized)

@@ -42,6 +42,7 @@ REWRITTEN = "repair"
 #: Tokens held back from the constraint for what opened line ends add (see above).
 SLACK = 64
 
+
 def exact_budget(longest: int) -> int:
     """The budget of an output whose longest is known to the character (a restated allocation's): that, and the
     slack a writer holds back for what the line ends a model opens add. Where the planner writes every line (all
