@@ -11,8 +11,17 @@ notional robot per sub-task, in the order written) ends the same: no call fails 
 alike as the goals see it (:func:`~smartllm_local.scoring.as_scored`), or, where the text met stated goals, it
 still meets each: a robot that has carried the watering can to the coffee table and goes on to "the statue" takes
 the one nearest it, not the one the other sub-task's robot took, and the coffee table ends as asked (dev6-c3). A
-sub-task that joins none starts the sub-tasks after it afresh. Only the model's plan, its stated goals and the team
-are read.
+sub-task that joins none starts the sub-tasks after it afresh.
+
+Teams apart are not all a block needs: its sub-tasks must also run at once. Asked to put the apple, the tomato and
+the lettuce in the fridge with three robots, the 1.5B wrote a sub-task for each, each opening and closing the
+fridge: run at once, the second robot's opening fails where the first's succeeded, so the allocation ran them in
+turn, two transitions the reference plan does not make (RU 0 for a plan that met every goal; dev9-c1, the wine
+bottle and the salt shaker, the same). So a sub-task with a team apart is joined too where the sub-tasks from the
+block's first to it, started together as the executor interleaves them (a notional robot each, a step or a second
+of sleep a tick, after the sub-tasks before them ran in turn), fail a call that run in turn succeeds; it is written
+at the end of the latest one before it whose joined block then runs at once. Only the model's plan, its stated
+goals and the team are read.
 """
 
 from __future__ import annotations
@@ -25,7 +34,9 @@ from ..scene import SceneObjects
 from ..scoring import Condition, as_scored
 from ..skills import SkillSet
 from .constraints.feasibility import EXACT_COALITIONS
-from .constraints.format import INDENT
+from .constraints.format import INDENT, MAX_SUBTASKS
+from .constraints.world_check import Call, WorldCheck
+from .constraints.written import CALL_LINE, sleep_ticks
 from .idle_steps import Step, body_end, dry_run, function_lines, function_name, skill_steps
 from .in_turn import apart
 
@@ -54,18 +65,51 @@ def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet, team: Se
     base = None  # the text's dry run, made once a join is tried
     start = 0  # the first sub-task of those the next must have a team apart from
     for later in range(len(defs)):
-        if apart(range(start, later + 1), steps, (), actions, team, scene):
+        teams_apart = apart(range(start, later + 1), steps, (), actions, team, scene)
+        if teams_apart and at_once(lines, start, later, scene, skills):
             continue
         for earlier in range(later - 1, start - 1, -1):
             moved = [replace(s, function=earlier) if s.function == later else s for s in steps]
             if not apart(range(start, later), moved, (), actions, team, scene):
                 continue
             after = _joined(lines, defs, earlier, later)
+            joined_steps = skill_steps(after, skills)
+            if teams_apart and not (joined_steps and at_once(after, start, later - 1, scene, skills)):
+                continue  # joined there, the block would still run in turn
             base = base or _outcome(steps, scene, skills, goals)
-            if _ends_well(base, skill_steps(after, skills), scene, skills, goals):
+            if _ends_well(base, joined_steps, scene, skills, goals):
                 return "".join(after), function_name(lines[defs[later]]), function_name(lines[defs[earlier]])
         start = later
     return None
+
+
+def at_once(lines: Sequence[str], first: int, last: int, scene: SceneObjects, skills: SkillSet) -> bool:
+    """Whether the sub-tasks ``first`` to ``last`` (by order written), started together after those before them ran
+    in turn, succeed in every call that they succeed in run in turn: a notional robot each, a step or a second of
+    sleep a tick, as the executor interleaves threads."""
+    timelines = _timelines(lines)
+    world = WorldCheck(scene, skills, MAX_SUBTASKS)
+    robot = [[min(f, MAX_SUBTASKS - 1)] for f in range(len(timelines))]
+    for f in range(first):
+        world.perform([c for c in timelines[f] if c is not None], robot[f])
+    if world.runs_together([(timelines[f], robot[f]) for f in range(first, last + 1)]):
+        return True
+    return not all([world.perform([c for c in timelines[f] if c is not None], robot[f])
+                    for f in range(first, last + 1)])
+
+
+def _timelines(lines: Sequence[str]) -> list[list[Call | None]]:
+    """Each function's body as the executor runs it: its skill calls (for the whole robot list), and a second of
+    nothing for each second it sleeps."""
+    timelines: list[list[Call | None]] = []
+    for line in lines:
+        if line.startswith("def "):
+            timelines.append([])
+        elif timelines and line.startswith(INDENT) and (call := CALL_LINE.match(line.rstrip("\n"))) is not None:
+            timelines[-1].append((None, call.group(1), tuple(o for o in call.group(3, 4) if o is not None)))
+        elif timelines:
+            timelines[-1] += [None] * sleep_ticks(line)
+    return timelines
 
 
 def _outcome(steps: Sequence[Step], scene: SceneObjects, skills: SkillSet,

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from smartllm_local.planner.joined import join_in_turn
+from smartllm_local.planner.joined import at_once, join_in_turn
 from smartllm_local.planner.pipeline import PlannerConfig
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
@@ -87,6 +87,59 @@ def test_a_join_that_takes_another_of_two_things_is_made_where_the_stated_goals_
     assert not failed and _met(dry, goals)
     wrong = [Condition("SideTable", item="Statue"), *goals]  # a goal the join would undo: not made
     assert join_in_turn(text, scene_objects(223), SKILLS, team, wrong)[1] == []
+
+
+def _to_fridge(n: int, thing: str) -> str:
+    return (f"def subtask{n}_{thing.lower()}_to_fridge():\n    # take the {thing.lower()} to the fridge\n"
+            f"    GoToObject('{thing}')\n    PickupObject('{thing}')\n    GoToObject('Fridge')\n"
+            f"    OpenObject('Fridge')\n    PutObject('{thing}', 'Fridge')\n    CloseObject('Fridge')\n\n")
+
+
+def _started_together(*names: str) -> str:
+    made = "".join(f"t{k} = threading.Thread(target={n})\n" for k, n in enumerate(names, 1))
+    return made + "".join(f"t{k}.start()\n" for k in range(1, len(names) + 1)) + \
+        "".join(f"t{k}.join()\n" for k in range(1, len(names) + 1))
+
+
+def test_sub_tasks_that_share_the_fridge_they_open_and_close_are_one():
+    """FloorPlan6, three robots that do everything: each sub-task has a robot of its own, but run at once the second
+    opens a fridge the first has opened, so the allocation would run them in turn (two transitions; the 1.5B's plan
+    of kitchen-05, RU 0). Joined, one sub-task puts all three away, and the dry run meets every goal."""
+    things = ("Apple", "Tomato", "Lettuce")
+    text = "".join(_to_fridge(k, t) for k, t in enumerate(things, 1)) + \
+        _started_together(*(f"subtask{k}_{t.lower()}_to_fridge" for k, t in enumerate(things, 1)))
+    lines = text.splitlines(keepends=True)
+    assert not at_once(lines, 0, 1, scene_objects(6), SKILLS) and at_once(lines, 0, 0, scene_objects(6), SKILLS)
+    joined, names = join_in_turn(text, scene_objects(6), SKILLS, CATALOGUE.team([1, 2, 3]))
+    assert names == ["subtask2_tomato_to_fridge into subtask1_apple_to_fridge",
+                     "subtask3_lettuce_to_fridge into subtask1_apple_to_fridge"]
+    assert joined.count("def ") == 1 and joined.endswith(_started_together("subtask1_apple_to_fridge"))
+    dry, failed = _final_state(joined, 6)
+    assert not failed and _met(dry, [Condition("Fridge", item=t) for t in things])
+
+
+def test_a_sub_task_at_the_fridge_joins_the_one_it_waits_for_not_the_latest():
+    """The apple's robot waits two seconds before it goes to the fridge, so at the tick it opens it, the tomato's
+    robot, after the light's two steps, opens it too: joined into the light's sub-task (the latest before it), the
+    tomato's would still collide with the apple's, so it joins the apple's, and the light's runs beside it."""
+    to_fridge = "    GoToObject('Fridge')\n"
+    apple = _to_fridge(1, "Apple").replace(to_fridge, "    time.sleep(2)\n" + to_fridge)
+    light = "def subtask2_light_off():\n    GoToObject('LightSwitch')\n    SwitchOff('LightSwitch')\n\n"
+    text = apple + light + _to_fridge(3, "Tomato") + \
+        _started_together("subtask1_apple_to_fridge", "subtask2_light_off", "subtask3_tomato_to_fridge")
+    joined, names = join_in_turn(text, scene_objects(6), SKILLS, CATALOGUE.team([1, 2, 3]))
+    assert names == ["subtask3_tomato_to_fridge into subtask1_apple_to_fridge"] and joined.count("def ") == 2
+    assert at_once(joined.splitlines(keepends=True), 0, 1, scene_objects(6), SKILLS)
+
+
+def test_a_sub_task_that_sleeps_until_the_fridge_is_closed_runs_at_once_with_the_one_that_opened_it():
+    """Run at once, two sub-tasks that each open and close the fridge collide; the second, sleeping three seconds
+    first (a second a tick, as the executor runs a sleep), opens it after the first has closed it."""
+    opened = "    GoToObject('Fridge')\n    OpenObject('Fridge')\n    CloseObject('Fridge')\n\n"
+    for sleep, together in (("", False), ("    time.sleep(3)\n", True)):
+        text = f"def subtask1_look():\n{opened}def subtask2_look_again():\n{sleep}{opened}" + \
+            _started_together("subtask1_look", "subtask2_look_again")
+        assert at_once(text.splitlines(keepends=True), 0, 1, scene_objects(6), SKILLS) is together
 
 
 def test_the_planner_hands_the_coalition_the_joined_sub_tasks_and_one_at_a_time_keeps_them_apart(monkeypatch):

@@ -18,7 +18,6 @@ threads as the executor interleaves them.
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
@@ -33,11 +32,10 @@ from .feasibility import Step, feasible_lists, one_robot_suffices
 from .format import INDENT
 from .plan import STEP_LINE, PlanConstraint
 from .world_check import Call, Thread, WorldCheck
-from .written import WrittenFunction, robots_named
+from .written import WrittenFunction, robots_named, sleep_ticks
 
 #: Robot arguments a search for the rest of a body may try before it gives up (and offers the step).
 COMPLETION_TRIES = 400
-_SLEEP = re.compile(r"^\s+time\.sleep\(([\d.]+)\)\n$")
 
 
 def restated_bodies(decomposition: str, names: Sequence[str]) -> list[list[str]]:
@@ -297,9 +295,8 @@ class RestatedAllocation(PlanConstraint):
         calls = iter(fn.calls)
         steps: list[Call | None] = []
         for line in self.bodies[self.fixed_names.index(fn.name)]:
-            sleep = _SLEEP.match(line)
-            if sleep:
-                steps += [None] * math.ceil(float(sleep.group(1)))
+            if ticks := sleep_ticks(line):
+                steps += [None] * ticks
             elif self._skill_call(line):
                 steps.append(next(calls))
         return steps

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 
@@ -11,6 +12,14 @@ from .world_check import Call
 #: A call line of a plan: its skill, its robot_list slot (if it names one) and its one or two objects.
 CALL_LINE = re.compile(r"^\s+(\w+)\((?:robot_list(?:\[(\d+)\])?, )?'([^']+)'(?:, '([^']+)')?\)$")
 _ROBOT = re.compile(r"robots\[(\d+)\]")
+_SLEEP = re.compile(r"^\s+time\.sleep\(([\d.]+)\)$")
+
+
+def sleep_ticks(line: str) -> int:
+    """The ticks the executor waits at a body line: a tick for each second a sleep waits (part of one a whole);
+    none at any other line."""
+    sleep = _SLEEP.match(line.rstrip("\n"))
+    return math.ceil(float(sleep.group(1))) if sleep else 0
 
 
 def robots_named(piece: str) -> list[int]:
