@@ -631,6 +631,16 @@ def test_the_soap_is_the_bar_beside_a_soap_bottle():
     assert asked.placements == {"Drawer": ["SoapBar", "SprayBottle"]}
 
 
+@pytest.mark.parametrize("holder_words", ["one of the drawers", "any of the drawers", "either of your drawers"])
+def test_a_thing_put_in_one_of_several_holders_is_owed_in_that_kind_of_holder(holder_words):
+    """Asked to put the spray bottle in one of the drawers, the 0.5B stated the toilet paper there, and nothing was
+    owed: the holder's words were read as "one of" (dev8-e2)."""
+    vocabulary = goal_vocabulary(scene_objects(426))
+    for instruction in (f"Put the spray bottle in {holder_words}.", f"The spray bottle goes in {holder_words}."):
+        assert asked_of(instruction, vocabulary, WORDS).placements == {"Drawer": ["SprayBottle"]}, instruction
+    assert asked_of("Put the spray bottle in one of them.", vocabulary, WORDS).placements == {}
+
+
 def test_of_several_things_named_for_a_state_those_where_the_words_place_them_are_asked():
     """Asked to switch off the lamp on the side table, the 0.5B switched off the floor lamp."""
     scene = scene_objects(201)
