@@ -36,7 +36,7 @@ from ..skills import SkillSet
 from .constraints.feasibility import EXACT_COALITIONS
 from .constraints.format import INDENT, MAX_SUBTASKS
 from .constraints.world_check import Call, WorldCheck
-from .constraints.written import CALL_LINE, sleep_ticks
+from .constraints.written import sleep_ticks
 from .idle_steps import Step, body_end, dry_run, function_lines, function_name, skill_steps
 from .in_turn import apart
 
@@ -66,7 +66,7 @@ def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet, team: Se
     start = 0  # the first sub-task of those the next must have a team apart from
     for later in range(len(defs)):
         teams_apart = apart(range(start, later + 1), steps, (), actions, team, scene)
-        if teams_apart and at_once(lines, start, later, scene, skills):
+        if teams_apart and at_once(lines, steps, start, later, scene, skills):
             continue
         for earlier in range(later - 1, start - 1, -1):
             moved = [replace(s, function=earlier) if s.function == later else s for s in steps]
@@ -74,7 +74,7 @@ def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet, team: Se
                 continue
             after = _joined(lines, defs, earlier, later)
             joined_steps = skill_steps(after, skills)
-            if teams_apart and not (joined_steps and at_once(after, start, later - 1, scene, skills)):
+            if teams_apart and not (joined_steps and at_once(after, joined_steps, start, later - 1, scene, skills)):
                 continue  # joined there, the block would still run in turn
             base = base or _outcome(steps, scene, skills, goals)
             if _ends_well(base, joined_steps, scene, skills, goals):
@@ -83,11 +83,12 @@ def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet, team: Se
     return None
 
 
-def at_once(lines: Sequence[str], first: int, last: int, scene: SceneObjects, skills: SkillSet) -> bool:
-    """Whether the sub-tasks ``first`` to ``last`` (by order written), started together after those before them ran
-    in turn, succeed in every call that they succeed in run in turn: a notional robot each, a step or a second of
-    sleep a tick, as the executor interleaves threads."""
-    timelines = _timelines(lines)
+def at_once(lines: Sequence[str], steps: Sequence[Step], first: int, last: int, scene: SceneObjects,
+            skills: SkillSet) -> bool:
+    """Whether the sub-tasks ``first`` to ``last`` (by order written) of the text's ``lines`` (its skill calls:
+    ``steps``), started together after those before them ran in turn, succeed in every call that they succeed in
+    run in turn: a notional robot each, a step or a second of sleep a tick, as the executor interleaves threads."""
+    timelines = _timelines(lines, steps)
     world = WorldCheck(scene, skills, MAX_SUBTASKS)
     robot = [[min(f, MAX_SUBTASKS - 1)] for f in range(len(timelines))]
     for f in range(first):
@@ -98,15 +99,16 @@ def at_once(lines: Sequence[str], first: int, last: int, scene: SceneObjects, sk
                     for f in range(first, last + 1)])
 
 
-def _timelines(lines: Sequence[str]) -> list[list[Call | None]]:
+def _timelines(lines: Sequence[str], steps: Sequence[Step]) -> list[list[Call | None]]:
     """Each function's body as the executor runs it: its skill calls (for the whole robot list), and a second of
     nothing for each second it sleeps."""
+    at = {s.line: s for s in steps}
     timelines: list[list[Call | None]] = []
-    for line in lines:
+    for n, line in enumerate(lines):
         if line.startswith("def "):
             timelines.append([])
-        elif timelines and line.startswith(INDENT) and (call := CALL_LINE.match(line.rstrip("\n"))) is not None:
-            timelines[-1].append((None, call.group(1), tuple(o for o in call.group(3, 4) if o is not None)))
+        elif n in at:
+            timelines[-1].append((None, at[n].skill, at[n].objects))
         elif timelines:
             timelines[-1] += [None] * sleep_ticks(line)
     return timelines

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from smartllm_local.planner.idle_steps import skill_steps
 from smartllm_local.planner.joined import at_once, join_in_turn
 from smartllm_local.planner.pipeline import PlannerConfig
 from smartllm_local.scoring import Condition
@@ -109,7 +110,9 @@ def test_sub_tasks_that_share_the_fridge_they_open_and_close_are_one():
     text = "".join(_to_fridge(k, t) for k, t in enumerate(things, 1)) + \
         _started_together(*(f"subtask{k}_{t.lower()}_to_fridge" for k, t in enumerate(things, 1)))
     lines = text.splitlines(keepends=True)
-    assert not at_once(lines, 0, 1, scene_objects(6), SKILLS) and at_once(lines, 0, 0, scene_objects(6), SKILLS)
+    steps = skill_steps(lines, SKILLS)
+    assert not at_once(lines, steps, 0, 1, scene_objects(6), SKILLS) and \
+        at_once(lines, steps, 0, 0, scene_objects(6), SKILLS)
     joined, names = join_in_turn(text, scene_objects(6), SKILLS, CATALOGUE.team([1, 2, 3]))
     assert names == ["subtask2_tomato_to_fridge into subtask1_apple_to_fridge",
                      "subtask3_lettuce_to_fridge into subtask1_apple_to_fridge"]
@@ -129,7 +132,8 @@ def test_a_sub_task_at_the_fridge_joins_the_one_it_waits_for_not_the_latest():
         _started_together("subtask1_apple_to_fridge", "subtask2_light_off", "subtask3_tomato_to_fridge")
     joined, names = join_in_turn(text, scene_objects(6), SKILLS, CATALOGUE.team([1, 2, 3]))
     assert names == ["subtask3_tomato_to_fridge into subtask1_apple_to_fridge"] and joined.count("def ") == 2
-    assert at_once(joined.splitlines(keepends=True), 0, 1, scene_objects(6), SKILLS)
+    lines = joined.splitlines(keepends=True)
+    assert at_once(lines, skill_steps(lines, SKILLS), 0, 1, scene_objects(6), SKILLS)
 
 
 def test_a_sub_task_that_sleeps_until_the_fridge_is_closed_runs_at_once_with_the_one_that_opened_it():
@@ -139,7 +143,8 @@ def test_a_sub_task_that_sleeps_until_the_fridge_is_closed_runs_at_once_with_the
     for sleep, together in (("", False), ("    time.sleep(3)\n", True)):
         text = f"def subtask1_look():\n{opened}def subtask2_look_again():\n{sleep}{opened}" + \
             _started_together("subtask1_look", "subtask2_look_again")
-        assert at_once(text.splitlines(keepends=True), 0, 1, scene_objects(6), SKILLS) is together
+        lines = text.splitlines(keepends=True)
+        assert at_once(lines, skill_steps(lines, SKILLS), 0, 1, scene_objects(6), SKILLS) is together
 
 
 def test_the_planner_hands_the_coalition_the_joined_sub_tasks_and_one_at_a_time_keeps_them_apart(monkeypatch):

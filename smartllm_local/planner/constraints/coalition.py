@@ -23,6 +23,7 @@ from ..decoding.line_ends import COMMENT_NEXT
 from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, longest
 from .feasibility import Need, feasible_teams, minimal_teams, shortfall
 from .format import REASON_CHARS, refusal_line, robot_list, text_run
+from .written import robots_named
 
 # A word of free text: letters and punctuation, never the ";" that ends a part of the line.
 WORD_CHARS = REASON_CHARS - {" ", ";"}
@@ -31,12 +32,12 @@ WORD_CHARS = REASON_CHARS - {" ", ";"}
 _TEAM = re.compile(r"; so (robots\[\d+\](?: and robots\[\d+\])*)\n?$")
 LINE = re.compile(r"^(# SubTask \d+ \(\w+\): )needs ([^;\n]+); ([^;\n]+); so (robots\[\d+\](?: and robots\[\d+\])*)$",
                   re.M)
-_NAME, _INDEX = re.compile(r"\((\w+)\)"), re.compile(r"robots\[(\d+)\]")
+_NAME = re.compile(r"\((\w+)\)")
 
 
 def chosen_teams(coalition: str) -> dict[str, frozenset[int]]:
     """The team each sub-task's line chose, by function name (none for a refusal or free text that is no line)."""
-    return {_NAME.search(m.group(1)).group(1): frozenset(map(int, _INDEX.findall(m.group(4))))  # type: ignore[union-attr]
+    return {_NAME.search(m.group(1)).group(1): frozenset(robots_named(m.group(4)))  # type: ignore[union-attr]
             for m in LINE.finditer(coalition)}
 
 
