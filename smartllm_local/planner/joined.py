@@ -11,7 +11,9 @@ notional robot per sub-task, in the order written) ends the same: no call fails 
 alike as the goals see it (:func:`~smartllm_local.scoring.as_scored`), or, where the text met stated goals, it
 still meets each: a robot that has carried the watering can to the coffee table and goes on to "the statue" takes
 the one nearest it, not the one the other sub-task's robot took, and the coffee table ends as asked (dev6-c3). A
-sub-task that joins none starts the sub-tasks after it afresh.
+call of the joined sub-task that then fails where it did not on a robot of its own is taken out: asked to slice the
+apple and the lettuce, the 1.5B had each sub-task pick up a knife, and the robot holding the first cannot pick up
+the second (dev10-s2). A sub-task that joins none starts the sub-tasks after it afresh.
 
 Teams apart are not all a block needs: its sub-tasks must also run at once. Asked to put the apple, the tomato and
 the lettuce in the fridge with three robots, the 1.5B wrote a sub-task for each, each opening and closing the
@@ -72,13 +74,15 @@ def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet, team: Se
             moved = [replace(s, function=earlier) if s.function == later else s for s in steps]
             if not apart(range(start, later), moved, (), actions, team, scene):
                 continue
-            after = _joined(lines, defs, earlier, later)
+            base = base or _outcome(steps, scene, skills, goals)
+            after, taken = _less_failing(_joined(lines, defs, earlier, later), body_end(lines, defs[earlier]),
+                                         skills, scene, base[0])
             joined_steps = skill_steps(after, skills)
             if teams_apart and not (joined_steps and at_once(after, joined_steps, start, later - 1, scene, skills)):
                 continue  # joined there, the block would still run in turn
-            base = base or _outcome(steps, scene, skills, goals)
             if _ends_well(base, joined_steps, scene, skills, goals):
-                return "".join(after), function_name(lines[defs[later]]), function_name(lines[defs[earlier]])
+                what = f" ({', '.join(taken)} taken out)" if taken else ""
+                return "".join(after), function_name(lines[defs[later]]), function_name(lines[defs[earlier]]) + what
         start = later
     return None
 
@@ -112,6 +116,26 @@ def _timelines(lines: Sequence[str], steps: Sequence[Step]) -> list[list[Call | 
         elif timelines:
             timelines[-1] += [None] * sleep_ticks(line)
     return timelines
+
+
+def _less_failing(lines: list[str], moved: int, skills: SkillSet, scene: SceneObjects,
+                  failing: int) -> tuple[list[str], list[str]]:
+    """The joined ``lines`` less the calls of the body moved (from line ``moved``, its comment) that fail in the dry
+    run where the text before the join failed ``failing`` calls (with the walk to each call's object just before
+    it), and those calls: a robot that cut the apple with the butter knife it holds cuts the lettuce with it too,
+    where the lettuce's own sub-task had its robot pick up the knife (dev10-s2)."""
+    taken: list[str] = []
+    while (steps := skill_steps(lines, skills)) is not None:
+        failed, _ = dry_run(steps, (), scene, skills)
+        out = {n for n in failed if n > moved}
+        if len(failed) <= failing or not out:
+            break
+        taken += [lines[n].strip() for n in sorted(out)]
+        at = {s.line: s for s in steps}
+        out |= {n - 1 for n in out if n - 1 in at and not skills[at[n - 1].skill].action
+                and at[n - 1].objects[:1] == at[n].objects[:1]}
+        lines = [line for n, line in enumerate(lines) if n not in out]
+    return lines, taken
 
 
 def _outcome(steps: Sequence[Step], scene: SceneObjects, skills: SkillSet,

@@ -147,6 +147,25 @@ def test_a_sub_task_that_sleeps_until_the_fridge_is_closed_runs_at_once_with_the
         assert at_once(lines, skill_steps(lines, SKILLS), 0, 1, scene_objects(6), SKILLS) is together
 
 
+def test_a_joined_sub_task_does_without_the_knife_the_robot_already_holds():
+    """FloorPlan9, robot 26 (picks up and slices) and robot 23 (opens the fridge the apple and the lettuce are in):
+    each sub-task picks up a knife of its own, and both need both robots. Joined, the robot holding the butter knife
+    could not pick up the other knife: that call (and the walk to it) is taken out, the butter knife cuts the lettuce
+    too, and the dry run fails nothing and meets both goals."""
+    def sliced(k: int, thing: str, knife: str) -> str:
+        return (f"def subtask{k}_slice_{thing.lower()}():\n    GoToObject('Fridge')\n    OpenObject('Fridge')\n"
+                f"    GoToObject('{knife}')\n    PickupObject('{knife}')\n    GoToObject('{thing}')\n"
+                f"    SliceObject('{thing}')\n    GoToObject('Fridge')\n    CloseObject('Fridge')\n\n")
+    text = sliced(1, "Apple", "ButterKnife") + sliced(2, "Lettuce", "Knife") + \
+        "subtask1_slice_apple()\nsubtask2_slice_lettuce()\n"
+    goals = [Condition("Apple", state="SLICED"), Condition("Lettuce", state="SLICED")]
+    joined, names = join_in_turn(text, scene_objects(9), SKILLS, CATALOGUE.team([26, 23]), goals)
+    assert names == ["subtask2_slice_lettuce into subtask1_slice_apple (PickupObject('Knife') taken out)"]
+    assert joined.count("def ") == 1 and "'Knife'" not in joined
+    dry, failed = _final_state(joined, 9)
+    assert not failed and _met(dry, goals)
+
+
 def test_the_planner_hands_the_coalition_the_joined_sub_tasks_and_one_at_a_time_keeps_them_apart(monkeypatch):
     task = ("Switch off the desk lamp and the ceiling light.", "FloorPlan303", [24, 25])
     goals = "DeskLamp off\nLightSwitch off\n\n"

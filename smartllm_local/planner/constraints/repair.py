@@ -22,7 +22,7 @@ from ...executor.dry_run import DryRun
 from ...scoring import Condition, condition_holds, containment
 from ...skills import Skill, SkillSet
 from ...world.object_types import base_type
-from .candidates import Candidate, Candidates, acts_on
+from .candidates import RELEASE, Candidate, Candidates, acts_on
 from .feasibility import WholeTeam
 from .world_check import WorldCheck
 from .written import CALL_LINE, WrittenFunction
@@ -130,8 +130,11 @@ class Repairer:
              allows: Callable[[str, Sequence[str]], bool] | None = None,
              skills: frozenset[str] | None = None) -> Repair | None:
         """The steps of a new sub-task whose robot ``member`` (one no sub-task has used) meets ``goals`` and ends
-        with empty hands, in at most ``most`` steps, or None."""
-        return self._written(member, goals, None, skills, True, lambda calls: 0 < len(calls) <= most
+        with empty hands, where its ``skills`` can let a thing go, in at most ``most`` steps, or None: asked to
+        slice the apple and the lettuce with a robot that picks up and slices and one that opens, the 0.5B sliced
+        the apple alone, and no plan that ends with the knife put down was found for the lettuce (dev10-s2)."""
+        free = skills is None or any(self.skills[s].action in RELEASE for s in skills if s in self.skills)
+        return self._written(member, goals, None, skills, free, lambda calls: 0 < len(calls) <= most
                              and self._usable(member, calls, allows, goals))
 
     def _written(self, member: int, goals: Sequence[Condition], place: str | None, skills: frozenset[str] | None,

@@ -390,3 +390,19 @@ def test_the_planners_last_sub_task_is_measured_in_the_tokens_it_costs():
     assert "Apple in Fridge" in costed.finish_made["goals"], text
     dry, failed = _final_state(text, 6)
     assert not failed and _met(dry, GOALS)
+
+
+def test_a_team_that_cannot_put_a_thing_down_is_finished_for_with_the_knife_kept_in_hand():
+    """FloorPlan9, robot 26 (picks up and slices) and robot 23 (opens): the model sliced the apple in the fridge and
+    ended; the lettuce, owed sliced, was left, since no plan of a team that puts nothing down ends with empty hands
+    (dev10-s2, the 0.5B). The planner's sub-task slices it, its robot keeping the knife."""
+    apple = ["def subtask1_slice_apple():\n", "    GoToObject('Knife')\n", "    PickupObject('Knife')\n",
+             "    GoToObject('Fridge')\n", "    OpenObject('Fridge')\n", "    GoToObject('Apple')\n",
+             "    SliceObject('Apple')\n", "    GoToObject('Fridge')\n", "    CloseObject('Fridge')\n", "\n",
+             "subtask1_slice_apple()\n"]
+    goals = [Condition("Apple", state="SLICED"), Condition("Lettuce", state="SLICED")]
+    decomposer = _decomposer(9, goals, team=CATALOGUE.team([26, 23]), said=Said(asked=tuple(goals), owed=tuple(goals)))
+    text = run_constraint(decomposer, *_scripted(apple), 3000)
+    assert decomposer.finish_made is not None and decomposer.finish_made["goals"] == ["Lettuce sliced"], text
+    dry, failed = _final_state(text, 9)
+    assert not failed and _met(dry, goals)
