@@ -152,17 +152,26 @@ def outnamed(instruction: str, types: Sequence[str]) -> set[str]:
     (:func:`named_as_phrase`): "the bar of soap" names the SoapBar, so "soap" does not name the SoapBottle; "the
     side table" is not the CoffeeTable; "on the desk" names no DeskLamp. A type whose name holds another's whole
     name is not outnamed by it where it is a kind of the other, its name ending as the other's does ("the chair"
-    may be the ArmChair), or a part people call by the other's name ("the sink" may be the SinkBasin)."""
+    may be the ArmChair), or a part people call by the other's name ("the sink" may be the SinkBasin). A word said
+    again outside the phrase names the type ("draw the shower curtain and switch the shower on": the ShowerHead)."""
+    text = instruction.lower()
     phrases = [t for t in types if named_as_phrase(instruction, t)]
-    said = word_forms(_WORD.findall(instruction.lower()))
+    said = word_forms(_WORD.findall(text))
     out = set()
     for t in types:
         words = set(type_words(t))
-        spoken = words & said
-        if spoken and not any(words == set(type_words(p)) for p in phrases) and \
-                spoken <= set().union(*(set(type_words(p)) for p in phrases if not _may_be(t, p))):
+        if not words & said or any(words == set(type_words(p)) for p in phrases):
+            continue
+        others = [_phrase(p) for p in phrases if not _may_be(t, p)]
+        if not words & word_forms(_WORD.findall(_blanked(text, others))):
             out.add(t)
     return out
+
+
+def _blanked(text: str, patterns: Sequence[re.Pattern[str]]) -> str:
+    """The text with each match of ``patterns`` in it blanked out."""
+    spans = [m.span() for pattern in patterns for m in pattern.finditer(text)]
+    return "".join(" " if any(a <= n < b for a, b in spans) else c for n, c in enumerate(text))
 
 
 def _may_be(kind: str, named: str) -> bool:
@@ -224,7 +233,8 @@ def holder_named(words: str, holders: Collection[str]) -> str | None:
     an armchair; "the toilet" is no toilet paper hanger) or an informal name means several ("the table" beside a
     coffee table and a side table). A thing put in the sink goes in its basin (:data:`PUT_IN_PART`), whether or
     not the scene's sink is a holder of its own ("put the mug in the sink": the 0.5B put it in the fridge named for
-    the apple, and nothing was owed; dev7-c5)."""
+    the apple, and nothing was owed; dev7-c5); one put in the bathtub goes in the bathtub, which holds things itself,
+    not its basin (the 1.5B stated the soap bar in the basin, and nothing was owed; dev10-p1)."""
     phrased = [h for h in holders if named_as_phrase(words, h)]
     phrased += [part for whole, part in PUT_IN_PART.items()
                 if part in holders and whole not in holders and named_as_phrase(words, whole)]
@@ -235,8 +245,9 @@ def holder_named(words: str, holders: Collection[str]) -> str | None:
     else:
         said = word_forms(_WORD.findall(words.lower()))
         named = {h for h in holders if _informally(said, h)}
-    parts = {PUT_IN_PART.get(h) for h in named} & named
-    return next(iter(named)) if len(named) == 1 else next(iter(parts)) if len(parts) == len(named) - 1 == 1 else None
+    meant = {PUT_IN_PART.get(h) for h in named} & named or \
+        {CALLED_BY_WHOLE.get(h) for h in named} & named - set(PUT_IN_PART)  # a bathtub holds things itself
+    return next(iter(named)) if len(named) == 1 else next(iter(meant)) if len(meant) == len(named) - 1 == 1 else None
 
 
 def coverage(named: Sequence[str], stated: Sequence[Condition]) -> float:

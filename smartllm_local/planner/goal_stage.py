@@ -49,6 +49,8 @@ from .prompting.asked_words import (
     named_for,
     placements_and_words,
     placements_asked,
+    referred,
+    sentences_before,
     states_asked,
     without_asking_verbs,
 )
@@ -186,12 +188,17 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
 
 def piece_beside_whole(condition: Condition, stated: Collection[Condition], cut: Collection[str]) -> bool:
     """Whether the condition is about a thing's pieces, the thing not asked cut (``cut``), beside the same condition
-    of the whole thing: the scorer counts a slice in the microwave as the apple, so the pieces' line asks for nothing
-    but a cut. Asked to put the apple, the egg and the potato in the microwave, the 0.5B stated `AppleSliced in
-    Microwave` beside `Apple in Microwave`, for a team that cannot slice, and no plan met either (dev6-s1)."""
+    of the whole thing, or, putting them somewhere, beside a line putting the whole thing somewhere: the scorer counts
+    a slice in the microwave as the apple, so the pieces' line asks for nothing but a cut. Asked to put the apple, the
+    egg and the potato in the microwave, the 0.5B stated `AppleSliced in Microwave` beside `Apple in Microwave`, for
+    a team that cannot slice, and no plan met either (dev6-s1); asked to take the tomato out of the fridge and leave
+    it on the counter, the 1.5B stated `TomatoSliced in Fridge` beside `Tomato in CounterTop` (dev7-e1)."""
     whole = Condition(base_type(condition.subject), state=condition.state,
                       item=None if condition.item is None else base_type(condition.item))
-    return whole != condition and whole in stated and not {whole.subject, whole.item} & set(cut)
+    if whole == condition or {whole.subject, whole.item} & set(cut):
+        return False
+    return whole in stated or condition.item is not None and whole.item != condition.item and \
+        any(c.item == whole.item for c in stated)
 
 
 def _without_placed(stated: StatedGoals, placed: Collection[Condition]) -> StatedGoals:
@@ -264,6 +271,7 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
     holders = {holder for holder, _ in there}
     states: dict[str, list[str]] = {}
     each: dict[str, list[str]] = {}
+    before = sentences_before(instruction, words.asked)
     for state, said in states_asked(instruction, words.asked, words.verbs).items():
         filled = [s for s in words.filled_by(said) if s != state]
         liquid = _holding_liquid(said, [state, *filled], vocabulary) if filled else {}
@@ -271,8 +279,10 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
             for given, things in liquid.items():
                 states[given] = [t for t in states.get(given, things) if t in things] or things
         else:
-            states[state] = _located(said, named_for(said, lambda t, s=state: s in vocabulary.states.get(t, ()),
-                                                     vocabulary), holders, there)
+            def able(kind: str, state: str = state) -> bool:
+                return state in vocabulary.states.get(kind, ())
+            named = named_for(said, able, vocabulary) or referred(said, before[state], able, vocabulary)
+            states[state] = _located(said, named, holders, there)
             apart = [t for t in things_named(said, vocabulary.types) if t in states[state]]
             if len(apart) > 1:  # "the desk lamp and the ceiling light", not "the lamp" beside two
                 each[state] = apart

@@ -183,9 +183,15 @@ class GoalConstraint(Constraint):
         return self._choose({}, options)
 
     def _closed_states(self) -> dict[str, set[str]]:
-        """Each type's states no longer offered: those said of it and their opposites, empty for a holder said to
-        hold a thing, and picked (held by a robot, so in no holder) for a thing said or owed to be in one."""
+        """Each type's states no longer offered: those said of it and their opposites, the opposite of a state the
+        asking words ask of it (not asked too: "open the fridge ... and close it"; "the bed is dirty; give it a clean":
+        the 1.5B stated the bed dirty, dev6-e2), empty for a holder said to hold a thing, and picked (held by a
+        robot, so in no holder) for a thing said or owed to be in one."""
         closed: dict[str, set[str]] = {kind: {PICKED} for named in self.placed.values() for kind in named}
+        for state, named in self.asked.items():
+            for kind in named:
+                if OPPOSITES.get(state) and kind not in self.asked.get(OPPOSITES[state], ()):
+                    closed.setdefault(kind, set()).add(OPPOSITES[state])
         for c in self.said:
             if c.state is not None:
                 closed.setdefault(c.subject, set()).update({c.state, OPPOSITES.get(c.state, c.state)})

@@ -50,6 +50,8 @@ _NAMING_NOTHING = frozenset({"and", "or", "then", "also", "the", "a", "an", "ple
 _SENTENCE = re.compile(r"[.!?]")
 #: Pronouns for the one thing, or all the things, the sentence named before ("put it away", "put them on the bed").
 _IT, _THEM = re.compile(r"\bit\b", re.IGNORECASE), re.compile(r"\b(?:them|both)\b", re.IGNORECASE)
+#: Where a clause of a sentence ends.
+_CLAUSE = re.compile(r"[,;:]")
 
 
 @dataclass(frozen=True)
@@ -149,6 +151,29 @@ def states_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[st
     return asked
 
 
+def sentences_before(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> dict[str, str]:
+    """Each state the instruction asks for (by ``patterns``) with the words of its sentence before the first words
+    asking for it."""
+    before = {}
+    for state, listed in patterns.items():
+        starts = [m.start() for p in listed for m in p.finditer(instruction)]
+        if starts:
+            before[state] = _SENTENCE.split(instruction[:min(starts)])[-1]
+    return before
+
+
+def referred(said: str, before: str, able: Callable[[str], bool], vocabulary: GoalVocabulary) -> list[str]:
+    """The things a pronoun of a state's asking words (``said``) stands for: "it" or "them" among them, or in their
+    clause before the verb ("give it a clean"), means the one thing (or all the things) ``able`` that the sentence
+    named before (``before``): "the kettle is empty; fill it up", "the bed is dirty; give it a clean" (dev6-e2: the
+    1.5B stated the mug clean)."""
+    clause = _CLAUSE.split(before)[-1]
+    if not any(p.search(said) or p.search(clause) for p in (_IT, _THEM)):
+        return []
+    earlier = named_for(before, able, vocabulary)
+    return earlier if len(earlier) == 1 or _THEM.search(said) or _THEM.search(clause) else []
+
+
 def _asking_words(instruction: str, match: re.Match[str], verbs: Sequence[re.Pattern[str]]) -> str:
     after = _after_verb(instruction[match.start():match.end()])
     rest = _PART.split(instruction[match.end():], 1)[0]
@@ -185,7 +210,8 @@ def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateW
     """The holders of the scene the instruction asks things into in so many words (the domain's ``[placements]``),
     each with the things the asking words name that can go in it ("throw the cloth away": GarbageCan, Cloth), and
     those it puts things in by name (``[put]``: "put the potato in the pot", Pot, Potato), where the words name
-    one holder and some thing that can go in it, by name or by a pronoun for the one thing (or all the things) the
+    one holder (or "it", the one holder the sentence named before: "turn on the microwave after you put the cup in
+    it", dev10-p2) and some thing that can go in it, by name or by a pronoun for the one thing (or all the things) the
     sentence named before ("close the laptop and put it away in the drawer"), or by a liquid (``StateWords.liquids``:
     "boil some water on the stove", the things that can be filled); not "the soap", which may be the bar or the
     bottle, nor "on the table" beside three."""
@@ -212,7 +238,7 @@ def _placed(instruction: str, vocabulary: GoalVocabulary,
             yield holder, named_for(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary), said
     holders = vocabulary.holder_types()
     for things, where, before in puts(instruction, words.put):
-        holder = holder_named(where, holders)
+        holder = holder_named(where, holders) or (holder_named(before, holders) if _IT.match(where) else None)
         able = [t for t in vocabulary.types if holder in vocabulary.holders.get(t, ())]
         named = things_named(things, able) if holder else []
         asking = things
