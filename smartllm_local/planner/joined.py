@@ -39,7 +39,7 @@ from .constraints.feasibility import EXACT_COALITIONS
 from .constraints.format import INDENT, MAX_SUBTASKS
 from .constraints.world_check import Call, WorldCheck
 from .constraints.written import sleep_ticks
-from .idle_steps import Step, body_end, dry_run, function_lines, function_name, skill_steps
+from .idle_steps import Step, body_end, dry_run, function_lines, function_name, gotos_before, skill_steps
 from .in_turn import apart
 
 
@@ -75,9 +75,8 @@ def _next_join(lines: list[str], scene: SceneObjects, skills: SkillSet, team: Se
             if not apart(range(start, later), moved, (), actions, team, scene):
                 continue
             base = base or _outcome(steps, scene, skills, goals)
-            after, taken = _less_failing(_joined(lines, defs, earlier, later), body_end(lines, defs[earlier]),
-                                         skills, scene, base[0])
-            joined_steps = skill_steps(after, skills)
+            after, joined_steps, taken = _less_failing(_joined(lines, defs, earlier, later),
+                                                       body_end(lines, defs[earlier]), skills, scene, base[0])
             if teams_apart and not (joined_steps and at_once(after, joined_steps, start, later - 1, scene, skills)):
                 continue  # joined there, the block would still run in turn
             if _ends_well(base, joined_steps, scene, skills, goals):
@@ -119,11 +118,13 @@ def _timelines(lines: Sequence[str], steps: Sequence[Step]) -> list[list[Call | 
 
 
 def _less_failing(lines: list[str], moved: int, skills: SkillSet, scene: SceneObjects,
-                  failing: int) -> tuple[list[str], list[str]]:
+                  failing: int) -> tuple[list[str], list[Step] | None, list[str]]:
     """The joined ``lines`` less the calls of the body moved (from line ``moved``, its comment) that fail in the dry
-    run where the text before the join failed ``failing`` calls (with the walk to each call's object just before
-    it), and those calls: a robot that cut the apple with the butter knife it holds cuts the lettuce with it too,
-    where the lettuce's own sub-task had its robot pick up the knife (dev10-s2)."""
+    run where the text before the join failed ``failing`` calls (with the walk to each call's object that led there,
+    :func:`.idle_steps.gotos_before`), their skill calls, and the calls taken out: a robot that cut the apple with the
+    butter knife it holds cuts the lettuce with it too, where the lettuce's own sub-task had its robot pick up the
+    knife (dev10-s2)."""
+    actions = {name: s.action for name, s in skills.items()}
     taken: list[str] = []
     while (steps := skill_steps(lines, skills)) is not None:
         failed, _ = dry_run(steps, (), scene, skills)
@@ -132,10 +133,10 @@ def _less_failing(lines: list[str], moved: int, skills: SkillSet, scene: SceneOb
             break
         taken += [lines[n].strip() for n in sorted(out)]
         at = {s.line: s for s in steps}
-        out |= {n - 1 for n in out if n - 1 in at and not skills[at[n - 1].skill].action
-                and at[n - 1].objects[:1] == at[n].objects[:1]}
+        out |= {n for call in out for n in gotos_before(steps, {call}, actions)
+                if at[n].objects[:1] == at[call].objects[:1]}
         lines = [line for n, line in enumerate(lines) if n not in out]
-    return lines, taken
+    return lines, steps, taken
 
 
 def _outcome(steps: Sequence[Step], scene: SceneObjects, skills: SkillSet,
