@@ -155,14 +155,14 @@ def outnamed(instruction: str, types: Sequence[str]) -> set[str]:
     may be the ArmChair), or a part people call by the other's name ("the sink" may be the SinkBasin). A word said
     again outside the phrase names the type ("draw the shower curtain and switch the shower on": the ShowerHead)."""
     text = instruction.lower()
-    phrases = [t for t in types if named_as_phrase(instruction, t)]
+    phrases = {t: _phrase(t) for t in types if named_as_phrase(instruction, t)}
     said = word_forms(_WORD.findall(text))
     out = set()
     for t in types:
         words = set(type_words(t))
         if not words & said or any(words == set(type_words(p)) for p in phrases):
             continue
-        others = [_phrase(p) for p in phrases if not _may_be(t, p)]
+        others = [pattern for p, pattern in phrases.items() if not _may_be(t, p)]
         if not words & word_forms(_WORD.findall(_blanked(text, others))):
             out.add(t)
     return out

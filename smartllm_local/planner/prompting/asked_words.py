@@ -158,8 +158,13 @@ def sentences_before(instruction: str, patterns: Mapping[str, Sequence[re.Patter
     for state, listed in patterns.items():
         starts = [m.start() for p in listed for m in p.finditer(instruction)]
         if starts:
-            before[state] = _SENTENCE.split(instruction[:min(starts)])[-1]
+            before[state] = _sentence_before(instruction, min(starts))
     return before
+
+
+def _sentence_before(instruction: str, at: int) -> str:
+    """The words of the instruction's sentence before position ``at``."""
+    return _SENTENCE.split(instruction[:at])[-1]
 
 
 def referred(said: str, before: str, able: Callable[[str], bool], vocabulary: GoalVocabulary) -> list[str]:
@@ -198,7 +203,7 @@ def puts(instruction: str, patterns: Sequence[re.Pattern[str]]) -> list[tuple[st
     """The things put somewhere the instruction names, as (the words naming the things, the words naming where,
     the words of the sentence before them), one for each match of ``patterns`` ("close the laptop and put it in
     the drawer": "it", "drawer", "close the laptop and")."""
-    return [(m["things"], m["holder"], _SENTENCE.split(instruction[:m.start()])[-1])
+    return [(m["things"], m["holder"], _sentence_before(instruction, m.start()))
             for p in patterns for m in p.finditer(instruction)]
 
 
