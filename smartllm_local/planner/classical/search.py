@@ -12,6 +12,10 @@ and, unlike LM-cut, defined for the conditional effects the world's rules need. 
 (emptying a counter of a dozen things), :data:`GREEDY` finds a plan, not proven the shortest, in a fraction of
 the time: greedy best-first search on the FF heuristic with its preferred operators, as LAMA's first
 iteration does. The PDDL that Unified Planning writes for Fast Downward is kept, for a reader or another planner.
+
+Both heuristics take a derived atom's negation (an item not enclosed, a goal not met yet) as always reachable
+(``axioms=approximate_negative``), which keeps h^max admissible: by default Fast Downward works out the negated
+axioms, and for two things to go in one of 26 cabinets (dev11-s1) that ran past 11 GB before the first state.
 """
 
 from __future__ import annotations
@@ -33,8 +37,8 @@ from up_fast_downward import FastDownwardPDDLPlanner
 
 from .problem import PlanningTask
 
-SEARCH = "astar(hmax())"
-GREEDY = "lazy_greedy([ff()],preferred=[ff()])"  # one argument: no space
+SEARCH = "astar(hmax(axioms=approximate_negative))"
+GREEDY = "let(h,ff(axioms=approximate_negative),lazy_greedy([h],preferred=[h]))"  # one argument: no space
 up.get_environment().credits_stream = None  # the engines' banners are not the planner's log
 
 
