@@ -52,6 +52,13 @@ _SENTENCE = re.compile(r"[.!?]")
 _IT, _THEM = re.compile(r"\bit\b", re.IGNORECASE), re.compile(r"\b(?:them|both)\b", re.IGNORECASE)
 #: Where a clause of a sentence ends.
 _CLAUSE = re.compile(r"[,;:]")
+#: A put with its verb left out, after the holder of the one before it: "... in the microwave(,) and the egg in the
+#: fridge"; the things' words a phrase a determiner starts, so that "and the lamp on the desk off" is not one.
+_GAPPED = re.compile(r"[a-z]+(?:\s+[a-z]+)??\s*,?\s+and\s+"
+                     r"(?P<things>(?:the|a|an|my|your|some)\s+[a-z'-]+(?:\s+[a-z'-]+){0,2}?)"
+                     r"\s+(?:in|into|inside|on|onto)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?(?:(?:one|any|either)\s+of\s+"
+                     r"(?:the\s+)?)?(?P<holder>[a-z]+(?:\s+(?!(?:on|off)\b)[a-z]+)?)\b(?!\s+(?:on|off)\b)",
+                     re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -171,10 +178,12 @@ def referred(said: str, before: str, able: Callable[[str], bool], vocabulary: Go
     """The things a pronoun of a state's asking words (``said``) stands for: "it" or "them" among them, or in their
     clause before the verb ("give it a clean"), means the one thing (or all the things) ``able`` that the sentence
     named before (``before``): "the kettle is empty; fill it up", "the bed is dirty; give it a clean" (dev6-e2: the
-    1.5B stated the mug clean)."""
+    1.5B stated the mug clean). Words that name nothing after the verb, with no pronoun, mean the one thing ``able``
+    their clause named before it: "get the bed clean again", "give the dirty bed a wash" (dev11-e3, dev11-inf-3)."""
     clause = _CLAUSE.split(before)[-1]
     if not any(p.search(said) or p.search(clause) for p in (_IT, _THEM)):
-        return []
+        earlier = [] if things_named(said, vocabulary.types) else named_for(clause, able, vocabulary)
+        return earlier if len(earlier) == 1 else []
     earlier = named_for(before, able, vocabulary)
     return earlier if len(earlier) == 1 or _THEM.search(said) or _THEM.search(clause) else []
 
@@ -202,9 +211,16 @@ def without_asking_verbs(instruction: str, patterns: Mapping[str, Sequence[re.Pa
 def puts(instruction: str, patterns: Sequence[re.Pattern[str]]) -> list[tuple[str, str, str]]:
     """The things put somewhere the instruction names, as (the words naming the things, the words naming where,
     the words of the sentence before them), one for each match of ``patterns`` ("close the laptop and put it in
-    the drawer": "it", "drawer", "close the laptop and")."""
-    return [(m["things"], m["holder"], _sentence_before(instruction, m.start()))
-            for p in patterns for m in p.finditer(instruction)]
+    the drawer": "it", "drawer", "close the laptop and") and for each put that follows one with its verb left out
+    ("put the mug in the microwave and the egg in the fridge": "the egg", "fridge")."""
+    found = []
+    for m in (m for p in patterns for m in p.finditer(instruction)):
+        found.append((m["things"], m["holder"], _sentence_before(instruction, m.start())))
+        at = m.start("holder")
+        while gapped := _GAPPED.match(instruction, at):
+            found.append((gapped["things"], gapped["holder"], _sentence_before(instruction, gapped.start("things"))))
+            at = gapped.start("holder")
+    return found
 
 
 def _after_verb(words: str) -> str:
