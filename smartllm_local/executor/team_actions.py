@@ -46,7 +46,8 @@ _CHANGES: dict[str, Callable[[dict[str, Any]], bool]] = {
     "ToggleObjectOn": lambda o: not o.get("isToggled"),
     "ToggleObjectOff": lambda o: bool(o.get("isToggled")),
 }
-_HELD_ACTIONS = frozenset({"PutObject", "DropHandObject", "ThrowObject"})
+#: The actions by which a robot lets go of what it holds.
+RELEASE_ACTIONS = frozenset({"PutObject", "DropHandObject", "ThrowObject"})
 
 
 @dataclass
@@ -290,7 +291,7 @@ class TeamWorld:
             return self._go_to(objects[0], members)
         if skill.action == "PickupObject":
             return self._pickup(skill, objects[0], members)
-        if skill.action in _HELD_ACTIONS:
+        if skill.action in RELEASE_ACTIONS:
             return self._release(skill, objects, members)
         return self._object_action(skill, objects[0], members)
 

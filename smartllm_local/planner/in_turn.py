@@ -23,6 +23,7 @@ import re
 from collections.abc import Collection, Iterator, Sequence
 from itertools import combinations
 
+from ..executor.team_actions import RELEASE_ACTIONS
 from ..robots import Robot
 from ..scene import MASS_TOLERANCE, SceneObjects
 from ..scoring import Condition
@@ -32,8 +33,6 @@ from .constraints.feasibility import EXACT_COALITIONS, Need, can_do
 from .errands import Unneeded
 from .idle_steps import THREAD, Step, acts, comments_above, function_name, gotos_before, skill_steps
 
-#: What a robot does to a thing it holds (its pick-up aside): the same robot must do it.
-_HELD = frozenset({"PutObject", "DropHandObject", "ThrowObject"})
 #: A top-level line of a decomposition's orchestration that starts or joins a thread, or calls a function.
 _START = re.compile(r"^(\w+)\.(start|join)\(\)$")
 _CALL = re.compile(r"^(\w+)\(\)$")
@@ -158,7 +157,7 @@ def _teams(steps: Sequence[Step], actions: dict[str, str], team: Sequence[Robot]
     for s in steps:
         if actions[s.skill] == "PickupObject":
             held.setdefault(s.objects[0], set()).add(s.skill)
-        elif actions[s.skill] in _HELD and s.objects[0] in held:
+        elif actions[s.skill] in RELEASE_ACTIONS and s.objects[0] in held:
             held[s.objects[0]].add(s.skill)
     able = []
     for n in range(1, len(team) + 1):

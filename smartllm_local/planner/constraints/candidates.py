@@ -12,6 +12,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from ...executor.team_actions import RELEASE_ACTIONS
 from ...scene import SceneObjects
 from ...scoring import Condition
 from ...skills import Skill
@@ -30,7 +31,6 @@ KNIVES = frozenset({"Knife", "ButterKnife"})
 # Actions that set a state, and the action that undoes each.
 STATE_ACTIONS = {"OpenObject": "CloseObject", "CloseObject": "OpenObject",
                  "ToggleObjectOn": "ToggleObjectOff", "ToggleObjectOff": "ToggleObjectOn"}
-RELEASE = ("PutObject", "DropHandObject", "ThrowObject")
 #: The states a thing may be broken or cut to reach: broken or sliced itself, and cooked (an egg cooks once cracked).
 BROKEN_FOR = frozenset({"BROKEN", "SLICED", "COOKED"})
 #: The actions that leave a thing in pieces.
@@ -92,7 +92,7 @@ class Candidates:
         self._every = list(self._filtered(None))
         self.action_max = max(self.line_len(c) for c in self._every)
         releases = [c for c in self._filtered(None) if c[0].action == "DropHandObject"] or \
-            [c for c in self._filtered(None) if c[0].action in RELEASE]
+            [c for c in self._filtered(None) if c[0].action in RELEASE_ACTIONS]
         self.release_max = max((self.line_len(c) for c in releases), default=self.action_max)
         self.goto_max = max(self.line_len(c) for c in self.goto_calls())
 
@@ -135,7 +135,7 @@ class Candidates:
             if skill.action in CUTTING:
                 types[0] = [t for t in types[0] if t not in self.spared]
             if fn is not None:
-                if skill.action in RELEASE:
+                if skill.action in RELEASE_ACTIONS:
                     types[0] = [t for t in types[0] if t in fn.held]
                     if len(types) > 1:
                         types[1] = [t for t in types[1] if t not in fn.held]
@@ -146,7 +146,7 @@ class Candidates:
                 elif skill.action in STATE_ACTIONS:
                     types[0] = [t for t in types[0] if fn.states.get(t) != skill.action
                                 and fn.last_call != (STATE_ACTIONS[skill.action], t)]
-                if skill.action not in RELEASE and skill.action != "PickupObject":
+                if skill.action not in RELEASE_ACTIONS and skill.action != "PickupObject":
                     # Not on what it holds: in a team, the holder would need this skill too.
                     types[0] = [t for t in types[0] if t not in fn.held]
             for first in types[0]:
@@ -193,7 +193,8 @@ class Candidates:
             return self.node([c for c in self.goto_calls() if self.line_len(c) + cheapest <= room])
         then = self.of(replace(fn, last_call=("", ""), went=True))
         if fn.steps + 1 >= self.max_steps - 1:  # the step after the go-to is the last: as succeeding
-            then = [c for c in then if c[0].action != "PickupObject" and (not fn.held or c[0].action in RELEASE)]
+            then = [c for c in then
+                    if c[0].action != "PickupObject" and (not fn.held or c[0].action in RELEASE_ACTIONS)]
         gotos = []
         holders = self._holder_types()
         for skill, (target,) in self.goto_calls():
@@ -215,7 +216,7 @@ class Candidates:
         if fn.steps >= self.max_steps - 1:  # the last step cannot pick up (nothing would put it down)
             candidates = [c for c in candidates if c[0].action != "PickupObject"]
             if fn.held:
-                candidates = [c for c in candidates if c[0].action in RELEASE]
+                candidates = [c for c in candidates if c[0].action in RELEASE_ACTIONS]
         place = self.place(fn)
         by = {place, None} | (self._holder_types().get(place, set()) if place else set())
         candidates = [c for c in candidates if acts_on(c) in by]
@@ -255,5 +256,5 @@ class Candidates:
         if self.world is None or self.allocated:
             return 0
         action = candidate[0].action
-        holding = (fn.held and action not in RELEASE) or action == "PickupObject"
+        holding = (fn.held and action not in RELEASE_ACTIONS) or action == "PickupObject"
         return self.release_max if holding else 0

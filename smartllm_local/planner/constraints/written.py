@@ -6,7 +6,8 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from .candidates import RELEASE, STATE_ACTIONS
+from ...executor.team_actions import RELEASE_ACTIONS
+from .candidates import STATE_ACTIONS
 from .world_check import Call
 
 #: A call line of a plan: its skill, its robot_list slot (if it names one) and its one or two objects.
@@ -59,7 +60,7 @@ class WrittenFunction:
         self.last_call = (action, first) if action else ("", "")
         if action == "PickupObject":
             self.held.add(first)
-        elif action in RELEASE:
+        elif action in RELEASE_ACTIONS:
             self.held.discard(first)
         elif action in STATE_ACTIONS:
             self.states[first] = action
