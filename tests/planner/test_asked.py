@@ -66,11 +66,16 @@ APPLE_IN = Condition("Fridge", item="Apple")
     ("Put the pot on the stove.", "Potato", False),
     ("Peel the potatoes.", "Pot", False),
     ("Put the pen in the drawer.", "Pencil", False),
+    ("Turn on the old telly.", "Television", True),  # first letters, in a noun's place
+    ("The spray bottle should sit on the dresser.", "ShowerHead", False),  # not "should"
+    ("Could you clean the bed?", "CounterTop", False),
+    ("Switch off both the desk lamp and the main light.", "Bottle", False),
 ])
 def test_an_instruction_names_a_type_by_a_word_of_its_name_or_the_first_letters_of_one(instruction, object_type,
                                                                                          named):
-    """The first letters, only of a word that names no type of its own: asked to boil water on the stove, the
-    1.5B's wine bottle put on a stool was taken for asked, the stool named by "stove"."""
+    """The first letters, only of a word that names no type of its own and stands where a noun does: asked to boil
+    water on the stove, the 1.5B's wine bottle put on a stool was taken for asked, the stool named by "stove"; asked
+    for the spray bottle on the dresser, its `ShowerHead on` was, named by "should" (dev11-e4)."""
     assert names(instruction, object_type) == named
 
 
