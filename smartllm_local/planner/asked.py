@@ -42,6 +42,7 @@ from ..world.object_types import (
 #: How many first letters a word of the instruction and a word of a type's name must share.
 PREFIX = 3
 _WORD = re.compile(r"[a-z]+")
+#: Words a noun follows (one or two words on).
 _DETERMINERS = frozenset({"the", "a", "an", "my", "your", "our", "its", "his", "her", "their", "this", "that", "these",
                           "those", "some", "any", "every", "each"})
 #: The holders that give what they hold a state, each with the states it gives (heat, cold, a burner's pan frying, a
@@ -58,8 +59,9 @@ ORIGIN = re.compile(r"\b(?:from|out of)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?([
 
 def names(instruction: str, object_type: str) -> bool:
     """Whether the instruction names the object type (or the type it is a slice of), by a word of its name (a
-    plural's ending aside), an informal name ("the TV": the Television) or a word sharing the first letters of a word
-    of its name that names no type of its own ("the telly"; "the stove" names no Stool, "the pot" no Potato)."""
+    plural's ending aside), an informal name ("the TV": the Television) or a word in a noun's place sharing the first
+    letters of a word of its name that names no type of its own ("the telly"; "the stove" names no Stool, "the pot"
+    no Potato)."""
     words = _WORD.findall(instruction.lower())
     said, nouns = set(words), _after_determiners(words)
     own = type_words(object_type)
