@@ -12,7 +12,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from ...executor.team_actions import RELEASE_ACTIONS
+from ...executor.team_actions import KNIVES, RELEASE_ACTIONS
 from ...scene import SceneObjects
 from ...scoring import Condition
 from ...skills import Skill
@@ -27,7 +27,6 @@ if TYPE_CHECKING:
 Candidate = tuple[Skill, tuple[str, ...]]
 #: Whether a plan may make a call at all (a skill's name and its objects); see feasibility.WholeTeam.
 Allows = Callable[[str, Sequence[str]], bool]
-KNIVES = frozenset({"Knife", "ButterKnife"})
 # Actions that set a state, and the action that undoes each.
 STATE_ACTIONS = {"OpenObject": "CloseObject", "CloseObject": "OpenObject",
                  "ToggleObjectOn": "ToggleObjectOff", "ToggleObjectOff": "ToggleObjectOn"}
@@ -48,6 +47,18 @@ def wanted_whole(goals: Sequence[Condition]) -> frozenset[str]:
     in_pieces |= {c.item for c in goals if c.item and any(base_type(t) == c.item != t
                                                            for t in RECEPTACLE_ONLY_ACCEPTS.get(c.subject, ()))}
     return frozenset(named - in_pieces)
+
+
+def held_for_good(goals: Sequence[Condition], skills: Sequence[Skill]) -> frozenset[str] | None:
+    """For a team that can never let a thing go (no skill of :data:`RELEASE_ACTIONS`), the only types a pick-up may
+    take: a knife where the goals want a thing in pieces, and a thing a goal wants held; None for a team that can,
+    or with no goals. Asked to chop the potato, the 0.5B had robot 26 (picks up and slices) pick up the potato, and
+    it could then never hold a knife (dev11-e6)."""
+    if not goals or any(s.action in RELEASE_ACTIONS for s in skills):
+        return None
+    named = {n for c in goals for n in ((c.item, c.subject) if c.item else (c.subject,))}
+    cut = any(c.state == "SLICED" for c in goals) or any(base_type(n) != n for n in named)
+    return (KNIVES if cut else frozenset()) | {c.subject for c in goals if c.state == "PICKED"}
 
 
 def args_text(objects: Sequence[str]) -> str:
@@ -74,11 +85,12 @@ class Candidates:
 
     def __init__(self, scene: SceneObjects, skills: Sequence[Skill], *, robot_arg_len: int, allocated: bool,
                  world: WorldCheck | None, max_steps: int, allows: Allows | None = None,
-                 spared: frozenset[str] = frozenset()):
+                 spared: frozenset[str] = frozenset(), kept: frozenset[str] | None = None):
         """``allows``: the calls a plan may make at all (the team's); none given, every call of ``skills``.
-        ``spared``: the types no call breaks or cuts (:func:`wanted_whole`)."""
+        ``spared``: the types no call breaks or cuts (:func:`wanted_whole`); ``kept``: the only types a call may
+        pick up, where any (:func:`held_for_good`)."""
         self.scene = scene
-        self.allows, self.spared = allows, spared
+        self.allows, self.spared, self.kept = allows, spared, kept
         self.skills = list(skills)
         self.gotos = [s for s in self.skills if s.action == ""]
         self.robot_arg_len = robot_arg_len
@@ -134,6 +146,8 @@ class Candidates:
                 types[0] = [t for t in types[0] if self.allows(skill.name, (t,))]
             if skill.action in CUTTING:
                 types[0] = [t for t in types[0] if t not in self.spared]
+            if skill.action == "PickupObject" and self.kept is not None:
+                types[0] = [t for t in types[0] if t in self.kept]
             if fn is not None:
                 if skill.action in RELEASE_ACTIONS:
                     types[0] = [t for t in types[0] if t in fn.held]

@@ -43,7 +43,7 @@ from ..decoding.grammar import Node, Ref, alt, chars, rep, seq
 from ..decoding.line_ends import COMMENT_NEXT, INDENTED_NEXT
 from ..decoding.protocol import REFUSAL_PREFIX, Choose, Constraint, Forced, Rewrite, longest
 from .budget import Budget
-from .candidates import Candidates, wanted_whole
+from .candidates import Candidates, held_for_good, wanted_whole
 from .feasibility import Step, WholeTeam
 from .finish import ROOM as FINISH_ROOM
 from .finish import Finish, Said
@@ -178,7 +178,7 @@ class PlanConstraint(Orchestration, Constraint):
         self.candidates = Candidates(self.scene, self.skills, robot_arg_len=self.robot_arg_len,
                                      allocated=self.allocated, world=self.world, max_steps=self.max_steps,
                                      allows=self.whole.can if self.whole is not None else None,
-                                     spared=wanted_whole(self.goals))
+                                     spared=wanted_whole(self.goals), kept=held_for_good(self.goals, self.skills))
         self.fresh_action = self.candidates.fresh_action(WrittenFunction(""))
         self._plan_with(repairer, repair, finish)
         self.budget = Budget(allocated=self.allocated, team_size=self.team_size, fixed_names=self.fixed_names,

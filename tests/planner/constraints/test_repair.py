@@ -15,7 +15,7 @@ from smartllm_local.plan_language import parse_plan
 from smartllm_local.planner.classical.problem import planning_task
 from smartllm_local.planner.classical.search import search
 from smartllm_local.planner.constraints import repair as repair_module
-from smartllm_local.planner.constraints.candidates import wanted_whole
+from smartllm_local.planner.constraints.candidates import held_for_good, wanted_whole
 from smartllm_local.planner.constraints.format import MAX_SUBTASKS
 from smartllm_local.planner.constraints.plan import PlanConstraint
 from smartllm_local.planner.constraints.repair import TIME_LIMIT, Repairer, SearchWallClockError, effect
@@ -259,6 +259,26 @@ def test_a_thing_the_goals_want_whole_is_not_broken():
     for others in ([], [Condition("WineBottle", state="BROKEN")]):
         assert "    BreakObject('WineBottle')\n" in run_constraint(_decomposer(13, goals=others), *_scripted(script),
                                                                    3000)
+
+
+def test_a_team_that_can_never_let_go_picks_up_only_what_it_needs_in_hand():
+    """Asked to chop the potato with robot 26 alone (it picks up and slices, and cannot put anything down), the
+    0.5B picked up the potato, and no knife could then be held (dev11-e6). For that team the grammar offers only the
+    knives to pick up; for a team that can put things down, or with no goals, the potato too."""
+    script = ["def subtask1_potato():\n", "    GoToObject('Potato')\n", "    PickupObject('Potato')\n"]
+    goals = [Condition("Potato", state="SLICED")]
+    assert held_for_good(goals, [SKILLS["PickupObject"], SKILLS["SliceObject"]]) == {"Knife", "ButterKnife"}
+    assert held_for_good(goals, [SKILLS["PickupObject"], SKILLS["PutObject"]]) is None
+
+    def decomposer(robots, goals):
+        world = WorldCheck(scene_objects(16), SKILLS, MAX_SUBTASKS)
+        return PlanConstraint(scene_objects(16), SKILLS, world=world, summary=False, comments=False,
+                              for_team=CATALOGUE.team(robots), goals=goals)
+
+    text = run_constraint(decomposer([26], goals), *_scripted(script), 3000)
+    assert "PickupObject('Potato')" not in text and "PickupObject(" in text
+    for robots, given in (([19], goals), ([26], [])):
+        assert "    PickupObject('Potato')\n" in run_constraint(decomposer(robots, given), *_scripted(script), 3000)
 
 
 def test_a_thing_a_goal_wants_in_pieces_may_be_broken():
