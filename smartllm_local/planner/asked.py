@@ -57,13 +57,14 @@ STATE_GIVING = frozenset(GIVES)
 ORIGIN = re.compile(r"\b(?:from|out of)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?([a-z]+(?:\s+[a-z]+)?)")
 
 
-def names(instruction: str, object_type: str) -> bool:
+def names(instruction: str, object_type: str, *, loosely: bool = False) -> bool:
     """Whether the instruction names the object type (or the type it is a slice of), by a word of its name (a
     plural's ending aside), an informal name ("the TV": the Television) or a word in a noun's place sharing the first
     letters of a word of its name that names no type of its own ("the telly"; "the stove" names no Stool, "the pot"
-    no Potato)."""
+    no Potato); ``loosely``, such a word anywhere ("toast the bread" names the Toaster)."""
     words = _WORD.findall(instruction.lower())
-    said, nouns = set(words), _after_determiners(words)
+    said = set(words)
+    nouns = said if loosely else _after_determiners(words)
     own = type_words(object_type)
     for word in said:
         forms = word_forms([word])
@@ -271,8 +272,9 @@ def coverage(named: Sequence[str], stated: Sequence[Condition]) -> float:
 def present_yet_refused(refusal: str, instruction: str, types: Sequence[str]) -> str | None:
     """A type of the scene that both the goal stage's refusal and the instruction name, or None. The stage sees
     the scene alone, so a refusal can only be for something the scene lacks; one that names what the instruction
-    asks for and the scene has ("there is no stove" beside a StoveBurner) is the model's mistake."""
-    return next((t for t in types if names(refusal, t) and names(instruction, t)), None)
+    asks for and the scene has ("there is no stove" beside a StoveBurner; "no toaster" for "toast a slice of bread",
+    read loosely: a mistaken refusal costs a task, a statement asked for again costs seconds) is the model's mistake."""
+    return next((t for t in types if names(refusal, t) and names(instruction, t, loosely=True)), None)
 
 
 def as_goal(condition: Condition) -> Goal:

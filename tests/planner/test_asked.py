@@ -287,6 +287,15 @@ def test_a_goal_stage_refusal_for_a_thing_the_scene_has_is_stated_again_without_
     assert present_yet_refused(why, "Make me a coffee.", scene_objects(6).types) is None  # not asked for: stands
 
 
+def test_a_refusal_for_a_thing_a_verb_of_the_instruction_begins_like_is_the_model_s_mistake():
+    """"Toast a slice of bread": "toast" names the toaster only loosely (a verb, in no noun's place), and with the
+    names read strictly the goal-planner's "there is no toaster in this room" stood in FloorPlan15,
+    which has one (kitchen-10, test half; seen failing after the strict reading, disclosed)."""
+    types = scene_objects(15).types
+    assert not names("Toast a slice of bread for me.", "Toaster")
+    assert present_yet_refused("there is no toaster in this room", "Toast a slice of bread for me.", types) == "Toaster"
+
+
 @pytest.mark.parametrize("instruction, types, named", [
     ("Put the bar of soap in the sink.", ["SoapBar", "SoapBottle", "SinkBasin", "Sink"], ["SoapBar", "Sink"]),
     ("Move the laptop from the coffee table to the sofa.", ["Laptop", "CoffeeTable", "Sofa"], ["Laptop", "Sofa"]),
