@@ -8,7 +8,7 @@ The plan constraint (:mod:`.plan`) keeps the budget on these lines' longest text
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -42,7 +42,7 @@ def wanted_whole(goals: Sequence[Condition]) -> frozenset[str]:
     an egg is fried cracked, or a holder that takes only its pieces: bread in the toaster). Asked to slice the potato
     and put the wine bottle in the fridge, the 0.5B broke the bottle, and no plan could then put it anywhere; asked to
     cut the bread and put the apple in the microwave, it cut the apple too."""
-    named = {n for c in goals for n in ((c.item, c.subject) if c.item else (c.subject,))}
+    named = _goal_types(goals)
     in_pieces = {c.subject for c in goals if c.state in BROKEN_FOR} | {base_type(n) for n in named if base_type(n) != n}
     in_pieces |= {c.item for c in goals if c.item and any(base_type(t) == c.item != t
                                                            for t in RECEPTACLE_ONLY_ACCEPTS.get(c.subject, ()))}
@@ -54,11 +54,20 @@ def held_for_good(goals: Sequence[Condition], skills: Sequence[Skill]) -> frozen
     take: a knife where the goals want a thing in pieces, and a thing a goal wants held; None for a team that can,
     or with no goals. Asked to chop the potato, the 0.5B had robot 26 (picks up and slices) pick up the potato, and
     it could then never hold a knife (dev11-e6)."""
-    if not goals or any(s.action in RELEASE_ACTIONS for s in skills):
+    if not goals or lets_go(skills):
         return None
-    named = {n for c in goals for n in ((c.item, c.subject) if c.item else (c.subject,))}
-    cut = any(c.state == "SLICED" for c in goals) or any(base_type(n) != n for n in named)
+    cut = any(c.state == "SLICED" for c in goals) or any(base_type(n) != n for n in _goal_types(goals))
     return (KNIVES if cut else frozenset()) | {c.subject for c in goals if c.state == "PICKED"}
+
+
+def lets_go(skills: Iterable[Skill]) -> bool:
+    """Whether some skill lets a robot let go of what it holds (an action of :data:`RELEASE_ACTIONS`)."""
+    return any(s.action in RELEASE_ACTIONS for s in skills)
+
+
+def _goal_types(goals: Sequence[Condition]) -> set[str]:
+    """The types the goals are about: what they put somewhere, what holds it, what is to be in a state."""
+    return {n for c in goals for n in ((c.item, c.subject) if c.item else (c.subject,))}
 
 
 def args_text(objects: Sequence[str]) -> str:

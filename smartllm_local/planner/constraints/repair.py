@@ -19,11 +19,10 @@ from dataclasses import dataclass, replace
 
 from ...errors import SmartLLMError
 from ...executor.dry_run import DryRun
-from ...executor.team_actions import RELEASE_ACTIONS
 from ...scoring import Condition, condition_holds, containment
 from ...skills import Skill, SkillSet
 from ...world.object_types import base_type
-from .candidates import Candidate, Candidates, acts_on
+from .candidates import Candidate, Candidates, acts_on, lets_go
 from .feasibility import WholeTeam
 from .world_check import WorldCheck
 from .written import CALL_LINE, WrittenFunction
@@ -134,7 +133,7 @@ class Repairer:
         with empty hands, where its ``skills`` can let a thing go, in at most ``most`` steps, or None: asked to
         slice the apple and the lettuce with a robot that picks up and slices and one that opens, the 0.5B sliced
         the apple alone, and no plan that ends with the knife put down was found for the lettuce (dev10-s2)."""
-        free = skills is None or any(self.skills[s].action in RELEASE_ACTIONS for s in skills if s in self.skills)
+        free = skills is None or lets_go(self.skills[s] for s in skills if s in self.skills)
         return self._written(member, goals, None, skills, free, lambda calls: 0 < len(calls) <= most
                              and self._usable(member, calls, allows, goals))
 
