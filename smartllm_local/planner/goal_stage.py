@@ -291,8 +291,25 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
     placements, placing = placements_and_words(instruction, vocabulary, words)
+    _cut_by_pieces_placed(states, each, placements)
     return Asked(states, withheld, placements, without_asking_verbs(instruction, switches),
                  words.asks_to_move(instruction), each, placing)
+
+
+def _cut_by_pieces_placed(states: dict[str, list[str]], each: dict[str, list[str]],
+                          placements: Mapping[str, Sequence[str]]) -> None:
+    """A thing whose pieces are put somewhere is owed no line of its own cut: the pieces' line asks for it ("put a
+    slice of bread in the toaster" owes `BreadSliced in Toaster`, not `Bread sliced` too: dev12-p6)."""
+    pieces = {base_type(t) for things in placements.values() for t in things if base_type(t) != t}
+    cut = [t for t in states.get("SLICED", ()) if t not in pieces]
+    if len(cut) == len(states.get("SLICED", ())):
+        return
+    apart = each.pop("SLICED", [])
+    states.pop("SLICED")
+    if cut:
+        states["SLICED"] = cut
+    if len(cut) > 1 and apart:
+        each["SLICED"] = cut
 
 
 def checked_against_team(record: StageRecord, instruction: str, scene: SceneObjects, conditions: Sequence[Condition],

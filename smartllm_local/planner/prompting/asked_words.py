@@ -45,6 +45,8 @@ _THEN = re.compile(r"\bthen\b", re.IGNORECASE)
 _WORD = re.compile(r"[a-z']+")
 _NAMING_NOTHING = frozenset({"and", "or", "then", "also", "the", "a", "an", "please", "now", "too", "both", "all",
                              "some", "it", "them", "of", "on", "off", "away", "out", "up", "down"})
+#: Words that join a verb to the words before it ("... and switch", "..., then turn").
+_JOINED = re.compile(r"(?:\b(?:and|then)|,)\s+$", re.IGNORECASE)
 #: Where a sentence ends: a pronoun of a put means what was named before it in its sentence, across ";" and ":"
 #: ("the potato and the egg are in the sink; put both of them in the fridge").
 _SENTENCE = re.compile(r"[.!?]")
@@ -189,12 +191,21 @@ def referred(said: str, before: str, able: Callable[[str], bool], vocabulary: Go
 
 
 def _asking_words(instruction: str, match: re.Match[str], verbs: Sequence[re.Pattern[str]]) -> str:
-    after = _after_verb(instruction[match.start():match.end()])
+    after = _own_words(_after_verb(instruction[match.start():match.end()]), verbs)
     rest = _PART.split(instruction[match.end():], 1)[0]
     for start in sorted({m.start() for p in verbs for m in p.finditer(rest)}):
         if set(_WORD.findall((after + rest[:start]).lower())) - _NAMING_NOTHING:
             return (after + rest[:start]).rstrip(", ")
     return after + rest
+
+
+def _own_words(after: str, verbs: Sequence[re.Pattern[str]]) -> str:
+    """The words after an asking verb from the last verb joined to them by "and" or "then", whose they are: "fold the
+    laptop shut and switch the floor lamp off" asks the lamp off, not the shut's words (dev12-s2: they named the
+    LightSwitch by the verb "switch")."""
+    starts = [m.start() for p in verbs if p is not _THEN for m in p.finditer(after)
+              if m.start() and _JOINED.search(after[:m.start()])]
+    return _after_verb(after[max(starts):]) if starts else after
 
 
 def without_asking_verbs(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> str:
