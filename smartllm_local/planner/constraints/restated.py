@@ -112,9 +112,13 @@ class RestatedAllocation(PlanConstraint):
         skill, objects, args = call
         able, working = self._robot_args(fn, skill, objects)
         if self.world is not None and working:
-            # Only robots after whose step the rest of the body can still be done by some robots.
-            found = [(a, self._completes(fn, a, skill, objects)) for a in working]
-            working = [a for a, ok in found if ok] or [a for a, ok in found if ok is None]
+            # Only robots after whose step the rest of the body can still be done by the team its coalition line
+            # chose (two weak robots lifting together beside a strong one's thread: dev12-c2), or by some robots
+            # where it cannot.
+            team = self.chosen.get(fn.name)
+            kept = [a for a in working if self._completes(fn, a, skill, objects, team)] if team else []
+            found = [] if kept else [(a, self._completes(fn, a, skill, objects)) for a in working]
+            working = kept or [a for a, ok in found if ok] or [a for a, ok in found if ok is None]
             if self.joins:  # a robot the sub-task can do without stays free for another thread
                 working = [a for a in working if not self._new_slot(fn, a)] or working
         if self.world is not None and not working:
@@ -163,22 +167,23 @@ class RestatedAllocation(PlanConstraint):
         calls = (self._skill_call(line) for line in self.bodies[len(self.functions) - 1][fn.written + 1:])
         return [(skill, objects) for skill, objects, _ in filter(None, calls)]
 
-    def _completes(self, fn: WrittenFunction, arg: str, skill: Skill, objects: Sequence[str]) -> bool | None:
+    def _completes(self, fn: WrittenFunction, arg: str, skill: Skill, objects: Sequence[str],
+                   team: frozenset[int] | None = None) -> bool | None:
         """Whether, after this step by ``arg``, every later step of the body can be given a robot
-        argument under which it succeeds (a depth-first search, the last step's robot tried first);
-        None if the search ran out of tries before it knew."""
+        argument under which it succeeds (a depth-first search, the last step's robot tried first), run by
+        ``team`` where one is given; None if the search ran out of tries before it knew."""
         budget = [COMPLETION_TRIES]
         saved = self.world.run.snapshot()
         try:
             trial = self._after(fn, arg, skill, objects)
-            return self._search(trial, self._rest(fn), arg, budget)
+            return self._search(trial, self._rest(fn), arg, budget, team)
         finally:
             self.world.run.restore(saved)
 
     def _search(self, fn: WrittenFunction, rest: Sequence[tuple[Skill, list[str]]], last: str,
-                budget: list[int]) -> bool | None:
+                budget: list[int], team: frozenset[int] | None = None) -> bool | None:
         if not rest:
-            return bool(self._team_lists(fn, budget))
+            return bool(self._team_lists(fn, budget, team))
         skill, objects = rest[0]
         unknown = False
         args = self._robot_args(fn, skill, objects)[1]
@@ -190,7 +195,7 @@ class RestatedAllocation(PlanConstraint):
             budget[0] -= 1
             saved = self.world.run.snapshot()
             try:
-                found = self._search(self._after(fn, arg, skill, objects), rest[1:], arg, budget)
+                found = self._search(self._after(fn, arg, skill, objects), rest[1:], arg, budget, team)
             finally:
                 self.world.run.restore(saved)
             if found:
@@ -198,11 +203,15 @@ class RestatedAllocation(PlanConstraint):
             unknown = unknown or found is None
         return None if unknown else False
 
-    def _team_lists(self, fn: WrittenFunction, budget: list[int] | None = None) -> list[tuple[int, ...]]:
+    def _team_lists(self, fn: WrittenFunction, budget: list[int] | None = None,
+                    team: frozenset[int] | None = None) -> list[tuple[int, ...]]:
         """The robot lists under which the team's own robots do every step of the whole body from the
-        state the bodies before it leave (one is enough with a budget); every list without a team."""
+        state the bodies before it leave (one is enough with a budget), of ``team``'s robots alone where one is
+        given; every list without a team."""
         need = self._need(fn)
         lists = feasible_lists(self.team, self._steps(fn), need) if self.team is not None else None
+        if team is not None and lists is not None:
+            lists = [order for order in lists if frozenset(order) == team]
         if self.body_world is None or lists is None:
             return lists or [tuple(range(need))]
         working = []

@@ -348,6 +348,41 @@ def test_an_allocation_runs_each_sub_task_on_the_team_its_coalition_line_chose()
     assert accepts(allocator({"subtask1_apple": frozenset({5})}), threads("robots[0]", "robots[1]", "robots[0]"))
 
 
+def test_a_body_is_written_for_the_team_its_coalition_line_chose_to_run_beside_another():
+    """Robot 28 (0.9 kg) can carry the lettuce (0.47 kg) alone, robots 8 and 7 only together: the coalition chose
+    robot 28 for the apple and the other two for the lettuce, to run at once. Its first step written for
+    robot_list[0], the lettuce's body could be run by robot 28 alone, after the apple (the 1.5B's plan, dev12-c2):
+    every step is now one the chosen pair can go on from."""
+    names = ["subtask1_apple", "subtask2_lettuce"]
+    decomposition = "".join(
+        f"def {name}():\n    GoToObject('{item}')\n    PickupObject('{item}')\n    GoToObject('CounterTop')\n"
+        f"    PutObject('{item}', 'CounterTop')\n\n" for name, item in zip(names, ["Apple", "Lettuce"]))
+    team = CATALOGUE.team((28, 8, 7))
+
+    def allocator(chosen):
+        return RestatedAllocation(scene_objects(KITCHEN), CATALOGUE.skills, team=team, function_names=names,
+                                  bodies=restated_bodies(decomposition, names),
+                                  world=WorldCheck(scene_objects(KITCHEN), CATALOGUE.skills, len(team)),
+                                  together=True, chosen=chosen)
+
+    def body(name: str, item: str, goes: str, carries: str) -> str:
+        return (f"def {name}(robot_list):\n    GoToObject({goes}, '{item}')\n    PickupObject({carries}, '{item}')\n"
+                f"    GoToObject({goes}, 'CounterTop')\n    PutObject({carries}, '{item}', 'CounterTop')\n\n")
+
+    apple = body("subtask1_apple", "Apple", "robot_list[0]", "robot_list[0]")
+    together = apple + body("subtask2_lettuce", "Lettuce", "robot_list", "robot_list") + (
+        "t1 = threading.Thread(target=subtask1_apple, args=([robots[0]],))\n"
+        "t2 = threading.Thread(target=subtask2_lettuce, args=([robots[1], robots[2]],))\n"
+        "t1.start()\nt2.start()\nt1.join()\nt2.join()\n")
+    after = apple + body("subtask2_lettuce", "Lettuce", "robot_list[0]", "robot_list[0]") + (
+        "t1 = threading.Thread(target=subtask1_apple, args=([robots[0]],))\nt1.start()\nt1.join()\n"
+        "t1 = threading.Thread(target=subtask2_lettuce, args=([robots[0]],))\nt1.start()\nt1.join()\n")
+    chosen = {"subtask1_apple": frozenset({0}), "subtask2_lettuce": frozenset({1, 2})}
+    assert accepts(allocator(chosen), together)
+    assert not accepts(allocator(chosen), after)
+    assert accepts(allocator({}), after)  # no coalition line: robot 28 may do both
+
+
 class _Whole:
     """Grammar.sample's choices: the whole robot_list where it is an option, else the first."""
 
