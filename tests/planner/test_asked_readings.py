@@ -229,3 +229,14 @@ def test_a_slice_put_somewhere_owes_no_line_of_its_whole_cut():
                    "BreadSliced in Toaster\nToaster on\n\n")
     both = _asked("Slice the tomato and the apple, and put a slice of bread in the toaster.", 19)
     assert both.states["SLICED"] == both.each["SLICED"] == ["Apple", "Tomato"]
+
+
+def test_a_switch_said_twice_with_its_verb_left_out_names_each_thing_for_its_own_particle():
+    """"Switch the TV on and the floor lamp off" owed either on and either off, and the 0.5B stated both on
+    (dev12-s6); the same particle twice still owes both things."""
+    for instruction, states in (
+            ("Switch the TV on and the floor lamp off.", {"ON": ["Television"], "OFF": ["FloorLamp"]}),
+            ("Switch the floor lamp off and the TV on, please.", {"ON": ["Television"], "OFF": ["FloorLamp"]}),
+            ("Turn the floor lamp off and the TV off.", {"OFF": ["FloorLamp", "Television"]}),
+            ("Switch the TV on and the floor lamp on.", {"ON": ["FloorLamp", "Television"]})):
+        assert _asked(instruction, 209).states == states, instruction

@@ -47,6 +47,13 @@ _NAMING_NOTHING = frozenset({"and", "or", "then", "also", "the", "a", "an", "ple
                              "some", "it", "them", "of", "on", "off", "away", "out", "up", "down"})
 #: Words that join a verb to the words before it ("... and switch", "..., then turn").
 _JOINED = re.compile(r"(?:\b(?:and|then)|,)\s+$", re.IGNORECASE)
+#: A switch's particle said, then "and" and another thing with its own ("switch the TV on and the floor lamp off"):
+#: the words after "and" are the other particle's, and those before it not.
+_PARTICLES = r"(?P<particle>on|off|open|shut|closed)"
+_PARTICLE_END = re.compile(rf"\b{_PARTICLES}\s*$", re.IGNORECASE)
+_PARTICLE_AND = re.compile(r"\b(?:on|off|open|shut|closed)\s*,?\s+and\s+", re.IGNORECASE)
+_GAPPED_SWITCH = re.compile(rf"\s*,?\s*and\s+(?:the|a|an|my|your|this|that)\s+(?:[a-z'-]+\s+){{0,3}}?{_PARTICLES}\b",
+                            re.IGNORECASE)
 #: Where a sentence ends: a pronoun of a put means what was named before it in its sentence, across ";" and ":"
 #: ("the potato and the egg are in the sink; put both of them in the fridge").
 _SENTENCE = re.compile(r"[.!?]")
@@ -193,6 +200,9 @@ def referred(said: str, before: str, able: Callable[[str], bool], vocabulary: Go
 def _asking_words(instruction: str, match: re.Match[str], verbs: Sequence[re.Pattern[str]]) -> str:
     after = _own_words(_after_verb(instruction[match.start():match.end()]), verbs)
     rest = _PART.split(instruction[match.end():], 1)[0]
+    ends, gapped = _PARTICLE_END.search(after), _GAPPED_SWITCH.match(rest)
+    if ends and gapped and gapped["particle"].lower() != ends["particle"].lower():
+        return after  # "switch the TV on and the floor lamp off": the lamp is the other particle's
     for start in sorted({m.start() for p in verbs for m in p.finditer(rest)}):
         if set(_WORD.findall((after + rest[:start]).lower())) - _NAMING_NOTHING:
             return (after + rest[:start]).rstrip(", ")
@@ -205,7 +215,8 @@ def _own_words(after: str, verbs: Sequence[re.Pattern[str]]) -> str:
     LightSwitch by the verb "switch")."""
     starts = [m.start() for p in verbs if p is not _THEN for m in p.finditer(after)
               if m.start() and _JOINED.search(after[:m.start()])]
-    return _after_verb(after[max(starts):]) if starts else after
+    after = _after_verb(after[max(starts):]) if starts else after
+    return _PARTICLE_AND.split(after)[-1]  # "the TV on and the floor lamp off": the lamp's, for "off"
 
 
 def without_asking_verbs(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> str:
