@@ -240,3 +240,4 @@ def test_a_switch_said_twice_with_its_verb_left_out_names_each_thing_for_its_own
             ("Turn the floor lamp off and the TV off.", {"OFF": ["FloorLamp", "Television"]}),
             ("Switch the TV on and the floor lamp on.", {"ON": ["FloorLamp", "Television"]})):
         assert _asked(instruction, 209).states == states, instruction
+    assert _asked("Fold the laptop shut and the blinds closed.", 226).states == {"CLOSED": ["Blinds", "Laptop"]}

@@ -49,11 +49,12 @@ _NAMING_NOTHING = frozenset({"and", "or", "then", "also", "the", "a", "an", "ple
 _JOINED = re.compile(r"(?:\b(?:and|then)|,)\s+$", re.IGNORECASE)
 #: A switch's particle said, then "and" and another thing with its own ("switch the TV on and the floor lamp off"):
 #: the words after "and" are the other particle's, and those before it not.
-_PARTICLES = r"(?P<particle>on|off|open|shut|closed)"
-_PARTICLE_END = re.compile(rf"\b{_PARTICLES}\s*$", re.IGNORECASE)
-_PARTICLE_AND = re.compile(r"\b(?:on|off|open|shut|closed)\s*,?\s+and\s+", re.IGNORECASE)
-_GAPPED_SWITCH = re.compile(rf"\s*,?\s*and\s+(?:the|a|an|my|your|this|that)\s+(?:[a-z'-]+\s+){{0,3}}?{_PARTICLES}\b",
-                            re.IGNORECASE)
+_PARTICLES = "on|off|open|shut|closed"
+_PARTICLE_END = re.compile(rf"\b(?P<particle>{_PARTICLES})\s*$", re.IGNORECASE)
+_PARTICLE_AND = re.compile(rf"\b(?:{_PARTICLES})\s*,?\s+and\s+", re.IGNORECASE)
+_GAPPED_SWITCH = re.compile(
+    rf"\s*,?\s*and\s+(?:the|a|an|my|your|this|that)\s+(?:[a-z'-]+\s+){{0,3}}?(?P<particle>{_PARTICLES})\b",
+    re.IGNORECASE)
 #: Where a sentence ends: a pronoun of a put means what was named before it in its sentence, across ";" and ":"
 #: ("the potato and the egg are in the sink; put both of them in the fridge").
 _SENTENCE = re.compile(r"[.!?]")
@@ -201,7 +202,7 @@ def _asking_words(instruction: str, match: re.Match[str], verbs: Sequence[re.Pat
     after = _own_words(_after_verb(instruction[match.start():match.end()]), verbs)
     rest = _PART.split(instruction[match.end():], 1)[0]
     ends, gapped = _PARTICLE_END.search(after), _GAPPED_SWITCH.match(rest)
-    if ends and gapped and gapped["particle"].lower() != ends["particle"].lower():
+    if ends and gapped and _particle(gapped) != _particle(ends):
         return after  # "switch the TV on and the floor lamp off": the lamp is the other particle's
     for start in sorted({m.start() for p in verbs for m in p.finditer(rest)}):
         if set(_WORD.findall((after + rest[:start]).lower())) - _NAMING_NOTHING:
@@ -209,14 +210,20 @@ def _asking_words(instruction: str, match: re.Match[str], verbs: Sequence[re.Pat
     return after + rest
 
 
+def _particle(match: re.Match[str]) -> str:
+    word = match["particle"].lower()
+    return "shut" if word == "closed" else word
+
+
 def _own_words(after: str, verbs: Sequence[re.Pattern[str]]) -> str:
     """The words after an asking verb from the last verb joined to them by "and" or "then", whose they are: "fold the
     laptop shut and switch the floor lamp off" asks the lamp off, not the shut's words (dev12-s2: they named the
-    LightSwitch by the verb "switch")."""
+    LightSwitch by the verb "switch"); and after another particle and "and", whose they are too ("switch the TV on
+    and the floor lamp off": the lamp's, for "off")."""
     starts = [m.start() for p in verbs if p is not _THEN for m in p.finditer(after)
               if m.start() and _JOINED.search(after[:m.start()])]
     after = _after_verb(after[max(starts):]) if starts else after
-    return _PARTICLE_AND.split(after)[-1]  # "the TV on and the floor lamp off": the lamp's, for "off"
+    return _PARTICLE_AND.split(after)[-1]
 
 
 def without_asking_verbs(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> str:
