@@ -241,3 +241,14 @@ def test_a_switch_said_twice_with_its_verb_left_out_names_each_thing_for_its_own
             ("Switch the TV on and the floor lamp on.", {"ON": ["FloorLamp", "Television"]})):
         assert _asked(instruction, 209).states == states, instruction
     assert _asked("Fold the laptop shut and the blinds closed.", 226).states == {"CLOSED": ["Blinds", "Laptop"]}
+
+
+def test_a_state_a_thing_must_not_be_left_in_is_its_opposite():
+    """"Don't leave the fridge open" read as the fridge asked open, and as a move."""
+    for instruction, floor_plan, state, things in (
+            ("Don't leave the fridge open.", 10, "CLOSED", ["Fridge"]),
+            ("Please never leave the desk lamp on.", 306, "OFF", ["DeskLamp"]),
+            ("Do not keep the blinds shut.", 306, "OPENED", ["Blinds"])):
+        asked = _asked(instruction, floor_plan)
+        assert asked.states == {state: things} and not asked.moves, instruction
+    assert _asked("Leave the fridge open.", 10).states == {"OPENED": ["Fridge"]}
