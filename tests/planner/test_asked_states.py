@@ -249,6 +249,12 @@ def test_a_domain_without_the_file_asks_for_nothing_and_a_bad_file_is_a_clear_er
     (tmp_path / "goal" / "asked_states.toml").write_text("COOKED = ['(fry']\n")
     with pytest.raises(UserError, match="asked_states.toml"):
         load_state_words(tmp_path)
+    # A state "as asked" under [only_where_asked] takes the words above; one with no words above is an error.
+    (tmp_path / "goal" / "asked_states.toml").write_text("OPENED = ['open']\n[only_where_asked]\nOPENED = 'as asked'\n")
+    assert [p.pattern for p in load_state_words(tmp_path).only_where_asked["OPENED"]] == ["open"]
+    (tmp_path / "goal" / "asked_states.toml").write_text("[only_where_asked]\nCLOSED = 'as asked'\n")
+    with pytest.raises(UserError, match=r"asked_states\.toml: 'CLOSED' is not a state"):
+        load_state_words(tmp_path)
 
 
 def test_state_words_are_parsed_once_per_text_of_their_file(tmp_path: Path):

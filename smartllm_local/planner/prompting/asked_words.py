@@ -27,6 +27,8 @@ ASKED_STATES = "asked_states.toml"
 #: The table of ``asked_states.toml`` whose states are offered only where asked for (owed only where the file's
 #: first table has them too).
 ONLY_WHERE_ASKED = "only_where_asked"
+#: A state's value under ``[only_where_asked]`` where its words are those of the table above (``OPENED = "as asked"``).
+AS_ASKED = "as asked"
 #: The table of ``asked_states.toml`` naming the holders an instruction asks things into in so many words.
 PLACEMENTS = "placements"
 #: The table of ``asked_states.toml`` whose patterns find a liquid, under the state a thing filled with it is in.
@@ -113,7 +115,8 @@ class StateWords:
 
 def load_state_words(prompts: Path) -> StateWords:
     """The domain's state words (none where there is no such file): ``STATE = ['<regular expression>', ...]`` a
-    line, the same lines under ``[only_where_asked]`` and ``[liquids]``, ``Holder = [...]`` lines under
+    line, the same lines under ``[only_where_asked]`` (or ``STATE = "as asked"``, the words of the table above) and
+    ``[liquids]``, ``Holder = [...]`` lines under
     ``[placements]``, and ``into = [...]`` and ``moves = [...]`` under ``[put]``. Parsed once per text of the file:
     every goal statement and goal check reads them."""
     path = prompts / GOAL_FOLDER / ASKED_STATES
@@ -135,6 +138,7 @@ def _parse_state_words(text: str) -> StateWords:
     for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements), (PUT, put), (LIQUIDS, liquids)):
         if not isinstance(part, dict):
             raise ValueError(f"[{name}] is not a table")
+    only = {state: table.get(state, listed) if listed == AS_ASKED else listed for state, listed in only.items()}
     put_patterns = _patterns(put, {PUT_INTO, PUT_MOVES}.__contains__, f"'{PUT_INTO}' or '{PUT_MOVES}'")
     into = put_patterns.get(PUT_INTO, ())
     if any(set(p.groupindex) != PUT_GROUPS for p in into):
