@@ -21,7 +21,7 @@ from ..robots import Robot
 from ..scene import GoalVocabulary, SceneObjects
 from ..scoring import Condition, condition_holds, containment
 from ..skills import SkillSet
-from ..world.object_types import base_type
+from ..world.object_types import RECEPTACLE_ONLY_ACCEPTS, TYPE_PROPERTIES, base_type
 from .asked import (
     GIVES,
     as_goal,
@@ -53,6 +53,7 @@ from .prompting.asked_words import (
     sentences_before,
     states_asked,
     without_asking_verbs,
+    without_purpose,
 )
 from .prompting.goal_prompt import GoalExample, goal_prompt, load_goal_examples
 from .result import PlanResult, StageRecord
@@ -130,7 +131,7 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     count = planner.config.goal_candidates
     objects = scene.world.dry_run(scene.floor_plan, planner.catalogue.skills).objects if planner.config.grammar else []
     there = placed_now(objects, vocabulary)
-    asked = asked_of(instruction, vocabulary, load_state_words(planner.world.examples_dir()), standing(objects))
+    asked = asked_of(instruction, vocabulary, load_state_words(planner.world.examples_dir()), objects)
 
     def write(backend: Backend, k: int) -> StatedGoals:
         return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, asked, refusals=refusals)
@@ -264,10 +265,14 @@ class Asked:
 
 
 def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
-             there: Collection[tuple[str, str]] = ()) -> Asked:
+             objects: Sequence[Mapping[str, Any]] = ()) -> Asked:
     """What the instruction asks for in so many words, in the domain's ``words``, of the vocabulary's things; of
-    several things its words name for a state, those it places where the scene has them (``there``: the scene's
-    :func:`standing`); where they name a liquid, the things that hold it, owed filled too (:func:`_holding_liquid`)."""
+    several things its words name for a state, those it places where the scene's ``objects`` have them; where they
+    name a liquid, the things that hold it, owed filled too (:func:`_holding_liquid`); asked of every light, each
+    light not in the state as the scene begins (:func:`_every_light`); nothing of what the person will do once the
+    robots are done (:func:`without_purpose`)."""
+    instruction = without_purpose(instruction)
+    there = standing(objects)
     holders = {holder for holder, _ in there}
     states: dict[str, list[str]] = {}
     each: dict[str, list[str]] = {}
@@ -288,28 +293,78 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
                 each[state] = apart
             elif len(states[state]) > 1 and EVERY.search(said):  # "every lamp": the desk lamp and the floor lamp
                 each[state] = states[state]
+    _every_light(instruction, vocabulary, words, objects, states, each)
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
     placements, placing = placements_and_words(instruction, vocabulary, words)
-    _cut_by_pieces_placed(states, each, placements)
+    placements = {holder: [_piece_for(t, holder, states, vocabulary) for t in things]
+                  for holder, things in placements.items()}
+    for state in CUT_BY_PIECES:
+        _cut_by_pieces_placed(state, states, each, placements)
+    _vessels_on_burners(states, placements, vocabulary, there)
     return Asked(states, withheld, placements, without_asking_verbs(instruction, switches),
                  words.asks_to_move(instruction), each, placing)
 
 
-def _cut_by_pieces_placed(states: dict[str, list[str]], each: dict[str, list[str]],
+def _every_light(instruction: str, vocabulary: GoalVocabulary, words: StateWords, objects: Sequence[Mapping[str, Any]],
+                 states: dict[str, list[str]], each: dict[str, list[str]]) -> None:
+    """Each light of the scene not yet in a state the instruction asks of every light, owed it in place of the lights
+    its other words name for it, beside the other things they name: "make it nice and dark in here" owes the ceiling
+    light and the floor lamp off where both are on (the 1.5B stated the ceiling light alone: dev13-s1, -s6, -c3)."""
+    for state in words.every_light_asked(instruction):
+        lights = [t for t in vocabulary.types if t in words.lights and state in vocabulary.states.get(t, ())
+                  and not condition_holds(Condition(t, state=state), objects)]
+        if lights:
+            states[state] = [t for t in states.get(state, ()) if t not in words.lights] + lights
+            if len(states[state]) > 1:
+                each[state] = states[state]
+
+
+def _piece_for(thing: str, holder: str, states: Mapping[str, Sequence[str]], vocabulary: GoalVocabulary) -> str:
+    """The piece of ``thing`` that goes in the holder, where it can: the piece a state is asked of that the thing
+    itself cannot be in ("fry me an egg" owes the cracked egg in the pan, as it owes it cooked), or the one breaking
+    the thing makes, the thing asked broken ("crack an egg into the pan": the cracked egg); else the thing."""
+    pieces = [t for t in vocabulary.types if base_type(t) == thing != t and holder in vocabulary.holders.get(t, ())]
+    for state, named in states.items():
+        piece = next((t for t in named if t in pieces), None)
+        if piece and state not in vocabulary.states.get(thing, ()):
+            return piece
+    broken = thing in states.get("BROKEN", ()) and "breakable" in TYPE_PROPERTIES.get(thing, ())
+    return pieces[0] if broken and pieces else thing
+
+
+def _vessels_on_burners(states: Mapping[str, Sequence[str]], placements: dict[str, list[str]],
+                        vocabulary: GoalVocabulary, there: Collection[tuple[str, str]]) -> None:
+    """A pan (pot, kettle) owed a thing that is to be cooked or heated in it, owed on the heat source that takes
+    only such vessels, where none of them holds it yet: "fry me an egg" owes the pan on the stove (dev13-p1, -c1:
+    the 1.5B put the egg in the microwave), and so does "cook the potato in the pan on the stove"."""
+    for source, vessels in RECEPTACLE_ONLY_ACCEPTS.items():
+        heated = {t for state in GIVES.get(source, ()) for t in states.get(state, ())}
+        for vessel in sorted(vessels):
+            if set(placements.get(vessel, ())) & heated and source in vocabulary.holders.get(vessel, ()) \
+                    and (source, vessel) not in there:
+                placements[source] = list(dict.fromkeys([*placements.get(source, []), vessel]))
+
+
+#: The states whose pieces say them: a thing whose pieces are somewhere was cut (broken).
+CUT_BY_PIECES = ("SLICED", "BROKEN")
+
+
+def _cut_by_pieces_placed(state: str, states: dict[str, list[str]], each: dict[str, list[str]],
                           placements: Mapping[str, Sequence[str]]) -> None:
-    """A thing whose pieces are put somewhere is owed no line of its own cut: the pieces' line asks for it ("put a
-    slice of bread in the toaster" owes `BreadSliced in Toaster`, not `Bread sliced` too: dev12-p6)."""
+    """A thing whose pieces are put somewhere is owed no line of its own cut (broken): the pieces' line asks for it
+    ("put a slice of bread in the toaster" owes `BreadSliced in Toaster`, not `Bread sliced` too: dev12-p6; "crack an
+    egg into the pan" `EggCracked in Pan`, not `Egg broken`)."""
     pieces = {base_type(t) for things in placements.values() for t in things if base_type(t) != t}
-    cut = [t for t in states.get("SLICED", ()) if t not in pieces]
-    if len(cut) == len(states.get("SLICED", ())):
+    cut = [t for t in states.get(state, ()) if t not in pieces]
+    if len(cut) == len(states.get(state, ())):
         return
-    apart = each.pop("SLICED", [])
-    states.pop("SLICED")
+    apart = each.pop(state, [])
+    states.pop(state)
     if cut:
-        states["SLICED"] = cut
+        states[state] = cut
     if len(cut) > 1 and apart:
-        each["SLICED"] = cut
+        each[state] = cut
 
 
 def checked_against_team(record: StageRecord, instruction: str, scene: SceneObjects, conditions: Sequence[Condition],
@@ -360,7 +415,7 @@ def said_of(instruction: str, scene: SceneObjects, goals: Sequence[Condition],
     holder they name, where they name no thing or name it; the holders it names (not by a word of another thing's
     name) or asks things into, each with the things asked into it."""
     vocabulary = goal_vocabulary(scene)
-    asked = asked_of(instruction, vocabulary, load_state_words(scene.world.examples_dir()), standing(objects))
+    asked = asked_of(instruction, vocabulary, load_state_words(scene.world.examples_dir()), objects)
     holders = {t: tuple(asked.placements.get(t, ())) for t in scene.types_for("receptacle")
                if t in asked.placements or named_apart(instruction, t, vocabulary.types)}
 

@@ -138,6 +138,7 @@ INFORMAL_NAMES: Final[dict[str, tuple[str, ...]]] = {
     **dict.fromkeys(("light", "lights", "lightswitches"), ("LightSwitch",)),
     "lamp": ("DeskLamp", "FloorLamp"),
     **dict.fromkeys(("couch", "settee"), ("Sofa",)),
+    "cushion": ("Pillow",),
     "table": ("DiningTable", "CoffeeTable", "SideTable"),
     "kitchensink": ("Sink",),
     "basin": ("SinkBasin", "BathtubBasin"),

@@ -2,9 +2,9 @@
 benchmark task, no worked example and no other set uses: the held-out tasks (``heldout/tasks.jsonl``), never used to
 choose anything, only to measure; and the extra development tasks (``development/tasks.jsonl``, then
 ``development-3/tasks.jsonl`` to ``development-13/tasks.jsonl``), each written to choose on once the set before it
-was spent (the ninth to thirteenth in earlier development sets' scenes: every floor plan was in use). Here: that they are
-what the docs say; the heavy suite proves every
-feasible one reachable and every infeasible one refused (the planner, given the tasks' goals)."""
+was spent (the ninth to thirteenth in earlier development sets' scenes: every floor plan was in use). Here: that
+they are what the docs say; the heavy suite proves every feasible one reachable and every infeasible one refused (the
+planner, given the tasks' goals)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,14 @@
 """What an instruction's words ask for where they point back, say a word again, name a place by its whole, or ask in
 phrasings the earlier sets did not use: read as the goal stage reads them
-(:func:`~smartllm_local.planner.goal_stage.asked_of`), on the tenth to twelfth development sets' instructions and
-the others' that showed the same."""
+(:func:`~smartllm_local.planner.goal_stage.asked_of`), on the tenth to thirteenth development sets' instructions
+and the others' that showed the same."""
 
 from __future__ import annotations
 
+import pytest
+
 from smartllm_local.domain import load_domain
+from smartllm_local.errors import UserError
 from smartllm_local.goal_language import parse_goal_statement
 from smartllm_local.planner.asked import outnamed
 from smartllm_local.planner.constraints.goal import GoalConstraint, goal_vocabulary
@@ -15,7 +18,8 @@ from smartllm_local.planner.prompting.asked_words import load_state_words
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.worlds import scene_objects
 
-WORDS = load_state_words(load_domain("household").prompts_dir())
+HOUSEHOLD = load_domain("household")
+WORDS = load_state_words(HOUSEHOLD.prompts_dir())
 
 
 def _asked(instruction: str, floor_plan: int):
@@ -252,3 +256,68 @@ def test_a_state_a_thing_must_not_be_left_in_is_its_opposite():
         asked = _asked(instruction, floor_plan)
         assert asked.states == {state: things} and not asked.moves, instruction
     assert _asked("Leave the fridge open.", 10).states == {"OPENED": ["Fridge"]}
+
+
+def _lit(instruction: str, floor_plan: int):
+    """As the goal stage reads it, with the scene's objects as it begins (which lights are on)."""
+    scene = scene_objects(floor_plan)
+    vocabulary = goal_vocabulary(scene)
+    return asked_of(instruction, vocabulary.less(outnamed(instruction, vocabulary.types)), WORDS,
+                    scene.world.dry_run(scene.floor_plan, HOUSEHOLD.catalogue.skills).objects)
+
+
+def test_a_room_made_dark_or_every_light_switched_owes_each_light_not_so_yet():
+    """The 1.5B stated the ceiling light off alone for "all the lights off in here" and "every light in the room
+    off", and nothing for the room made dark beside shutting the laptop (dev13-s1, -s6, -p4, -c3)."""
+    for instruction, floor_plan, lights in (
+            ("Make it nice and dark in here.", 211, ["FloorLamp", "LightSwitch"]),  # both on
+            ("All the lights off in here, please.", 211, ["FloorLamp", "LightSwitch"]),
+            ("TV on, and every light in the room off.", 204, ["DeskLamp", "LightSwitch"]),  # the floor lamp is off
+            ("Bedtime: shut the laptop and make the room dark.", 311, ["DeskLamp", "LightSwitch"]),
+            ("Lights out, please.", 204, ["DeskLamp", "LightSwitch"]),
+            ("Darken the living room.", 211, ["FloorLamp", "LightSwitch"])):
+        asked = _lit(instruction, floor_plan)
+        assert asked.states["OFF"] == lights and asked.each["OFF"] == lights, instruction
+    assert _lit("Switch on all the lights.", 204).states["ON"] == ["FloorLamp"]  # the others are on
+    assert _lit("Make the room dark for the film.", 220).states["OFF"] == ["LightSwitch"]  # the one light on
+    for instruction in ("It's too dark to read in here; turn on the desk lamp.", "Turn out the light."):
+        assert _lit(instruction, 204).states.get("OFF", ["LightSwitch"]) == ["LightSwitch"], instruction
+
+
+def test_a_cushion_is_the_pillow_and_a_plonk_puts_it():
+    """"Put the cushion on the armchair" owed nothing, and the 1.5B put the credit card there (dev13-e2)."""
+    assert _asked("Put the cushion on the armchair.", 204).placements == {"ArmChair": ["Pillow"]}
+    assert _asked("Plonk the cushion on the armchair.", 211).placements == {"ArmChair": ["Pillow"]}
+
+
+def test_a_state_said_as_what_must_hold_before_something_else_is_owed():
+    assert _asked("Once the laptop is shut, plonk the cushion on the armchair.", 211).states == {"CLOSED": ["Laptop"]}
+    assert _asked("When the TV is on, put the remote on the sofa.", 211).states == {"ON": ["Television"]}
+
+
+def test_a_thing_fried_is_owed_in_a_pan_on_the_stove_as_its_cooked_piece():
+    """Asked to fry an egg, the 1.5B put the whole egg in the microwave (dev13-p1, -c1)."""
+    fried = _lit("Fry me an egg, would you?", 14)
+    assert fried.states == {"COOKED": ["EggCracked"]}
+    assert fried.placements == {"Pan": ["EggCracked"], "StoveBurner": ["Pan"]}
+    assert _lit("Cook the potato in the pan on the stove.", 21).placements == \
+        {"Pan": ["Potato"], "StoveBurner": ["Pan"]}  # the pan is in a cabinet
+    cracked = _lit("Put the pan on the stove, crack an egg into it and turn the burner on.", 21)
+    assert cracked.placements == {"StoveBurner": ["Pan"], "Pan": ["EggCracked"]}  # "it": no egg goes on a burner
+    assert "BROKEN" not in cracked.states  # the cracked egg's line asks for it
+    assert "COOKED" not in _lit("Put the frying pan in the sink.", 14).states
+
+
+def test_what_the_person_will_do_once_the_robots_are_done_asks_nothing():
+    asked = _lit("Slice the potato and turn on the stove so I can fry it.", 14)
+    assert asked.states == {"SLICED": ["Potato"], "ON": ["StoveBurner", "StoveKnob"]} and asked.placements == {}
+
+
+def test_an_every_light_part_that_names_no_types_is_a_clear_error(tmp_path):
+    (tmp_path / "goal").mkdir()
+    path = tmp_path / "goal" / "asked_states.toml"
+    path.write_text("[every_light]\nthings = ['light switch']\nOFF = ['\\bdark\\b']\n")
+    with pytest.raises(UserError, match=r"\[every_light\] things is not a list of type names"):
+        load_state_words(tmp_path)
+    path.write_text("[every_light]\nthings = ['LightSwitch']\nOFF = ['\\bdark\\b']\n")
+    assert load_state_words(tmp_path).every_light_asked("Make it dark.") == ["OFF"]

@@ -653,12 +653,13 @@ def test_of_several_things_named_for_a_state_those_where_the_words_place_them_ar
     """Asked to switch off the lamp on the side table, the 0.5B switched off the floor lamp."""
     scene = scene_objects(201)
     vocabulary = goal_vocabulary(scene)
-    there = standing(scene.world.dry_run(scene.floor_plan, SKILLS).objects)
+    objects = scene.world.dry_run(scene.floor_plan, SKILLS).objects
+    there = standing(objects)
     assert ("SideTable", "DeskLamp") in there and ("SideTable", "FloorLamp") not in there
     lamp = "Switch off the lamp on the side table."
     assert asked_of(lamp, vocabulary, WORDS).states == {"OFF": ["DeskLamp", "FloorLamp"]}  # where, not said
-    assert asked_of(lamp, vocabulary, WORDS, there).states == {"OFF": ["DeskLamp"]}
-    assert asked_of("Switch off the lamp on the sofa.", vocabulary, WORDS, there).states == \
+    assert asked_of(lamp, vocabulary, WORDS, objects).states == {"OFF": ["DeskLamp"]}
+    assert asked_of("Switch off the lamp on the sofa.", vocabulary, WORDS, objects).states == \
         {"OFF": ["DeskLamp", "FloorLamp"]}  # no lamp there: both
 
 

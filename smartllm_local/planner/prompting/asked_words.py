@@ -33,6 +33,8 @@ AS_ASKED = "as asked"
 PLACEMENTS = "placements"
 #: The table of ``asked_states.toml`` whose patterns find a liquid, under the state a thing filled with it is in.
 LIQUIDS = "liquids"
+#: The table of ``asked_states.toml`` whose patterns ask a state of every light of the room (its ``things``).
+EVERY_LIGHT, LIGHTS = "every_light", "things"
 #: The table of ``asked_states.toml`` whose patterns find a thing put in a holder the instruction names: its
 #: ``into`` patterns, each with a ``things`` group and a ``holder`` group; and its ``moves`` patterns, the words that
 #: ask for a thing moved at all, a holder named or not ("put the cup away", "tidy the desk").
@@ -57,6 +59,10 @@ _PARTICLE_AND = re.compile(rf"\b(?:{_PARTICLES})\s*,?\s+and\s+", re.IGNORECASE)
 _GAPPED_SWITCH = re.compile(
     rf"\s*,?\s*and\s+(?:the|a|an|my|your|this|that)\s+(?:[a-z'-]+\s+){{0,3}}?(?P<particle>{_PARTICLES})\b",
     re.IGNORECASE)
+#: Words saying what the person will do once the robots are done, which ask nothing of the robots: "turn on the stove
+#: so I can fry it" asks for no potato cooked, and puts nothing in a pan.
+_PURPOSE = re.compile(r"\b(?:so\s+(?:that\s+)?(?:i|we)\s+(?:can|could|may|might)|for\s+(?:me|us)\s+to)\b[^.;:!?]*",
+                      re.IGNORECASE)
 #: Where a sentence ends: a pronoun of a put means what was named before it in its sentence, across ";" and ":"
 #: ("the potato and the egg are in the sink; put both of them in the fridge").
 _SENTENCE = re.compile(r"[.!?]")
@@ -84,7 +90,8 @@ class StateWords:
     ``into`` patterns, which find the things put in a holder the instruction names ("put the potato in the pot"),
     owed the same way; ``moves``, its ``moves`` patterns (none: every instruction may ask for a thing moved);
     ``liquids``, its ``[liquids]`` table, each state a thing filled with a liquid is in with the patterns naming
-    the liquid ("boil some water": a thing filled)."""
+    the liquid ("boil some water": a thing filled); ``every_light``, its ``[every_light]`` table, each state with the
+    patterns that ask it of every light (``lights``: its ``things``) that is not in it ("make the room dark")."""
 
     asked: dict[str, tuple[re.Pattern[str], ...]]
     only_where_asked: dict[str, tuple[re.Pattern[str], ...]]
@@ -92,17 +99,23 @@ class StateWords:
     put: tuple[re.Pattern[str], ...] = ()
     moves: tuple[re.Pattern[str], ...] = ()
     liquids: Mapping[str, tuple[re.Pattern[str], ...]] = field(default_factory=dict)
+    every_light: Mapping[str, tuple[re.Pattern[str], ...]] = field(default_factory=dict)
+    lights: tuple[str, ...] = ()
 
     @functools.cached_property
     def verbs(self) -> tuple[re.Pattern[str], ...]:
         """The patterns that begin a phrase asking for something: a state, a holder, a thing moved, or "then"."""
-        return (*(p for listed in (*self.asked.values(), *self.placements.values()) for p in listed), *self.moves,
-                _THEN)
+        tables = (*self.asked.values(), *self.placements.values(), *self.every_light.values())
+        return (*(p for listed in tables for p in listed), *self.moves, _THEN)
 
     def unsaid(self, instruction: str) -> set[str]:
         """The states it has words to ask for that the instruction does not use ("put it on the counter" asks for no
         switch on)."""
         return {state for state, listed in self.asked.items() if not any(p.search(instruction) for p in listed)}
+
+    def every_light_asked(self, instruction: str) -> list[str]:
+        """The states the instruction asks of every light ("make the room dark": OFF)."""
+        return [state for state, listed in self.every_light.items() if any(p.search(instruction) for p in listed)]
 
     def asks_to_move(self, instruction: str) -> bool:
         """Whether the instruction asks for any thing moved (always, where the domain has no ``moves`` words)."""
@@ -116,7 +129,7 @@ class StateWords:
 def load_state_words(prompts: Path) -> StateWords:
     """The domain's state words (none where there is no such file): ``STATE = ['<regular expression>', ...]`` a
     line, the same lines under ``[only_where_asked]`` (or ``STATE = "as asked"``, the words of the table above) and
-    ``[liquids]``, ``Holder = [...]`` lines under
+    ``[liquids]`` and ``[every_light]`` (with its ``things = ["LightSwitch", ...]``), ``Holder = [...]`` lines under
     ``[placements]``, and ``into = [...]`` and ``moves = [...]`` under ``[put]``. Parsed once per text of the file:
     every goal statement and goal check reads them."""
     path = prompts / GOAL_FOLDER / ASKED_STATES
@@ -126,18 +139,23 @@ def load_state_words(prompts: Path) -> StateWords:
         return _parse_state_words(path.read_text(encoding="utf-8"))
     except (OSError, ValueError, TypeError, re.error) as exc:
         raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...] "
-                        "(under [liquids] too), each holder under [placements] as Holder = [...] and the [put] "
-                        "patterns as into = [...] and moves = [...], or remove the file") from exc
+                        "(under [liquids] and [every_light] too, with its things = ['LightSwitch', ...]), each "
+                        "holder under [placements] as Holder = [...] and the [put] patterns as into = [...] and "
+                        "moves = [...], or remove the file") from exc
 
 
 @functools.lru_cache(maxsize=16)
 def _parse_state_words(text: str) -> StateWords:
     table = tomllib.loads(text)
     only, placements, put = table.pop(ONLY_WHERE_ASKED, {}), table.pop(PLACEMENTS, {}), table.pop(PUT, {})
-    liquids = table.pop(LIQUIDS, {})
-    for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements), (PUT, put), (LIQUIDS, liquids)):
+    liquids, every_light = table.pop(LIQUIDS, {}), table.pop(EVERY_LIGHT, {})
+    for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements), (PUT, put), (LIQUIDS, liquids),
+                       (EVERY_LIGHT, every_light)):
         if not isinstance(part, dict):
             raise ValueError(f"[{name}] is not a table")
+    lights = every_light.pop(LIGHTS, [])
+    if not isinstance(lights, list) or not all(isinstance(t, str) and _TYPE_NAME.fullmatch(t) for t in lights):
+        raise ValueError(f"[{EVERY_LIGHT}] {LIGHTS} is not a list of type names (LightSwitch)")
     only = {state: table.get(state, listed) if listed == AS_ASKED else listed for state, listed in only.items()}
     put_patterns = _patterns(put, {PUT_INTO, PUT_MOVES}.__contains__, f"'{PUT_INTO}' or '{PUT_MOVES}'")
     into = put_patterns.get(PUT_INTO, ())
@@ -145,7 +163,7 @@ def _parse_state_words(text: str) -> StateWords:
         raise ValueError(f"each [{PUT}] {PUT_INTO} pattern needs a (?P<things>...) group and a (?P<holder>...) group")
     return StateWords(_patterns(table), _patterns(only),
                       _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"), into,
-                      put_patterns.get(PUT_MOVES, ()), _patterns(liquids))
+                      put_patterns.get(PUT_MOVES, ()), _patterns(liquids), _patterns(every_light), tuple(lights))
 
 
 def _patterns(table: Mapping[str, Any], known: Callable[[str], object] = STATE_WORDS.__contains__,
@@ -170,6 +188,11 @@ def states_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[st
         if found:
             asked[state] = " ".join(_asking_words(instruction, m, verbs) for m in found).strip()
     return asked
+
+
+def without_purpose(instruction: str) -> str:
+    """The instruction with what the person will do blanked out (:data:`_PURPOSE`), its other words where they were."""
+    return _PURPOSE.sub(lambda m: " " * len(m[0]), instruction)
 
 
 def sentences_before(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> dict[str, str]:
@@ -292,7 +315,8 @@ def _placed(instruction: str, vocabulary: GoalVocabulary,
             yield holder, named_for(said, lambda t, h=holder: h in vocabulary.holders.get(t, ()), vocabulary), said
     holders = vocabulary.holder_types()
     for things, where, before in puts(instruction, words.put):
-        holder = holder_named(where, holders) or (holder_named(before, holders) if _IT.match(where) else None)
+        holder = holder_named(where, holders) or \
+            (_holder_before(things, before, vocabulary) if _IT.match(where) else None)
         able = [t for t in vocabulary.types if holder in vocabulary.holders.get(t, ())]
         named = things_named(things, able) if holder else []
         asking = things
@@ -305,6 +329,15 @@ def _placed(instruction: str, vocabulary: GoalVocabulary,
             named = [t for t in able if filled <= set(vocabulary.states.get(t, ()))]  # (not "in the pot": the pot)
         if holder and named:
             yield holder, named, asking
+
+
+def _holder_before(things: str, before: str, vocabulary: GoalVocabulary) -> str | None:
+    """The one holder the sentence named before a put's "it" that can take a thing ``things`` name ("put the pan on
+    the stove, crack an egg into it": the pan, since no egg goes on a burner); where the things name none, the one
+    holder named before ("turn on the microwave after you put the cup in it")."""
+    named = things_named(things, vocabulary.types)
+    able = {h for t in named for h in vocabulary.holders.get(t, ())} if named else vocabulary.holder_types()
+    return holder_named(before, able)
 
 
 def named_for(words: str, able: Callable[[str], bool], vocabulary: GoalVocabulary) -> list[str]:
