@@ -173,14 +173,15 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
     states nobody asked for (:func:`.asked.gives_nothing_asked`: "open the fridge and cut the apple"). So is a thing
     put in a holder the instruction asks other things into, by words that do not name it (:meth:`Asked.put_elsewhere`:
     asked to cut the bread and put the apple in the microwave, the 0.5B put the bread in it too), and a thing's
-    pieces beside the whole thing where nobody asked it cut (:func:`piece_beside_whole`)."""
+    pieces beside the whole thing where nobody asked it cut (:func:`piece_beside_whole`), unless owed, and the whole
+    thing put where its piece is owed (:meth:`Asked.whole_of_piece_owed`)."""
     statement = stated.statement
     if statement is None or statement.refusal is not None:
         return stated
     out = {c for c in unasked(asked.naming or instruction, statement.conditions, asked.placements)
            if c.state not in asked.states and c.subject not in asked.placements}
-    out |= {c for c in statement.conditions if asked.put_elsewhere(c)
-            or piece_beside_whole(c, statement.conditions, asked.states.get("SLICED", ()))}
+    out |= {c for c in statement.conditions if asked.put_elsewhere(c) or asked.whole_of_piece_owed(c)
+            or piece_beside_whole(c, statement.conditions, asked.states.get("SLICED", ())) and not asked.owes(c)}
     if not asked.moves:  # nothing asked moved: a holder nobody named, or one for a state nobody asked, is the model's
         out |= {c for c in statement.conditions if placed_by_model(instruction, c, asked.placements)
                 or gives_nothing_asked(instruction, c, asked.states, asked.placements)}
@@ -255,6 +256,19 @@ class Asked:
     moves: bool = True
     each: Mapping[str, Sequence[str]] = field(default_factory=dict)
     placing: Mapping[str, str] = field(default_factory=dict)
+
+    def owes(self, condition: Condition) -> bool:
+        """Whether the condition is one the words owe: a thing they name put where they ask it, or in the state."""
+        if condition.item is not None:
+            return condition.item in self.placements.get(condition.subject, ())
+        return condition.subject in self.states.get(condition.state or "", ())
+
+    def whole_of_piece_owed(self, condition: Condition) -> bool:
+        """Whether the condition puts a whole thing where the words owe its piece: `Egg in Pan` beside the owed
+        `EggCracked in Pan`: a cracked egg is no whole one, and no plan meets both (the goal planner found none for `Egg
+        broken` beside `Egg in Pan`: dev13-c6)."""
+        return condition.item is not None and \
+            any(base_type(t) == condition.item != t for t in self.placements.get(condition.subject, ()))
 
     def put_elsewhere(self, condition: Condition) -> bool:
         """Whether the condition puts a thing in a holder the instruction asks other things into, by words that do
@@ -385,7 +399,7 @@ def checked_against_team(record: StageRecord, instruction: str, scene: SceneObje
     placed = placements_asked(instruction, goal_vocabulary(scene), words)
     not_said = words.unsaid(instruction) - set(words.filled_by(instruction))
     unsaid = {(kind, state) for holder, things in placed.items() for kind in (holder, *things) for state in not_said}
-    asked = set(states_asked(instruction, words.asked, words.verbs))
+    asked = set(states_asked(instruction, words.asked, words.verbs)) | set(words.every_light_asked(instruction))
     if asked:  # words ask for states: the others are the model's
         unsaid |= {(base_type(c.subject), c.state) for c in conditions if c.state in not_said}
     dropped = invented(instruction, [c for c, why in problems.items() if why], conditions, list(placed), unsaid)

@@ -28,8 +28,10 @@ of the fridge they were to put the apple in) is not offered at all.
 A holder the instruction asks things into in so many words (``placed``: "throw the cloth away", the GarbageCan) is
 owed the same way: a line puts each thing the asking words name there (where they name none, "throw it away", one
 thing of the model's choice), and a thing so named is offered in no other holder (asked to throw the cloth away, the
-0.5B stated it in the sink). Owed placements come before owed states, so that a state owed of nothing named goes to
-the thing just placed ("make me a coffee": the Mug in the CoffeeMachine is filled, not the Cup).
+0.5B stated it in the sink), nor is the whole thing of a piece so named (asked to fry an egg, owed the cracked egg
+in the pan, the 1.5B put the whole egg in the microwave too: dev13-p1). Owed placements come before owed states,
+so that a state owed of nothing named goes to the thing just placed ("make me a coffee": the Mug in the CoffeeMachine
+is filled, not the Cup).
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from itertools import count
 from ...goal_language import CONTAINMENT, OPPOSITES, PREPOSITIONS, STATE_WORDS, aliases, parse_goal_statement
 from ...scene import GoalVocabulary, SceneObjects
 from ...scoring import Condition
+from ...world.object_types import base_type
 from ..decoding.grammar import Node, Ref, alt, seq
 from ..decoding.protocol import Choose, Constraint, longest
 from .format import refusal_line
@@ -219,7 +222,8 @@ class GoalConstraint(Constraint):
                 self._asked_of_others(kind) - self.withheld
             holders = self.vocabulary.holders.get(kind, frozenset()) - said_in.get(kind, set()) - emptied \
                 if len(said_in.get(kind, ())) < MAX_HOLDERS and kind not in held else frozenset()
-            asked_into = {holder for holder, named in self.placed.items() if kind in named}
+            asked_into = {holder for holder, named in self.placed.items()
+                          if kind in named or any(base_type(n) == kind != n for n in named)}
             holders = holders & asked_into if asked_into else holders  # "throw the cloth away": only the bin
             if states or holders:
                 groups.setdefault((frozenset(states), frozenset(holders)), []).append(kind)

@@ -110,8 +110,9 @@ class StateWords:
 
     def unsaid(self, instruction: str) -> set[str]:
         """The states it has words to ask for that the instruction does not use ("put it on the counter" asks for no
-        switch on)."""
-        return {state for state, listed in self.asked.items() if not any(p.search(instruction) for p in listed)}
+        switch on; "make the room dark" asks for off, of every light)."""
+        return {state for state, listed in self.asked.items() if not any(p.search(instruction) for p in listed)} \
+            - set(self.every_light_asked(instruction))
 
     def every_light_asked(self, instruction: str) -> list[str]:
         """The states the instruction asks of every light ("make the room dark": OFF)."""
