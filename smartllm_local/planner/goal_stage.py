@@ -399,7 +399,7 @@ def checked_against_team(record: StageRecord, instruction: str, scene: SceneObje
     placed = placements_asked(instruction, goal_vocabulary(scene), words)
     not_said = words.unsaid(instruction) - set(words.filled_by(instruction))
     unsaid = {(kind, state) for holder, things in placed.items() for kind in (holder, *things) for state in not_said}
-    asked = set(states_asked(instruction, words.asked, words.verbs)) | set(words.every_light_asked(instruction))
+    asked = set(states_asked(instruction, words.asked, words.verbs))
     if asked:  # words ask for states: the others are the model's
         unsaid |= {(base_type(c.subject), c.state) for c in conditions if c.state in not_said}
     dropped = invented(instruction, [c for c, why in problems.items() if why], conditions, list(placed), unsaid)

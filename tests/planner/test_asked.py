@@ -218,6 +218,10 @@ def test_a_state_the_instruction_has_no_words_for_is_dropped_within_reach_too(mo
     boil = "Boil some water in the pot."
     _, record = _checked(monkeypatch, boil, "Pot filled\nPot hot\n\n", floor_plan=20, robots=[3, 4])
     assert record.refusal is None and not record.dropped_goals
+    lights = "TV on, and every light in the room off."  # no verb asks the TV on: it is no state of the model's
+    _, record = _checked(monkeypatch, lights, "Television on\nLightSwitch off\nDeskLamp off\n\n", floor_plan=204,
+                         robots=[20, 24])
+    assert record.refusal is None and not record.dropped_goals
     dark = "Bedtime: shut the laptop and make the room dark."  # every light off is asked (dev13-p4 lost both)
     _, record = _checked(monkeypatch, dark, "Laptop closed\nLightSwitch off\nDeskLamp off\n\n", floor_plan=311,
                          robots=[24, 23])
