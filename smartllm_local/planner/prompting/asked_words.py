@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -111,12 +111,11 @@ class StateWords:
     def unsaid(self, instruction: str) -> set[str]:
         """The states it has words to ask for that the instruction does not use ("put it on the counter" asks for no
         switch on; "make the room dark" asks for off, of every light)."""
-        return {state for state, listed in self.asked.items() if not any(p.search(instruction) for p in listed)} \
-            - set(self.every_light_asked(instruction))
+        return set(self.asked) - set(_matching(self.asked, instruction)) - set(self.every_light_asked(instruction))
 
     def every_light_asked(self, instruction: str) -> list[str]:
         """The states the instruction asks of every light ("make the room dark": OFF)."""
-        return [state for state, listed in self.every_light.items() if any(p.search(instruction) for p in listed)]
+        return _matching(self.every_light, instruction)
 
     def asks_to_move(self, instruction: str) -> bool:
         """Whether the instruction asks for any thing moved (always, where the domain has no ``moves`` words)."""
@@ -124,7 +123,12 @@ class StateWords:
 
     def filled_by(self, words: str) -> list[str]:
         """The states of a thing filled with a liquid the words name ("some water on the stove": FILLED)."""
-        return [state for state, listed in self.liquids.items() if any(p.search(words) for p in listed)]
+        return _matching(self.liquids, words)
+
+
+def _matching(table: Mapping[str, Sequence[re.Pattern[str]]], text: str) -> list[str]:
+    """The keys of ``table`` some pattern of which the text matches."""
+    return [key for key, listed in table.items() if any(p.search(text) for p in listed)]
 
 
 def load_state_words(prompts: Path) -> StateWords:
@@ -317,7 +321,7 @@ def _placed(instruction: str, vocabulary: GoalVocabulary,
     holders = vocabulary.holder_types()
     for things, where, before in puts(instruction, words.put):
         holder = holder_named(where, holders) or \
-            (_holder_before(things, before, vocabulary) if _IT.match(where) else None)
+            (_holder_before(things, before, vocabulary, holders) if _IT.match(where) else None)
         able = [t for t in vocabulary.types if holder in vocabulary.holders.get(t, ())]
         named = things_named(things, able) if holder else []
         asking = things
@@ -332,12 +336,12 @@ def _placed(instruction: str, vocabulary: GoalVocabulary,
             yield holder, named, asking
 
 
-def _holder_before(things: str, before: str, vocabulary: GoalVocabulary) -> str | None:
-    """The one holder the sentence named before a put's "it" that can take a thing ``things`` name ("put the pan on
-    the stove, crack an egg into it": the pan, since no egg goes on a burner); where the things name none, the one
-    holder named before ("turn on the microwave after you put the cup in it")."""
+def _holder_before(things: str, before: str, vocabulary: GoalVocabulary, holders: Collection[str]) -> str | None:
+    """The one holder of ``holders`` the sentence named before a put's "it" that can take a thing ``things`` name
+    ("put the pan on the stove, crack an egg into it": the pan, since no egg goes on a burner); where the things name
+    none, the one holder named before ("turn on the microwave after you put the cup in it")."""
     named = things_named(things, vocabulary.types)
-    able = {h for t in named for h in vocabulary.holders.get(t, ())} if named else vocabulary.holder_types()
+    able = {h for t in named for h in vocabulary.holders.get(t, ())} if named else holders
     return holder_named(before, able)
 
 
