@@ -204,12 +204,17 @@ def named_as_phrase(instruction: str, object_type: str) -> bool:
 def named_apart(instruction: str, object_type: str, types: Sequence[str]) -> bool:
     """Whether the instruction names the type (:func:`names`) in words that are not part of the phrase of another
     name among ``types`` not within its own ("switch off the desk lamp" names no Desk, "the coffee machine" no
-    CoffeeTable; "the sink" may be the SinkBasin)."""
+    CoffeeTable; "the sink" may be the SinkBasin), nor where an informal name of it says whose another thing is
+    ("the nightstand drawer" names no SideTable, "the TV remote" no Television)."""
     words = set(type_words(object_type))
+    others = [other for other in types if not set(type_words(other)) <= words]
     text = instruction.lower()
-    for other in types:
-        if not set(type_words(other)) <= words:
-            text = _phrase(other).sub(" ", text)
+    informal = [n for n in informal_names(base_type(object_type)) if n not in words]  # "the lamp can go off"
+    heads = sorted({w for o in others for w in type_words(o)} - words)
+    if informal and heads:
+        text = re.sub(rf"\b(?:{'|'.join(informal)})\s+(?=(?:{'|'.join(heads)})(?:e?s)?\b)", " ", text)
+    for other in others:
+        text = _phrase(other).sub(" ", text)
     return names(text, object_type)
 
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from ..errors import PlanError
-from ..goal_language import GoalStatement, condition_line, parse_goal_statement
+from ..goal_language import OPPOSITES, GoalStatement, condition_line, parse_goal_statement
 from ..robots import Robot
 from ..scene import GoalVocabulary, SceneObjects
 from ..scoring import Condition, condition_holds, containment
@@ -44,13 +44,15 @@ from .constraints.finish import Said
 from .constraints.goal import GoalConstraint, goal_vocabulary
 from .progress import SILENT
 from .prompting.asked_words import (
+    Phrase,
     StateWords,
     load_state_words,
     named_for,
+    phrases_asked,
     placements_and_words,
     placements_asked,
     referred,
-    sentences_before,
+    sentence_before,
     states_asked,
     without_asking_verbs,
     without_purpose,
@@ -123,15 +125,16 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
     """The statement, or with several goal candidates the one :func:`choose_statement` keeps (the others in its
     record's ``candidates``)."""
     scene = planner.scene(floor_plan)
+    words = load_state_words(planner.world.examples_dir())
     vocabulary = goal_vocabulary(scene)
-    if planner.config.grammar:  # "the bar of soap": the words name the SoapBar only, not the SoapBottle
-        vocabulary = vocabulary.less(outnamed(instruction, vocabulary.types))
+    if planner.config.grammar:
+        vocabulary = reading_vocabulary(instruction, vocabulary, words)
     prompt = fit_prompt(lambda ex: goal_prompt(instruction, scene, ex), goal_examples(planner), planner.backend,
                         GOAL_BUDGET, planner.chat)
     count = planner.config.goal_candidates
     objects = scene.world.dry_run(scene.floor_plan, planner.catalogue.skills).objects if planner.config.grammar else []
     there = placed_now(objects, vocabulary)
-    asked = asked_of(instruction, vocabulary, load_state_words(planner.world.examples_dir()), objects)
+    asked = asked_of(instruction, vocabulary, words, objects)
 
     def write(backend: Backend, k: int) -> StatedGoals:
         return _candidate(planner, backend, k, prompt, scene, vocabulary, instruction, asked, refusals=refusals)
@@ -144,6 +147,14 @@ def _state_goals(planner: Planner, instruction: str, floor_plan: str | int, *, r
         chosen.record.seconds = time.perf_counter() - started
     chosen = _without_placed(chosen, there)
     return _without_unasked(chosen, instruction, asked) if planner.config.grammar else chosen
+
+
+def reading_vocabulary(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> GoalVocabulary:
+    """The vocabulary an instruction's goals are stated in: less the things its words name only as part of another's
+    name ("the bar of soap" names the SoapBar, not the SoapBottle: :func:`.asked.outnamed`), read without what it
+    leaves as it is, and less those ("every light except the floor lamp": the desk lamp, not the floor lamp)."""
+    kept = words.excepted_in(instruction, vocabulary.types)
+    return vocabulary.less(outnamed(words.without_excepted(instruction), vocabulary.types) | kept)
 
 
 def placed_now(objects: Sequence[Mapping[str, Any]], vocabulary: GoalVocabulary) -> frozenset[Condition]:
@@ -286,27 +297,31 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
     light not in the state as the scene begins (:func:`_every_light`); nothing of what the person will do once the
     robots are done (:func:`without_purpose`)."""
     instruction = without_purpose(instruction)
+    vocabulary = vocabulary.less(words.excepted_in(instruction, vocabulary.types))
     there = standing(objects)
     holders = {holder for holder, _ in there}
     states: dict[str, list[str]] = {}
     each: dict[str, list[str]] = {}
-    before = sentences_before(instruction, words.asked)
-    for state, said in states_asked(instruction, words.asked, words.verbs).items():
+    said_at: dict[tuple[str, str], int] = {}
+    for state, phrases in phrases_asked(instruction, words.asked, words.verbs).items():
+        said = " ".join(phrase.words for phrase in phrases).strip()
         filled = [s for s in words.filled_by(said) if s != state]
         liquid = _holding_liquid(said, [state, *filled], vocabulary) if filled else {}
         if liquid:  # "boil some water on the stove": a pot, filled and hot (and on the burner: the put's)
             for given, things in liquid.items():
                 states[given] = [t for t in states.get(given, things) if t in things] or things
         else:
-            def able(kind: str, state: str = state) -> bool:
-                return state in vocabulary.states.get(kind, ())
-            named = named_for(said, able, vocabulary) or referred(said, before[state], able, vocabulary)
-            states[state] = _located(said, named, holders, there)
+            named = _named_in_phrases(instruction, state, phrases, vocabulary)
+            if not named and all(phrase.own for phrase in phrases):
+                continue  # "leave the TV on; the match is still on": the words of a state asked name nothing
+            said_at.update({(state, t): at for t, at in named.items()})
+            states[state] = _located(said, [t for t in vocabulary.types if t in named], holders, there)
             apart = [t for t in things_named(said, vocabulary.types) if t in states[state]]
             if len(apart) > 1:  # "the desk lamp and the ceiling light", not "the lamp" beside two
                 each[state] = apart
             elif len(states[state]) > 1 and EVERY.search(said):  # "every lamp": the desk lamp and the floor lamp
                 each[state] = states[state]
+    _last_of_opposites(states, each, said_at)
     _every_light(instruction, vocabulary, words, objects, states, each)
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))
     switches = {state: words.asked[state] for state in SWITCHED if state in words.asked}
@@ -318,6 +333,37 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
     _vessels_on_burners(states, placements, vocabulary, there)
     return Asked(states, withheld, placements, without_asking_verbs(instruction, switches),
                  words.asks_to_move(instruction), each, placing)
+
+
+def _named_in_phrases(instruction: str, state: str, phrases: Sequence[Phrase],
+                      vocabulary: GoalVocabulary) -> dict[str, int]:
+    """The things the phrases asking for a state name (or a pronoun of one stands for, the thing its own sentence
+    named before: "if the candle isn't lit, light it, and turn on the shower"), each with where the last of them
+    starts."""
+    def able(kind: str) -> bool:
+        return state in vocabulary.states.get(kind, ())
+    named = {}
+    for phrase in phrases:
+        before = sentence_before(instruction, phrase.at)
+        for thing in named_for(phrase.words, able, vocabulary) or \
+                ([] if phrase.own else referred(phrase.words, before, able, vocabulary)):
+            named[thing] = phrase.at
+    return named
+
+
+def _last_of_opposites(states: dict[str, list[str]], each: dict[str, list[str]],
+                       said_at: Mapping[tuple[str, str], int]) -> None:
+    """A thing asked for in a state and in its opposite is owed the one said last: "open the fridge, put the lettuce
+    on the worktop, and shut the fridge again" owes it shut, not open too."""
+    for state, things in list(states.items()):
+        opposite = OPPOSITES.get(state, "")
+        gone = [t for t in things if (opposite, t) in said_at and said_at[opposite, t] > said_at.get((state, t), -1)]
+        if gone:
+            states[state] = [t for t in things if t not in gone]
+            each[state] = [t for t in each.get(state, ()) if t not in gone]
+            for table in (states, each):
+                if not table[state]:
+                    del table[state]
 
 
 def _every_light(instruction: str, vocabulary: GoalVocabulary, words: StateWords, objects: Sequence[Mapping[str, Any]],

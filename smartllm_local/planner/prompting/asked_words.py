@@ -9,7 +9,7 @@ import re
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 try:
     import tomllib
@@ -39,6 +39,12 @@ EVERY_LIGHT, LIGHTS = "every_light", "things"
 #: ``into`` patterns, each with a ``things`` group and a ``holder`` group; and its ``moves`` patterns, the words that
 #: ask for a thing moved at all, a holder named or not ("put the cup away", "tidy the desk").
 PUT, PUT_INTO, PUT_GROUPS, PUT_MOVES = "put", "into", frozenset({"things", "holder"}), "moves"
+#: The table of ``asked_states.toml`` whose ``words`` patterns find things left as they are ("every light except the
+#: floor lamp"), each with a ``things`` group naming them.
+EXCEPTED, EXCEPTED_WORDS = "excepted", "words"
+#: The group of a state's pattern that holds the words saying what is to be in it where no verb asks ("TV on,
+#: please": ``(?P<said>...)``); without one, the words after the pattern's first word (its verb).
+SAID = "said"
 _TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*")
 #: Where the words asking for a state or a holder end: at the end of their part of the sentence, or before the next
 #: verb that asks for something (``StateWords.verbs``) once they name something ("cut the bread and put the apple in
@@ -48,7 +54,7 @@ _PART = re.compile(r"[.;:!?]")
 _THEN = re.compile(r"\bthen\b", re.IGNORECASE)
 _WORD = re.compile(r"[a-z']+")
 _NAMING_NOTHING = frozenset({"and", "or", "then", "also", "the", "a", "an", "please", "now", "too", "both", "all",
-                             "some", "it", "them", "of", "on", "off", "away", "out", "up", "down"})
+                             "some", "of", "on", "off", "away", "out", "up", "down"})
 #: Words that join a verb to the words before it ("... and switch", "..., then turn").
 _JOINED = re.compile(r"(?:\b(?:and|then)|,)\s+$", re.IGNORECASE)
 #: A switch's particle said, then "and" and another thing with its own ("switch the TV on and the floor lamp off"):
@@ -57,7 +63,7 @@ _PARTICLES = "on|off|open|shut|closed"
 _PARTICLE_END = re.compile(rf"\b(?P<particle>{_PARTICLES})\s*$", re.IGNORECASE)
 _PARTICLE_AND = re.compile(rf"\b(?:{_PARTICLES})\s*,?\s+and\s+", re.IGNORECASE)
 _GAPPED_SWITCH = re.compile(
-    rf"\s*,?\s*and\s+(?:the|a|an|my|your|this|that)\s+(?:[a-z'-]+\s+){{0,3}}?(?P<particle>{_PARTICLES})\b",
+    rf"\s*,?\s*and\s+(?:the|a|an|my|your|this|that|every|each|all|both)\s+(?:[a-z'-]+\s+){{0,3}}?(?P<particle>{_PARTICLES})\b",
     re.IGNORECASE)
 #: Words saying what the person will do once the robots are done, which ask nothing of the robots: "turn on the stove
 #: so I can fry it" asks for no potato cooked, and puts nothing in a pan.
@@ -91,7 +97,9 @@ class StateWords:
     owed the same way; ``moves``, its ``moves`` patterns (none: every instruction may ask for a thing moved);
     ``liquids``, its ``[liquids]`` table, each state a thing filled with a liquid is in with the patterns naming
     the liquid ("boil some water": a thing filled); ``every_light``, its ``[every_light]`` table, each state with the
-    patterns that ask it of every light (``lights``: its ``things``) that is not in it ("make the room dark")."""
+    patterns that ask it of every light (``lights``: its ``things``) that is not in it ("make the room dark");
+    ``excepted``, its ``[excepted]`` table's ``words``, which name the things left as they are ("every light except
+    the floor lamp")."""
 
     asked: dict[str, tuple[re.Pattern[str], ...]]
     only_where_asked: dict[str, tuple[re.Pattern[str], ...]]
@@ -101,6 +109,7 @@ class StateWords:
     liquids: Mapping[str, tuple[re.Pattern[str], ...]] = field(default_factory=dict)
     every_light: Mapping[str, tuple[re.Pattern[str], ...]] = field(default_factory=dict)
     lights: tuple[str, ...] = ()
+    excepted: tuple[re.Pattern[str], ...] = ()
 
     @functools.cached_property
     def verbs(self) -> tuple[re.Pattern[str], ...]:
@@ -116,6 +125,21 @@ class StateWords:
     def every_light_asked(self, instruction: str) -> list[str]:
         """The states the instruction asks of every light ("make the room dark": OFF)."""
         return _matching(self.every_light, instruction)
+
+    def excepted_in(self, instruction: str, types: Sequence[str]) -> set[str]:
+        """The types the instruction leaves as they are, those named as a phrase where there are ("switch off every
+        light except the floor lamp": the floor lamp, not the desk lamp that "lamp" may mean)."""
+        kept = set()
+        for words in (m["things"] for p in self.excepted for m in p.finditer(instruction)):
+            named = things_named(words, types)
+            kept.update([t for t in named if named_as_phrase(words, t)] or named)
+        return kept
+
+    def without_excepted(self, instruction: str) -> str:
+        """The instruction with the words naming what it leaves as it is blanked out, its other words where they
+        were: "except the floor lamp" says nothing of the desk lamp."""
+        spans = [m.span("things") for p in self.excepted for m in p.finditer(instruction)]
+        return "".join(" " if any(a <= n < b for a, b in spans) else c for n, c in enumerate(instruction))
 
     def asks_to_move(self, instruction: str) -> bool:
         """Whether the instruction asks for any thing moved (always, where the domain has no ``moves`` words)."""
@@ -135,7 +159,8 @@ def load_state_words(prompts: Path) -> StateWords:
     """The domain's state words (none where there is no such file): ``STATE = ['<regular expression>', ...]`` a
     line, the same lines under ``[only_where_asked]`` (or ``STATE = "as asked"``, the words of the table above) and
     ``[liquids]`` and ``[every_light]`` (with its ``things = ["LightSwitch", ...]``), ``Holder = [...]`` lines under
-    ``[placements]``, and ``into = [...]`` and ``moves = [...]`` under ``[put]``. Parsed once per text of the file:
+    ``[placements]``, ``into = [...]`` and ``moves = [...]`` under ``[put]``, and ``words = [...]`` under
+    ``[excepted]``. Parsed once per text of the file:
     every goal statement and goal check reads them."""
     path = prompts / GOAL_FOLDER / ASKED_STATES
     if not path.is_file():
@@ -146,16 +171,16 @@ def load_state_words(prompts: Path) -> StateWords:
         raise UserError(f"cannot read {path}: {exc}; write each state as STATE = ['<regular expression>', ...] "
                         "(under [liquids] and [every_light] too, with its things = ['LightSwitch', ...]), each "
                         "holder under [placements] as Holder = [...] and the [put] patterns as into = [...] and "
-                        "moves = [...], or remove the file") from exc
+                        "moves = [...] and the [excepted] ones as words = [...], or remove the file") from exc
 
 
 @functools.lru_cache(maxsize=16)
 def _parse_state_words(text: str) -> StateWords:
     table = tomllib.loads(text)
     only, placements, put = table.pop(ONLY_WHERE_ASKED, {}), table.pop(PLACEMENTS, {}), table.pop(PUT, {})
-    liquids, every_light = table.pop(LIQUIDS, {}), table.pop(EVERY_LIGHT, {})
+    liquids, every_light, excepted = table.pop(LIQUIDS, {}), table.pop(EVERY_LIGHT, {}), table.pop(EXCEPTED, {})
     for name, part in ((ONLY_WHERE_ASKED, only), (PLACEMENTS, placements), (PUT, put), (LIQUIDS, liquids),
-                       (EVERY_LIGHT, every_light)):
+                       (EVERY_LIGHT, every_light), (EXCEPTED, excepted)):
         if not isinstance(part, dict):
             raise ValueError(f"[{name}] is not a table")
     lights = every_light.pop(LIGHTS, [])
@@ -163,12 +188,19 @@ def _parse_state_words(text: str) -> StateWords:
         raise ValueError(f"[{EVERY_LIGHT}] {LIGHTS} is not a list of type names (LightSwitch)")
     only = {state: table.get(state, listed) if listed == AS_ASKED else listed for state, listed in only.items()}
     put_patterns = _patterns(put, {PUT_INTO, PUT_MOVES}.__contains__, f"'{PUT_INTO}' or '{PUT_MOVES}'")
+    asked, only = _patterns(table), _patterns(only)
+    if any(set(p.groupindex) - {SAID} for part in (asked, only) for listed in part.values() for p in listed):
+        raise ValueError(f"a state's pattern may have no group but (?P<{SAID}>...), the words saying what is asked")
     into = put_patterns.get(PUT_INTO, ())
     if any(set(p.groupindex) != PUT_GROUPS for p in into):
         raise ValueError(f"each [{PUT}] {PUT_INTO} pattern needs a (?P<things>...) group and a (?P<holder>...) group")
-    return StateWords(_patterns(table), _patterns(only),
+    left = _patterns(excepted, {EXCEPTED_WORDS}.__contains__, f"'{EXCEPTED_WORDS}'").get(EXCEPTED_WORDS, ())
+    if any(set(p.groupindex) != {"things"} for p in left):
+        raise ValueError(f"each [{EXCEPTED}] {EXCEPTED_WORDS} pattern needs a (?P<things>...) group and no other")
+    return StateWords(asked, only,
                       _patterns(placements, _TYPE_NAME.fullmatch, "a holder's type name (GarbageCan)"), into,
-                      put_patterns.get(PUT_MOVES, ()), _patterns(liquids), _patterns(every_light), tuple(lights))
+                      put_patterns.get(PUT_MOVES, ()), _patterns(liquids), _patterns(every_light), tuple(lights),
+                      left)
 
 
 def _patterns(table: Mapping[str, Any], known: Callable[[str], object] = STATE_WORDS.__contains__,
@@ -187,11 +219,30 @@ def states_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[st
     of their part of the sentence or the next of ``verbs`` after a thing named, which name what is to be in it ("fry
     the potato in a pan, and switch ...": COOKED, "the potato in a pan, and"); the verb names nothing ("switch the TV
     on" does not ask for the LightSwitch on)."""
+    return {state: " ".join(phrase.words for phrase in found).strip()
+            for state, found in phrases_asked(instruction, patterns, verbs).items()}
+
+
+class Phrase(NamedTuple):
+    """A phrase asking for a state: where it starts, its words (:func:`states_asked`), and whether they are its
+    pattern's own (a ``said`` group: "the laptop's been left open"), which name its thing or nothing, with no
+    pronoun of an earlier thing."""
+
+    at: int
+    words: str
+    own: bool
+
+
+def phrases_asked(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]],
+                  verbs: Sequence[re.Pattern[str]] = ()) -> dict[str, list[Phrase]]:
+    """:func:`states_asked`, each state with its phrases apart, in the order said (a pronoun of one stands for what
+    its own sentence named before it: :func:`sentence_before`)."""
     asked = {}
     for state, listed in patterns.items():
-        found = [m for p in listed for m in p.finditer(instruction)]
+        found = sorted((m for p in listed for m in p.finditer(instruction)), key=lambda m: m.start())
         if found:
-            asked[state] = " ".join(_asking_words(instruction, m, verbs) for m in found).strip()
+            asked[state] = [Phrase(m.start(), _asking_words(instruction, m, verbs), SAID in m.re.groupindex)
+                            for m in found]
     return asked
 
 
@@ -200,18 +251,7 @@ def without_purpose(instruction: str) -> str:
     return _PURPOSE.sub(lambda m: " " * len(m[0]), instruction)
 
 
-def sentences_before(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> dict[str, str]:
-    """Each state the instruction asks for (by ``patterns``) with the words of its sentence before the first words
-    asking for it."""
-    before = {}
-    for state, listed in patterns.items():
-        starts = [m.start() for p in listed for m in p.finditer(instruction)]
-        if starts:
-            before[state] = _sentence_before(instruction, min(starts))
-    return before
-
-
-def _sentence_before(instruction: str, at: int) -> str:
+def sentence_before(instruction: str, at: int) -> str:
     """The words of the instruction's sentence before position ``at``."""
     return _SENTENCE.split(instruction[:at])[-1]
 
@@ -231,12 +271,15 @@ def referred(said: str, before: str, able: Callable[[str], bool], vocabulary: Go
 
 
 def _asking_words(instruction: str, match: re.Match[str], verbs: Sequence[re.Pattern[str]]) -> str:
-    after = _own_words(_after_verb(instruction[match.start():match.end()]), verbs)
+    if SAID in match.re.groupindex:  # the pattern's own words, whole ("the desk lamp's still on and ...")
+        return match[SAID] or ""
+    after = _own_words(_after_verb(match[0]), verbs)
     rest = _PART.split(instruction[match.end():], 1)[0]
     ends, gapped = _PARTICLE_END.search(after), _GAPPED_SWITCH.match(rest)
     if ends and gapped and _particle(gapped) != _particle(ends):
         return after  # "switch the TV on and the floor lamp off": the lamp is the other particle's
-    for start in sorted({m.start() for p in verbs for m in p.finditer(rest)}):
+    end = match.end()  # searched in place, so that a verb's pattern sees the words before the rest, not its start
+    for start in sorted({m.start() - end for p in verbs for m in p.finditer(instruction, end, end + len(rest))}):
         if set(_WORD.findall((after + rest[:start]).lower())) - _NAMING_NOTHING:
             return (after + rest[:start]).rstrip(", ")
     return after + rest
@@ -261,8 +304,8 @@ def _own_words(after: str, verbs: Sequence[re.Pattern[str]]) -> str:
 def without_asking_verbs(instruction: str, patterns: Mapping[str, Sequence[re.Pattern[str]]]) -> str:
     """The instruction with the verb of each state it asks for blanked out: the verb names nothing ("switch off the
     lamp" names no LightSwitch)."""
-    spans = sorted({(m.start(), m.start() + len(m[0].split(maxsplit=1)[0]))
-                    for listed in patterns.values() for p in listed for m in p.finditer(instruction) if m[0].strip()})
+    spans = sorted({_verb_span(m) for listed in patterns.values() for p in listed for m in p.finditer(instruction)
+                    if m[0].strip()})
     text = instruction
     for start, end in reversed(spans):
         text = text[:start] + " " * (end - start) + text[end:]
@@ -276,16 +319,23 @@ def puts(instruction: str, patterns: Sequence[re.Pattern[str]]) -> list[tuple[st
     ("put the mug in the microwave and the egg in the fridge": "the egg", "fridge")."""
     found = []
     for m in (m for p in patterns for m in p.finditer(instruction)):
-        found.append((m["things"], m["holder"], _sentence_before(instruction, m.start())))
+        found.append((m["things"], m["holder"], sentence_before(instruction, m.start())))
         at = m.start("holder")
         while gapped := _GAPPED.match(instruction, at):
-            found.append((gapped["things"], gapped["holder"], _sentence_before(instruction, gapped.start("things"))))
+            found.append((gapped["things"], gapped["holder"], sentence_before(instruction, gapped.start("things"))))
             at = gapped.start("holder")
     return found
 
 
 def _after_verb(words: str) -> str:
     return words.split(maxsplit=1)[1] if " " in words.strip() else ""
+
+
+def _verb_span(match: re.Match[str]) -> tuple[int, int]:
+    """Where a match's verb is: the words before its ``said`` group (none, or a joining "and"), else its first word."""
+    if SAID in match.re.groupindex:
+        return match.start(), match.start(SAID)
+    return match.start(), match.start() + len(match[0].split(maxsplit=1)[0])
 
 
 def placements_asked(instruction: str, vocabulary: GoalVocabulary, words: StateWords) -> dict[str, list[str]]:
@@ -327,6 +377,8 @@ def _placed(instruction: str, vocabulary: GoalVocabulary,
         asking = things
         if holder and not named and (_IT.search(things) or _THEM.search(things)):
             earlier = things_named(before, able)  # "close the laptop and put it away in the drawer"
+            if len(earlier) > 1 and not _THEM.search(things):  # "throw the plunger out, and take the cloth ... and
+                earlier = things_named(_CLAUSE.split(before)[-1], able)  # leave it on the counter": the cloth
             named = earlier if len(earlier) == 1 or _THEM.search(things) else []
             asking = f"{before} {things}"
         filled = set(words.filled_by(things)) if holder and not named else set()
