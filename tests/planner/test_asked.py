@@ -28,11 +28,11 @@ from smartllm_local.planner.decoding.sampling import Generated
 from smartllm_local.planner.goal_stage import (
     GOAL_CHECK,
     StatedGoals,
-    asked_of,
     said_of,
     state_goals,
     stated_conditions,
 )
+from smartllm_local.planner.owed import asked_of
 from smartllm_local.planner.pipeline import Planner, PlannerConfig
 from smartllm_local.planner.prompting.asked_words import load_state_words
 from smartllm_local.planner.result import PlanResult, StageRecord

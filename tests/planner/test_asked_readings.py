@@ -1,6 +1,6 @@
 """What an instruction's words ask for where they point back, say a word again, name a place by its whole, or ask in
 phrasings the earlier sets did not use: read as the goal stage reads them
-(:func:`~smartllm_local.planner.goal_stage.asked_of`), on the tenth to fourteenth development sets' instructions
+(:func:`~smartllm_local.planner.owed.asked_of`), on the tenth to fourteenth development sets' instructions
 and the others' that showed the same."""
 
 from __future__ import annotations
@@ -13,7 +13,8 @@ from smartllm_local.goal_language import parse_goal_statement
 from smartllm_local.planner.asked import named_apart, outnamed
 from smartllm_local.planner.constraints.goal import GoalConstraint, goal_vocabulary
 from smartllm_local.planner.decoding.writer import accepts
-from smartllm_local.planner.goal_stage import StatedGoals, _without_unasked, asked_of, reading_vocabulary
+from smartllm_local.planner.goal_stage import StatedGoals, _without_unasked
+from smartllm_local.planner.owed import asked_of, reading_vocabulary
 from smartllm_local.planner.prompting.asked_words import load_state_words
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.worlds import scene_objects

@@ -20,17 +20,14 @@ from smartllm_local.planner.constraints.goal import MAX_HOLDERS, GoalConstraint,
 from smartllm_local.planner.decoding.writer import Report, accepts, run_constraint, run_tokens
 from smartllm_local.planner.goal_stage import (
     GOAL_BUDGET,
-    Asked,
     StatedGoals,
     _without_placed,
     _without_unasked,
-    asked_of,
     holders_asked,
     piece_beside_whole,
     placed_now,
-    reading_vocabulary,
-    standing,
 )
+from smartllm_local.planner.owed import Asked, asked_of, reading_vocabulary, standing
 from smartllm_local.planner.prompting.asked_words import load_state_words, states_asked
 from smartllm_local.planner.result import StageRecord
 from smartllm_local.scoring import Condition, condition_holds
