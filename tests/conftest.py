@@ -131,7 +131,7 @@ def benchmark_run(out, *args: str, timeout: int = 900) -> subprocess.CompletedPr
 #: The household's task sets: the benchmark's, then those beside it (folders of the domain).
 HOUSEHOLD_SETS = ("benchmark", "heldout", "development", "development-3", "development-4", "development-5",
                   "development-6", "development-7", "development-8", "development-9", "development-10",
-                  "development-11", "development-12", "development-13", "development-14")
+                  "development-11", "development-12", "development-13", "development-14", "development-15")
 SAMPLE = ("kitchen-01", "living-02", "kitchen-09", "living-07", "kitchen-inf-02")
 
 
