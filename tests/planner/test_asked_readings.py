@@ -433,3 +433,40 @@ def test_state_patterns_with_a_stray_group_and_excepted_ones_without_things_are_
         load_state_words(tmp_path)
     path.write_text("ON = ['(?P<said>[a-z]+) on$']\n")
     assert load_state_words(tmp_path).asked["ON"][0].search("lamp on")
+
+
+def test_a_thing_someone_left_on_or_open_or_says_is_dirty_is_owed_mended():
+    """"Someone's left the laptop open" owed the laptop open, "left" read as "leave it open" (dev15-e2, -inf-2); "the
+    bed's filthy ... sort them out" owed no bed clean (dev15-c2)."""
+    for instruction, floor_plan, states in (
+            ("Someone's left the laptop open.", 313, {"CLOSED": ["Laptop"]}),
+            ("Somebody left the laptop open again.", 313, {"CLOSED": ["Laptop"]}),
+            ("Who left the desk lamp on?", 313, {"OFF": ["DeskLamp"]}),
+            ("The bed's filthy and the desk lamp's still on; sort them out.", 313,
+             {"CLEAN": ["Bed"], "OFF": ["DeskLamp"]}),
+            ("The bed is a mess, please sort it out.", 313, {"CLEAN": ["Bed"]})):
+        assert _asked(instruction, floor_plan).states == states, instruction
+    assert _asked("Leave the laptop open.", 313).states == {"OPENED": ["Laptop"]}  # a wish, not a complaint
+
+
+def test_terse_requests_with_no_verb_and_no_article_are_read():
+    """"Blinds up", "kettle on", "remote onto the sofa and lamp off", "cushion onto the armchair" asked for nothing
+    (dev15-e5, -e6, -s3, -c4); a verb's particle is no such request ("pick the book up")."""
+    assert _asked("Blinds up, please.", 308).states == {"OPENED": ["Blinds"]}
+    kettle = _asked("Kettle on, please.", 5)
+    assert kettle.states == {"HOT": ["Kettle"]} and "HOT" not in kettle.withheld
+    terse = _asked("Remote onto the sofa and lamp off.", 206)
+    assert terse.states == {"OFF": ["FloorLamp"]} and terse.placements == {"Sofa": ["RemoteControl"]}
+    assert _asked("Cushion onto the armchair, telly on.", 206).placements == {"ArmChair": ["Pillow"]}
+    for instruction in ("Pick the book up.", "That candle has burnt down; throw it in the bin."):
+        asked = _asked(instruction, 308)
+        assert "OPENED" not in asked.states and "CLOSED" not in asked.states, instruction
+        assert {"OPENED", "CLOSED"} <= set(asked.withheld), instruction
+
+
+def test_a_holder_named_in_three_words_is_that_holder():
+    """"Put it on the toilet paper hanger" put the toilet paper on the toilet, "toilet paper" being all the words the
+    holder could have (dev15-c3)."""
+    asked = _asked("Take the toilet paper out of the bin and put it on the toilet paper hanger, then run the shower.",
+                   417)
+    assert asked.placements == {"ToiletPaperHanger": ["ToiletPaper"]}
