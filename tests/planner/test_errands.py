@@ -9,6 +9,7 @@ import pytest
 from smartllm_local.domain import load_domain
 from smartllm_local.planner.errands import drop_errands
 from smartllm_local.planner.idle_steps import drop_idle_steps
+from smartllm_local.planner.prompting.asked_words import load_state_words
 from smartllm_local.scoring import Condition
 from smartllm_local.worlds import scene_objects
 
@@ -273,3 +274,32 @@ def test_a_piece_of_a_thing_asked_cut_and_put_nowhere_is_carried_nowhere():
     put = plan.replace(MICROWAVE, "    PutObject('AppleSliced', 'Fridge')\n")
     assert drop_errands(put, scene_objects(24), SKILLS, "Cut the apple and put it in the fridge.",
                         [Condition("Apple", state="SLICED"), Condition("Fridge", item="Apple")]) == (put, [])
+
+
+#: The 1.5B's decomposition of "switch off every light except the floor lamp" (dev14-s1): the floor lamp first.
+LIGHTS = """def subtask1_switch_off_lights():
+    # go to the floor lamp
+    GoToObject('FloorLamp')
+    # turn it off
+    SwitchOff('FloorLamp')
+    # go to the other lights
+    GoToObject('LightSwitch')
+    # turn them off
+    SwitchOff('LightSwitch')
+    GoToObject('DeskLamp')
+    SwitchOff('DeskLamp')
+
+subtask1_switch_off_lights()
+"""
+
+
+def test_steps_on_a_thing_named_only_to_be_left_as_it_is_are_errands():
+    """Read without what it leaves as it is (as the planner reads it), the instruction names no floor lamp, so its
+    steps go; read whole, it names the floor lamp, and they stayed (the lamp switched off against the words)."""
+    instruction = "Switch off every light except the floor lamp."
+    goals = [Condition("LightSwitch", state="OFF"), Condition("DeskLamp", state="OFF")]
+    words = load_state_words(load_domain().prompts_dir())
+    text, dropped = drop_errands(LIGHTS, scene_objects(215), SKILLS, words.without_excepted(instruction), goals)
+    assert "FloorLamp" not in text and "SwitchOff('DeskLamp')" in text and "SwitchOff('LightSwitch')" in text
+    assert any("FloorLamp" in line for line in dropped)
+    assert drop_errands(LIGHTS, scene_objects(215), SKILLS, instruction, goals) == (LIGHTS, [])
