@@ -129,8 +129,8 @@ def asked_of(instruction: str, vocabulary: GoalVocabulary, words: StateWords,
             apart = [t for t in things_named(said, vocabulary.types) if t in states[state]]
             if len(apart) > 1:  # "the desk lamp and the ceiling light", not "the lamp" beside two
                 each[state] = apart
-            elif len(states[state]) > 1 and EVERY.search(said):  # "every lamp": the desk lamp and the floor lamp
-                each[state] = states[state]
+            elif len(states[state]) > 1 and (EVERY.search(said) or len(set(named.values())) > 1):
+                each[state] = states[state]  # "every lamp"; "light it, and turn on the shower": each its phrase's
     _last_of_opposites(states, each, said_at)
     _every_light(instruction, vocabulary, words, objects, states, each)
     withheld = set(words.only_where_asked) - set(states_asked(instruction, words.only_where_asked))

@@ -408,9 +408,9 @@ def test_a_thing_asked_into_a_state_and_its_opposite_is_owed_the_last():
 
 def test_each_phrase_asking_a_state_has_its_own_pronoun():
     """"If the candle isn't lit, light it, and turn on the shower": the shower, named by the other phrase asking
-    ON, had taken the place of "it" (dev14-s4)."""
-    assert _asked("If the candle isn't lit, light it, and turn on the shower.", 416).states == \
-        {"ON": ["Candle", "ShowerHead"]}
+    ON, had taken the place of "it" (dev14-s4); each phrase's thing is owed, not one of them."""
+    asked = _asked("If the candle isn't lit, light it, and turn on the shower.", 416)
+    assert asked.states == asked.each == {"ON": ["Candle", "ShowerHead"]}  # each owed (the 0.5B stated the shower)
 
 
 def test_a_put_ends_where_another_verb_begins():
