@@ -225,7 +225,9 @@ class Planner:
 
     def _decomposition(self, result: PlanResult, scene: SceneObjects, team: Sequence[Robot], prompt: Fitted,
                        backend: Backend, k: int, progress: StageProgress) -> StageRecord:
-        """Candidate ``k`` of the decomposition, written on ``backend`` (the planner's, or a lane of it)."""
+        """Candidate ``k`` of the decomposition, written on ``backend`` (the planner's, or a lane of it). With stated
+        goals (which the goal check found the team can meet) it may not refuse: asked to switch a lamp off and open
+        the blinds, the 1.5B refused for PutObject, a skill the team lacks and no goal needs (dev15-s5)."""
         opts = self.config.prompts
         record = StageRecord("decomposition", chat_template=self.chat_status)
         skills = self.catalogue.skills
@@ -237,7 +239,7 @@ class Planner:
         said = said_of(result.instruction, scene, goals, world.objects() if world is not None else ()) \
             if config.finish_goals else Said()
         constraint = PlanConstraint(scene, skills, comments=opts.comments, summary=opts.summary, world=world,
-                                    for_team=team, goals=goals, said=said, repairer=repairer,
+                                    for_team=team, goals=goals, said=said, repairer=repairer, allow_refusal=not goals,
                                     stop=config.stop_at_goals, repair=config.repair, finish=config.finish_goals,
                                     cost=spelled_cost(backend)) if config.grammar else None
         rng = self.stage_rng(result, record.stage if k == 0 else f"{record.stage} candidate {k}")

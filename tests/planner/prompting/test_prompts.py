@@ -18,6 +18,7 @@ from smartllm_local.planner.prompting.prompts import (
     strip_comments,
     strip_summary,
 )
+from smartllm_local.planner.result import PlanResult, StageRecord
 from smartllm_local.worlds import scene_objects
 from tests.planner.fakes import FakeBackend
 
@@ -144,6 +145,18 @@ def test_output_budgets_follow_the_task(catalogue):
     planned = restated.plan(INSTRUCTION, 6, [29, 24, 25])
     decomposition, allocation = planned.stage("decomposition"), planned.stage("allocation")
     assert len(allocation.output) <= allocation.output_budget < len(allocation.output) + 64 * functions + 400
+
+
+def test_a_decomposition_for_goals_the_team_can_meet_offers_no_refusal(catalogue):
+    """Robots 24 and 25 lack skills the scene has, but not one the stated goal needs (the goal check found the
+    team can meet it): a model that would refuse writes a plan (the 1.5B refused for PutObject to switch a lamp off
+    and open the blinds, dev15-s5). Without stated goals it may still refuse."""
+    goal = StageRecord("goal", output="LightSwitch off\n")
+    result = PlanResult(INSTRUCTION, "FloorPlan6", [24, 25], stages={"goal": goal})
+    record = Planner(FakeBackend(refuse=True), catalogue).decompose(result)
+    assert not record.output.startswith("# INFEASIBLE") and record.plan is not None and not record.plan.is_refusal
+    alone = Planner(FakeBackend(refuse=True), catalogue).decompose(PlanResult(INSTRUCTION, "FloorPlan6", [24, 25]))
+    assert alone.output.startswith("# INFEASIBLE: no robot of the team has ")
 
 
 def test_a_refusal_stops_the_pipeline_and_becomes_the_plan(catalogue, tmp_path):
