@@ -23,6 +23,7 @@ from ..skills import SkillSet
 from ..world.object_types import base_type
 from .asked import (
     GIVES,
+    STATE_GIVING,
     as_goal,
     coverage,
     gives_nothing_asked,
@@ -153,9 +154,12 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
     small models add a light switched on to moving a laptop, a tomato warmed to boiling water. Where the instruction
     asks for nothing moved (``Asked.moves``), a thing put in a holder it neither names nor asks into, and that gives
     the thing no state, is left out too (:func:`.asked.placed_by_model`), as is one put in a holder that gives only
-    states nobody asked for (:func:`.asked.gives_nothing_asked`: "open the fridge and cut the apple"). So is a thing
-    put in a holder the instruction asks other things into, by words that do not name it (:meth:`Asked.put_elsewhere`:
-    asked to cut the bread and put the apple in the microwave, the 0.5B put the bread in it too), and a thing's
+    states nobody asked for (:func:`.asked.gives_nothing_asked`: "open the fridge and cut the apple"), and a thing it
+    does not name, put in a holder nobody asks things into that gives it no state (asked to lift the loo seat, the
+    1.5B put the toilet paper in the toilet, and the goal check refused a team that carries nothing: dev15-e4). So
+    is a thing put in a holder the instruction asks other things into, by words that do not name it
+    (:meth:`Asked.put_elsewhere`: asked to cut the bread and put the apple in the microwave, the 0.5B put the bread
+    in it too), and a thing's
     pieces beside the whole thing where nobody asked it cut (:func:`piece_beside_whole`), unless owed, and the whole
     thing put where its piece is owed (:meth:`Asked.whole_of_piece_owed`)."""
     statement = stated.statement
@@ -167,7 +171,9 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
             or piece_beside_whole(c, statement.conditions, asked.states.get("SLICED", ())) and not asked.owes(c)}
     if not asked.moves:  # nothing asked moved: a holder nobody named, or one for a state nobody asked, is the model's
         out |= {c for c in statement.conditions if placed_by_model(instruction, c, asked.placements)
-                or gives_nothing_asked(instruction, c, asked.states, asked.placements)}
+                or gives_nothing_asked(instruction, c, asked.states, asked.placements)
+                or c.item is not None and not names(instruction, c.item) and c.subject not in asked.placements
+                and c.subject not in STATE_GIVING}
     return _leave_out(stated, out, "unasked")
 
 
