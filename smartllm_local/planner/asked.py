@@ -123,9 +123,21 @@ def placed_by_model(instruction: str, condition: Condition, asked_into: Collecti
     """Whether the condition puts a thing in a holder the instruction neither names nor asks things into
     (``asked_into``) and that gives what it holds no state (:data:`STATE_GIVING`): where the thing goes is the
     model's choice."""
+    return _put_freely(condition, asked_into) and not names(instruction, condition.subject)
+
+
+def brought_by_model(instruction: str, condition: Condition, asked_into: Collection[str]) -> bool:
+    """Whether the condition puts a thing the instruction does not name in a holder it asks nothing into and that
+    gives what it holds no state: which thing goes there is the model's choice (asked to lift the loo seat, the
+    1.5B put the toilet paper in the toilet: dev15-e4)."""
+    return _put_freely(condition, asked_into) and not names(instruction, condition.item or "")
+
+
+def _put_freely(condition: Condition, asked_into: Collection[str]) -> bool:
+    """Whether the condition puts a thing in a holder nobody asks things into (``asked_into``) that gives what it
+    holds no state (:data:`STATE_GIVING`)."""
     holder = condition.subject
-    return condition.item is not None and holder not in asked_into and holder not in STATE_GIVING \
-        and not names(instruction, holder)
+    return condition.item is not None and holder not in asked_into and holder not in STATE_GIVING
 
 
 def gives_nothing_asked(instruction: str, condition: Condition, states: Mapping[str, Collection[str]],
@@ -183,7 +195,11 @@ def outnamed(instruction: str, types: Sequence[str]) -> set[str]:
 
 def _blanked(text: str, patterns: Sequence[re.Pattern[str]]) -> str:
     """The text with each match of ``patterns`` in it blanked out."""
-    spans = [m.span() for pattern in patterns for m in pattern.finditer(text)]
+    return blanked_spans(text, [m.span() for pattern in patterns for m in pattern.finditer(text)])
+
+
+def blanked_spans(text: str, spans: Collection[tuple[int, int]]) -> str:
+    """The text with each of the ``(start, end)`` spans blanked out, its other characters where they were."""
     return "".join(" " if any(a <= n < b for a, b in spans) else c for n, c in enumerate(text))
 
 

@@ -23,8 +23,8 @@ from ..skills import SkillSet
 from ..world.object_types import base_type
 from .asked import (
     GIVES,
-    STATE_GIVING,
     as_goal,
+    brought_by_model,
     coverage,
     gives_nothing_asked,
     invented,
@@ -155,8 +155,8 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
     asks for nothing moved (``Asked.moves``), a thing put in a holder it neither names nor asks into, and that gives
     the thing no state, is left out too (:func:`.asked.placed_by_model`), as is one put in a holder that gives only
     states nobody asked for (:func:`.asked.gives_nothing_asked`: "open the fridge and cut the apple"), and a thing it
-    does not name, put in a holder nobody asks things into that gives it no state (asked to lift the loo seat, the
-    1.5B put the toilet paper in the toilet, and the goal check refused a team that carries nothing: dev15-e4). So
+    does not name, put in a holder nobody asks things into that gives it no state (:func:`.asked.brought_by_model`:
+    asked to lift the loo seat, the 1.5B put the toilet paper in the toilet, and the goal check refused). So
     is a thing put in a holder the instruction asks other things into, by words that do not name it
     (:meth:`Asked.put_elsewhere`: asked to cut the bread and put the apple in the microwave, the 0.5B put the bread
     in it too), and a thing's
@@ -172,8 +172,7 @@ def _without_unasked(stated: StatedGoals, instruction: str, asked: Asked) -> Sta
     if not asked.moves:  # nothing asked moved: a holder nobody named, or one for a state nobody asked, is the model's
         out |= {c for c in statement.conditions if placed_by_model(instruction, c, asked.placements)
                 or gives_nothing_asked(instruction, c, asked.states, asked.placements)
-                or c.item is not None and not names(instruction, c.item) and c.subject not in asked.placements
-                and c.subject not in STATE_GIVING}
+                or brought_by_model(instruction, c, asked.placements)}
     return _leave_out(stated, out, "unasked")
 
 

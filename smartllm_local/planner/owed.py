@@ -48,12 +48,8 @@ def standing(objects: Sequence[Mapping[str, Any]]) -> frozenset[tuple[str, str]]
 
 #: The states a switch's verb asks for ("switch", "turn", "power" name nothing).
 SWITCHED = ("ON", "OFF")
-
-
 #: Words that ask a state of every thing the word after them names ("turn off every lamp in the room").
 EVERY = re.compile(r"\b(?:every|each|all|both)\s+(?:of\s+)?(?:the\s+)?[a-z]+", re.IGNORECASE)
-
-
 #: Words that place a thing where it is ("the lamp on the side table").
 LOCATED = re.compile(r"\b(?:on|in|inside)\s+(?:the\s+|a\s+|an\s+|my\s+|your\s+)?"
                      r"(?P<holder>[a-z]+(?:\s+[a-z]+)?)", re.IGNORECASE)

@@ -400,16 +400,25 @@ def test_a_thing_put_in_a_holder_the_instruction_asks_other_things_into_is_left_
                     "SoapBar in Drawer\nSprayBottle in Drawer\n\n", 410) == []
 
 
+def _set_tasks(name: str) -> list:
+    """The tasks of one household set (the benchmark's, or a folder of the domain's)."""
+    household = load_domain("household")
+    return list(TASKS) if name == "benchmark" else load_tasks([household.folder / name / "tasks.jsonl"],
+                                                              domain=household)
+
+
+def _statement_text(conditions) -> str:
+    """A goal statement saying exactly ``conditions``, ended as the stage ends one."""
+    return "".join(f"{c.item} in {c.subject}\n" if c.state is None else f"{c.subject} {c.state.lower()}\n"
+                   for c in conditions) + "\n"
+
+
 @pytest.mark.parametrize("tasks", HOUSEHOLD_SETS)
 def test_every_household_tasks_goals_stated_as_they_are_lose_no_line_as_unasked(tasks):
     """The lines the goal stage leaves out as nobody's are never a task's own goals, in any set."""
-    household = load_domain("household")
-    chosen = TASKS if tasks == "benchmark" else load_tasks([household.folder / tasks / "tasks.jsonl"],
-                                                           domain=household)
-    for task in (t for t in chosen if t.feasible):
+    for task in (t for t in _set_tasks(tasks) if t.feasible):
         vocabulary = reading_vocabulary(task.instruction, goal_vocabulary(scene_objects(task.floor_plan)), WORDS)
-        text = "".join(f"{c.item} in {c.subject}\n" if c.state is None else f"{c.subject} {c.state.lower()}\n"
-                       for g in task.goals for c in g.conditions()) + "\n"
+        text = _statement_text([c for g in task.goals for c in g.conditions()])
         statement = parse_goal_statement(text, types=vocabulary.types)
         asked = asked_of(task.instruction, vocabulary, WORDS, load_scene(task.floor_plan))
         kept = _without_unasked(StatedGoals(StageRecord("goal", output=text), statement), task.instruction, asked)
@@ -572,11 +581,8 @@ def test_every_household_goal_of_a_thing_asked_into_a_holder_puts_it_there_and_t
     """The owed lines are the tasks' own goals (read here to check the words, never by the stage), and a statement of
     exactly a task's goals, with the states owed that the scene has as it begins (which no task's goals list: "shut
     the fridge again"), is still one the stage's grammar can write."""
-    household = load_domain("household")
-    chosen = TASKS if tasks == "benchmark" else load_tasks([household.folder / tasks / "tasks.jsonl"],
-                                                           domain=household)
     asking = 0
-    for task in chosen:
+    for task in _set_tasks(tasks):
         vocabulary = reading_vocabulary(task.instruction, goal_vocabulary(scene_objects(task.floor_plan)), WORDS)
         asked = asked_of(task.instruction, vocabulary, WORDS)
         objects = load_scene(task.floor_plan)
@@ -588,10 +594,9 @@ def test_every_household_goal_of_a_thing_asked_into_a_holder_puts_it_there_and_t
             assert all(Condition(holder, item=kind) in truth for kind in named), (task.id, named)
             assert not any(asked.put_elsewhere(c) for c in truth if c.subject == holder), task.id
             assert any(c.subject == holder and c.state is None for c in truth), task.id  # "throw it in the bin"
-            text = "".join(f"{c.item} in {c.subject}\n" if c.state is None else f"{c.subject} {c.state.lower()}\n"
-                           for c in truth)
+            text = _statement_text(truth)
             assert accepts(GoalConstraint(vocabulary, asked=asked.states, withheld=asked.withheld,
-                                          placed=asked.placements), text + "\n"), (task.id, text)
+                                          placed=asked.placements), text), (task.id, text)
     assert asking >= 3
 
 

@@ -20,7 +20,7 @@ from ...errors import UserError
 from ...goal_language import STATE_WORDS
 from ...scene import GoalVocabulary
 from ...world.object_types import base_type
-from ..asked import holder_named, named_as_phrase, names_a_word, things_named, type_words, word_forms
+from ..asked import blanked_spans, holder_named, named_as_phrase, names_a_word, things_named, type_words, word_forms
 from .goal_prompt import GOAL_FOLDER
 
 ASKED_STATES = "asked_states.toml"
@@ -138,8 +138,7 @@ class StateWords:
     def without_excepted(self, instruction: str) -> str:
         """The instruction with the words naming what it leaves as it is blanked out, its other words where they
         were: "except the floor lamp" says nothing of the desk lamp."""
-        spans = [m.span("things") for p in self.excepted for m in p.finditer(instruction)]
-        return "".join(" " if any(a <= n < b for a, b in spans) else c for n, c in enumerate(instruction))
+        return blanked_spans(instruction, [m.span("things") for p in self.excepted for m in p.finditer(instruction)])
 
     def asks_to_move(self, instruction: str) -> bool:
         """Whether the instruction asks for any thing moved (always, where the domain has no ``moves`` words)."""
